@@ -1,0 +1,73 @@
+// Accelerator parameters: each structure declares its parameters (name, type, default,
+// range or choices); user input (CLI "k=v", YAML values) is validated against that list
+// before anything is built. A parameter a structure does not have is an error, never
+// silently ignored.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace accelbench {
+
+enum class ParamType { Int, Float, Enum, Bool };
+
+const char* to_string(ParamType t);
+
+struct ParamSpec {
+    std::string name;
+    ParamType type = ParamType::Int;
+    std::string default_value;          // as text, parsed like user input
+    std::vector<std::string> choices;   // Enum only
+    double min = -1e300, max = 1e300;   // Int/Float only, inclusive
+    std::string help;
+    // A default that depends on the scene (e.g. the kd-tree's 8 + 1.3 log2 N): then
+    // default_value is shown as text (e.g. "auto") and the structure computes it.
+    bool scene_dependent_default = false;
+};
+
+using ParamValue = std::variant<int64_t, double, std::string, bool>;
+
+struct ParamError : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// A validated set of values: every declared parameter has a value (the given one or the
+// default); nothing else is present.
+class ParamSet {
+public:
+    int64_t get_int(const std::string& name) const;
+    double get_float(const std::string& name) const;
+    const std::string& get_enum(const std::string& name) const;
+    bool get_bool(const std::string& name) const;
+    // True when the user gave the value (false: the default applies).
+    bool given(const std::string& name) const;
+    // Canonical text "k=v;k=v" in declaration order, as the CSV's `params` column.
+    std::string canonical() const;
+    const std::vector<std::pair<std::string, std::string>>& items() const { return text_; }
+
+private:
+    friend ParamSet resolve_params(const std::string&, const std::vector<ParamSpec>&,
+                                   const std::map<std::string, std::string>&);
+    const ParamValue& at(const std::string& name) const;
+    std::map<std::string, ParamValue> values_;
+    std::map<std::string, bool> given_;
+    std::vector<std::pair<std::string, std::string>> text_;
+};
+
+// Parses one value as the spec's type; throws ParamError with a message that names the
+// accelerator, the parameter and what was expected.
+ParamValue parse_param(const std::string& accel, const ParamSpec& spec, const std::string& text);
+
+// Validates user values against the specs and fills in defaults.
+ParamSet resolve_params(const std::string& accel, const std::vector<ParamSpec>& specs,
+                        const std::map<std::string, std::string>& given);
+
+// Canonical text of a value (integers without decimals, floats round-trippable).
+std::string format_param(const ParamValue& v);
+
+}  // namespace accelbench

@@ -1,0 +1,37 @@
+#include "accelbench/registry.h"
+
+#include "accelbench/brute_force.h"
+#include "accelbench/embree_accel.h"
+
+namespace accelbench {
+
+const std::vector<AcceleratorInfo>& accelerator_registry() {
+    static const std::vector<AcceleratorInfo> registry = {
+        BruteForce::info(),
+        EmbreeAccel::info(),
+    };
+    return registry;
+}
+
+const AcceleratorInfo* find_accelerator(std::string_view name) {
+    for (const auto& info : accelerator_registry())
+        if (info.name == name) return &info;
+    return nullptr;
+}
+
+std::unique_ptr<Accelerator> make_accelerator(const std::string& name,
+                                              const std::map<std::string, std::string>& params,
+                                              ParamSet* resolved) {
+    const AcceleratorInfo* info = find_accelerator(name);
+    if (!info) {
+        std::string known;
+        for (const auto& i : accelerator_registry()) known += (known.empty() ? "" : ", ") + i.name;
+        throw ParamError("unknown accelerator '" + name + "' (known: " + known + ")");
+    }
+    ParamSet set = resolve_params(name, info->params, params);
+    auto accel = info->create(set);
+    if (resolved) *resolved = std::move(set);
+    return accel;
+}
+
+}  // namespace accelbench

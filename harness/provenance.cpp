@@ -1,0 +1,66 @@
+#include "provenance.h"
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+
+#include "accelbench/embree_accel.h"
+
+#ifndef ACCELBENCH_SOURCE_DIR
+#define ACCELBENCH_SOURCE_DIR "."
+#endif
+#ifndef ACCELBENCH_BUILD_TYPE
+#define ACCELBENCH_BUILD_TYPE "unknown"
+#endif
+
+namespace accelbench {
+
+namespace {
+
+std::string run(const std::string& cmd) {
+    std::string out;
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+    if (!pipe) return out;
+    std::array<char, 256> buf;
+    while (fgets(buf.data(), int(buf.size()), pipe.get())) out += buf.data();
+    while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
+    return out;
+}
+
+std::string cpu_model() {
+    std::ifstream in("/proc/cpuinfo");
+    std::string line;
+    while (std::getline(in, line))
+        if (line.rfind("model name", 0) == 0) {
+            auto pos = line.find(':');
+            return pos == std::string::npos ? line : line.substr(pos + 2);
+        }
+    return "unknown";
+}
+
+}  // namespace
+
+const Provenance& provenance() {
+    static const Provenance p = [] {
+        Provenance p;
+        const std::string git = std::string("git -C '") + ACCELBENCH_SOURCE_DIR + "' ";
+        p.git_sha = run(git + "rev-parse HEAD 2>/dev/null");
+        if (p.git_sha.empty()) p.git_sha = "unknown";
+        p.git_dirty = !run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty();
+#if defined(__clang__)
+        p.compiler = "clang " __clang_version__;
+#elif defined(__GNUC__)
+        p.compiler = "gcc " __VERSION__;
+#else
+        p.compiler = "unknown";
+#endif
+        p.build_type = ACCELBENCH_BUILD_TYPE;
+        p.cpu = cpu_model();
+        p.embree_version = EmbreeAccel::version();
+        return p;
+    }();
+    return p;
+}
+
+}  // namespace accelbench
