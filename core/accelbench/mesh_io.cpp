@@ -1,5 +1,7 @@
 #include "accelbench/mesh_io.h"
 
+#include "accelbench/temp_dir.h"
+
 #include <zlib.h>
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -285,27 +287,6 @@ private:
 
 // ---- gzip --------------------------------------------------------------------------
 
-// A private temporary directory, removed with everything in it.
-class TempDir {
-public:
-    TempDir() {
-        std::string pattern = (fs::temp_directory_path() / "accelbench-mesh-XXXXXX").string();
-        if (!mkdtemp(pattern.data())) throw std::runtime_error("cannot create a temporary directory in " +
-                                                               fs::temp_directory_path().string());
-        path_ = pattern;
-    }
-    ~TempDir() {
-        std::error_code ignored;
-        fs::remove_all(path_, ignored);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    const fs::path& path() const { return path_; }
-
-private:
-    fs::path path_;
-};
-
 void gunzip(const std::string& from, const fs::path& to) {
     gzFile in = gzopen(from.c_str(), "rb");
     if (!in) fail(from, "cannot open it for reading");
@@ -382,7 +363,7 @@ Scene load_mesh(const std::string& path, MeshLoadInfo* info_out) {
     std::optional<TempDir> temp;
     std::string readable = path;
     if (info.compressed) {
-        temp.emplace();
+        temp.emplace("accelbench-mesh-");
         readable = (temp->path() / inner).string();
         gunzip(path, readable);
     }

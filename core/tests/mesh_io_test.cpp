@@ -2,6 +2,8 @@
 // counts, fan triangles and coordinates are known exactly.
 #include "accelbench/mesh_io.h"
 
+#include "accelbench/temp_dir.h"
+
 #include <gtest/gtest.h>
 #include <zlib.h>
 
@@ -22,12 +24,6 @@ using Tri = std::array<uint32_t, 3>;
 
 class MeshIoTest : public ::testing::Test {
 protected:
-    void SetUp() override {
-        std::string pattern = (fs::temp_directory_path() / "mesh_io_test-XXXXXX").string();
-        ASSERT_NE(mkdtemp(pattern.data()), nullptr);
-        dir_ = pattern;
-    }
-    void TearDown() override { fs::remove_all(dir_); }
 
     std::string write(const std::string& name, const std::string& bytes) {
         const std::string path = (dir_ / name).string();
@@ -52,7 +48,8 @@ protected:
         return "";
     }
 
-    fs::path dir_;
+    TempDir temp_{"mesh_io_test-"};
+    const fs::path& dir_ = temp_.path();
 };
 
 template <class T>

@@ -13,6 +13,7 @@
 #include <string>
 #include <utility>
 
+#include "accelbench/temp_dir.h"
 #include "sha256.h"
 
 namespace accelbench {
@@ -38,20 +39,6 @@ public:
 private:
     const char* name_;
     std::optional<std::string> old_;
-};
-
-class TempDir {
-public:
-    TempDir() {
-        std::string pattern = (fs::temp_directory_path() / "model_registry_test-XXXXXX").string();
-        if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-        path_ = pattern;
-    }
-    ~TempDir() { fs::remove_all(path_); }
-    const fs::path& path() const { return path_; }
-
-private:
-    fs::path path_;
 };
 
 std::string write(const fs::path& path, const std::string& bytes) {
@@ -161,7 +148,7 @@ TEST_F(RealRegistry, ChecksumMismatchIsAnError) {
     const ModelEntry& bunny = entry("stanford-bunny");
     const ModelLocation original = registry_.locate(bunny);
     ASSERT_FALSE(original.path.empty());
-    TempDir dir;
+    TempDir dir("model_registry_test-");
     const fs::path copy = dir.path() / bunny.file;
     fs::copy_file(original.path, copy);
     {
@@ -184,7 +171,7 @@ TEST_F(RealRegistry, ChecksumMismatchIsAnError) {
 
 TEST_F(RealRegistry, ModelsVariableDirectoryComesFirst) {
     const ModelEntry& bunny = entry("stanford-bunny");
-    TempDir dir;
+    TempDir dir("model_registry_test-");
     fs::copy_file(registry_.locate(bunny).path, dir.path() / bunny.file);
     ScopedEnv env("ACCELBENCH_MODELS", dir.path().string());
     const ModelLocation where = registry_.locate(bunny);
@@ -213,7 +200,7 @@ protected:
                "\n    triangles: 4\n    vertices: 4\n    source: " + source + "\n    credit: test\n" + extra;
     }
 
-    TempDir project_, upstream_;
+    TempDir project_{"model_registry_test-"}, upstream_{"model_registry_test-"};
     std::string tetra_;
     ScopedEnv models_{"ACCELBENCH_MODELS", std::nullopt};
     ScopedEnv project_env_{"ACCELBENCH_PROJECT_DIR", project_.path().string()};
