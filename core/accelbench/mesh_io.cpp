@@ -411,7 +411,7 @@ Scene load_mesh(const std::string& path, MeshLoadInfo* info_out) {
         const std::string hint = info.format == "stl" ? " (OpenMesh's STL reader skips triangles with two corners at the same position)"
                                : info.format == "obj" ? " (OpenMesh's OBJ reader skips faces with fewer than 3 distinct corners)"
                                : "";
-        fail(path, "corrupt or truncated: the file has " + std::to_string(declared.faces) +
+        fail(path, "faces were lost: the file has " + std::to_string(declared.faces) +
                        " faces but the reader delivered " + std::to_string(importer.faces) + hint + first_message);
     }
     if (declared.triangles && *declared.triangles != importer.triangles.size())
