@@ -314,18 +314,26 @@ void gunzip(const std::string& from, const fs::path& to) {
     if (!out.flush()) fail(from, "cannot write the decompressed copy to " + to.string());
 }
 
-// Runs OpenMesh's reader for the format. PLY and OFF are read from a stream we own, so
-// that afterwards we can see whether the reader ran out of data: their ASCII readers stop
-// quietly at the end of a truncated file, or repeat the last face, and return success.
-// A complete file is read to its last face without the stream failing. (OBJ and STL are
-// line-based: their readers run to the end of the file by design, and the counts checked
-// afterwards catch what a cut file loses.)
+// Runs OpenMesh's reader for the format. PLY and OFF are read from a stream we own that
+// throws at its first failed read. Their ASCII readers do not check each read: past the
+// end of a truncated file, or after a word that is not a number, every further read leaves
+// its variable as it was, so they repeat the last face, or take an uninitialised corner
+// count and loop for billions of corners. Stopping at the first failure turns all of that
+// into one clear error. A complete file is read to its last face without a failed read.
+// (OBJ and STL are line-based: their readers parse each line on its own and run to the end
+// of the file by design; the counts checked afterwards catch what a cut file loses.)
 bool read_with_openmesh(const std::string& format, const std::string& path, FlatImporter& importer,
                         bool& stream_failed) {
     OpenMesh::IO::Options options;  // positions and faces only
-    if (format == "ply" || format == "off") {
-        std::ifstream in(path, std::ios::binary);
-        bool parsed = false;
+    if (format != "ply" && format != "off") return OpenMesh::IO::IOManager().read(path, importer, options);
+
+    std::ifstream in(path, std::ios::binary);
+    in.exceptions(std::ios::failbit | std::ios::badbit);
+    // The readers switch omerr() off while they read faces and back on at the end; an
+    // exception skips the second half.
+    const bool omerr_was_enabled = ::omerr().is_enabled();
+    bool parsed = false;
+    try {
         if (format == "ply") {
             parsed = OpenMesh::IO::PLYReader().read(in, importer, options);
         } else {
@@ -334,10 +342,12 @@ bool read_with_openmesh(const std::string& format, const std::string& path, Flat
             OpenMesh::IO::_OFFReader_& reader = OpenMesh::IO::OFFReader();
             parsed = reader.can_u_read(path) && reader.read(in, importer, options);
         }
-        stream_failed = in.fail();
-        return parsed;
+    } catch (const std::exception&) {  // std::ios_base::failure (of either library ABI)
+        stream_failed = true;
+        parsed = true;  // the reader did not reject the file; report the failed read
     }
-    return OpenMesh::IO::IOManager().read(path, importer, options);
+    if (omerr_was_enabled) ::omerr().enable();
+    return parsed;
 }
 
 }  // namespace
@@ -401,7 +411,7 @@ Scene load_mesh(const std::string& path, MeshLoadInfo* info_out) {
         const std::string hint = info.format == "stl" ? " (OpenMesh's STL reader skips triangles with two corners at the same position)"
                                : info.format == "obj" ? " (OpenMesh's OBJ reader skips faces with fewer than 3 distinct corners)"
                                : "";
-        fail(path, "corrupt or truncated: the file has " + std::to_string(declared.faces) +
+        fail(path, "faces were lost: the file has " + std::to_string(declared.faces) +
                        " faces but the reader delivered " + std::to_string(importer.faces) + hint + first_message);
     }
     if (declared.triangles && *declared.triangles != importer.triangles.size())

@@ -273,11 +273,16 @@ TEST_F(MeshIoTest, TruncatedAsciiPly) {
     EXPECT_NE(in_vertices.find("corrupt or truncated"), std::string::npos) << in_vertices;
 }
 
+// After a failed read OpenMesh's ASCII reader would go on with uninitialised corner
+// counts (and could loop for billions of corners): the first failed read must stop it.
 TEST_F(MeshIoTest, AsciiPlyWithSomethingThatIsNotANumber) {
-    std::string ply = kAsciiPly;
-    ply.replace(ply.find("1 1 0"), 5, "1 x 0");
-    const std::string error = load_error(write("garbage.ply", ply));
-    EXPECT_NE(error.find("corrupt or truncated"), std::string::npos) << error;
+    for (const auto& [from, to] : {std::pair{"1 1 0", "1 x 0"}, std::pair{"4 0 1 2 3", "4 0 1 ? 3"},
+                                   std::pair{"3 0 1 4", "three 0 1 4"}}) {
+        std::string ply = kAsciiPly;
+        ply.replace(ply.find(from), std::string(from).size(), to);
+        const std::string error = load_error(write("garbage.ply", ply));
+        EXPECT_NE(error.find("corrupt or truncated"), std::string::npos) << to << ": " << error;
+    }
 }
 
 TEST_F(MeshIoTest, TruncatedOff) {
