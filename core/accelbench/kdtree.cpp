@@ -225,7 +225,9 @@ public:
           max_prims_(uint32_t(s.max_prims)),
           max_depth_(max_depth),
           presorted_(s.build == KdTree::BuildAlgorithm::NLogN),
-          ref_budget_(std::max<uint64_t>(KdTree::kMinRefBudget, KdTree::kMaxRefsPerPrim * scene.triangle_count())),
+          ref_budget_(s.max_refs ? *s.max_refs
+                                 : std::max<uint64_t>(KdTree::kMinRefBudget,
+                                                      KdTree::kMaxRefsPerPrim * scene.triangle_count())),
           nodes_(nodes),
           prim_indices_(prim_indices),
           side_(scene.triangle_count()) {}
@@ -236,6 +238,7 @@ public:
         uint32_t* prims = prims_.grow(n);
         for (uint32_t i = 0; i < n; ++i) prims[i] = i;
         lists.prims = {0, n};
+        live_refs_ = n;
         if (presorted_) {
             for (int axis = 0; axis < 3; ++axis) {
                 EventKey* ev = events_[axis].grow(2 * size_t(n));
@@ -302,15 +305,18 @@ private:
             nodes_[index] = KdNode::leaf(count, uint32_t(prim_indices_.size()));
             prim_indices_.insert(prim_indices_.end(), p, p + count);
         }
+        live_refs_ -= count;
+        leaf_refs_ += count;
         deepest_leaf_ = std::max(deepest_leaf_, depth);
     }
 
     void check_limit(uint64_t value, uint64_t limit, const char* what) const {
         if (value > limit)
             throw std::runtime_error("kdtree: build exceeds its limit of " + std::to_string(limit) + " " + what +
-                                     " (kMaxRefsPerPrim=" + std::to_string(KdTree::kMaxRefsPerPrim) +
-                                     " per triangle, at most 2^30 nodes); lower max_depth or raise "
-                                     "max_prims/traversal_cost");
+                                     " (references: " + std::to_string(KdTree::kMaxRefsPerPrim) +
+                                     " per triangle, at least " + std::to_string(KdTree::kMinRefBudget) +
+                                     "; nodes and references: 2^30 - 1); lower max_depth or raise "
+                                     "max_prims or traversal_cost");
     }
 
     // Splits one list (a range of `stack`) by side_: the above part is appended at the
@@ -363,7 +369,8 @@ private:
             for (int axis = 0; axis < 3; ++axis)
                 std::tie(below.events[axis], above.events[axis]) =
                     split_list(events_[axis], lists.events[axis], [](EventKey e) { return prim_of(e); });
-        check_limit(prims_.size() + prim_indices_.size(), ref_budget_, "primitive references");
+        live_refs_ += below.prims.size() + above.prims.size() - n;
+        check_limit(leaf_refs_ + live_refs_, ref_budget_, "primitive references");
 
         Bounds3 below_bounds = node, above_bounds = node;
         below_bounds.upper[split.axis] = above_bounds.lower[split.axis] = split.position;
@@ -391,6 +398,8 @@ private:
     ListStack<EventKey> events_[3];    // nlogn: sorted event lists per axis
     std::vector<EventKey> scratch_;    // one node's events on one axis, sorted on the spot
     BuildCounters counters_;
+    uint64_t leaf_refs_ = 0;  // references held by the leaves made so far
+    uint64_t live_refs_ = 0;  // references in the lists still to be split
     int deepest_leaf_ = 0;
 };
 
@@ -416,7 +425,15 @@ void KdTree::build(const Scene& scene) {
     int deepest = 0;
     if (n > 0) {
         Builder builder(scene, settings_, max_depth_used_, nodes_, prim_indices_);
-        builder.run(bounds_);
+        try {
+            builder.run(bounds_);
+        } catch (...) {
+            // A build that stopped at a limit leaves no half tree behind: an empty tree
+            // answers every ray with a miss, never with a wrong hit.
+            nodes_ = {};
+            prim_indices_ = {};
+            throw;
+        }
         counters = builder.counters();
         deepest = builder.deepest_leaf();
     }
