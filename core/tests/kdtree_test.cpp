@@ -300,6 +300,32 @@ TEST(KdTree, ExactCountersOnTwoTriangles) {
     EXPECT_EQ(st3.prim_tests, 1u);
 }
 
+// A hit beyond the leaf's own t-range must not end the search. A (x in [0, 3]) is
+// slanted so the x axis meets it at x = 2.5; B (x in [1.6, 2]) meets it at x = 1.8.
+// Root box 3 x 1.5 x 2 (area 27): the split at x = 1.6 costs 1 + 80 (17.2/27 + 2 *
+// 15.8/27) = 145.6, the one at x = 2 costs 158, a leaf 160; so the first leaf along +x
+// holds A alone, found at x = 2.5, outside that leaf. Stopping there would answer A.
+TEST(KdTree, HitBeyondTheLeafDoesNotEndTheSearch) {
+    Scene s;
+    s.name = "beyond";
+    add_triangle(s, {0, -1, -1}, {0, -1, 1}, {3, 0.2f, 0});
+    add_triangle(s, {1.6f, -0.5f, -0.5f}, {1.6f, -0.5f, 0.5f}, {2.0f, 0.5f, 0});
+    s.finalize();
+    for (const char* build : {"nlogn", "pbrt"}) {
+        auto kd = build_kdtree(s, {{"build", build}});
+        const KdTree& t = as_kdtree(*kd);
+        ASSERT_FALSE(t.nodes()[0].is_leaf());
+        EXPECT_EQ(t.nodes()[0].axis(), 0);
+        EXPECT_EQ(t.nodes()[0].split(), 1.6f);
+        EXPECT_EQ(t.nodes()[1], KdNode::leaf(1, 0));
+        RayStats st;
+        const Hit h = trace(*kd, {{-1, 0, 0}, 0.0f, {1, 0, 0}, kInfinity}, &st);
+        EXPECT_EQ(h.prim, 1u) << build;
+        EXPECT_NEAR(h.t, 2.8f, 1e-5f);
+        EXPECT_GE(st.prim_tests, 2u);
+    }
+}
+
 // ---- the depth rule --------------------------------------------------------------------
 
 TEST(KdTree, DefaultMaxDepth) {
