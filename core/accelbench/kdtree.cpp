@@ -282,7 +282,9 @@ private:
     }
 
     // Longest axis first; the other axes only when it offers no split cheaper than a
-    // leaf (the report's "try other axes instead"), keeping the cheapest seen.
+    // leaf (the report's "try other axes instead"), keeping the cheapest seen. pbrt-v3
+    // retries only when an axis has no candidate at all; retrying also after a bad
+    // candidate turns some of its bad refines into good splits.
     Split choose_split(const Bounds3& node, const Lists& lists, float leaf_cost) {
         Split best;
         if (!(node.area() > 0.0f)) return best;
@@ -418,7 +420,7 @@ void KdTree::build(const Scene& scene) {
     prim_indices_.clear();
     stats_ = BuildStats{};
     max_depth_used_ = settings_.max_depth ? *settings_.max_depth : default_max_depth(n);
-    // A default depth above the traversal stack would need > 10^36 triangles.
+    // Only a scene of more than 2^92 triangles would get a default above the limit.
     max_depth_used_ = std::min(max_depth_used_, kMaxDepthLimit);
 
     BuildCounters counters;
@@ -475,7 +477,8 @@ void KdTree::build(const Scene& scene) {
     stats_.nodes = nodes_.size();
     stats_.leaves = leaves;
     stats_.max_depth = uint64_t(deepest);
-    stats_.memory_bytes = nodes_.size() * sizeof(KdNode) + prim_indices_.size() * sizeof(uint32_t);
+    stats_.memory_bytes = nodes_.size() * sizeof(KdNode) + prim_indices_.size() * sizeof(uint32_t) +
+                          corners_.size() * sizeof(corners_[0]);
     stats_.avg_leaf_size = leaves ? double(refs) / double(leaves) : 0.0;
     if (n > 0) stats_.sah_cost = sah;
     stats_.extra["prim_refs"] = double(refs);

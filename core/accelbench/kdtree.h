@@ -97,6 +97,14 @@ public:
     explicit KdTree(const Settings& settings);
 
     void build(const Scene& scene) override;
+    // nodes, leaves (empty ones included), max_depth (deepest leaf; root = 0),
+    // avg_leaf_size (primitive references per leaf), memory_bytes (nodes, the shared
+    // primitive-index array and the triangle copy; inline single primitives cost
+    // nothing extra), sah_cost: the expected cost of a ray through the root box in pbrt's
+    // model with THIS build's constants and no empty bonus: sum over interior nodes of
+    // C_T * A(node)/A(root) plus over leaves of C_I * count * A(leaf)/A(root).
+    // extra: prim_refs (references over all leaves), empty_leaves, bad_refines (splits
+    // made although dearer than a leaf), max_depth_limit (the max_depth applied).
     BuildStats build_stats() const override;
 
     template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
@@ -116,6 +124,9 @@ private:
     bool hit_triangle(const WatertightRay& wr, uint32_t prim, float tmin, float tmax, Hit& hit) const;
 
     Settings settings_;
+    // The triangles' corners, copied in primitive order: a leaf's test then loads one
+    // 36-byte record instead of an index triple and three scattered vertices (~5%
+    // faster on the bunny).
     std::vector<std::array<Vec3, 3>> corners_;
     Bounds3 bounds_;
     std::vector<KdNode> nodes_;

@@ -219,7 +219,7 @@ TEST(KdTree, ExactTreeForTwoTriangles) {
         EXPECT_EQ(st.nodes, 3u);
         EXPECT_EQ(st.leaves, 2u);
         EXPECT_EQ(st.max_depth, 1u);
-        EXPECT_EQ(st.memory_bytes, 24u);
+        EXPECT_EQ(st.memory_bytes, 3 * 8 + 2 * 36u);  // 3 nodes, no index array, 2 triangle copies
         EXPECT_EQ(st.avg_leaf_size, 1.0);
         EXPECT_EQ(st.extra.at("prim_refs"), 2.0);
         EXPECT_EQ(st.extra.at("empty_leaves"), 0.0);
@@ -329,7 +329,8 @@ TEST(KdTree, HitBeyondTheLeafDoesNotEndTheSearch) {
 // ---- the depth rule --------------------------------------------------------------------
 
 TEST(KdTree, DefaultMaxDepth) {
-    EXPECT_EQ(KdTree::default_max_depth(69451), 29);  // the bunny (report Table 2's ~28)
+    EXPECT_EQ(KdTree::default_max_depth(69451), 29);  // the bunny's triangles
+    EXPECT_EQ(KdTree::default_max_depth(35947), 28);  // its vertices: the report's N, its "depth = 28"
     EXPECT_EQ(KdTree::default_max_depth(0), 8);
     EXPECT_EQ(KdTree::default_max_depth(1), 8);
     EXPECT_EQ(KdTree::default_max_depth(2), 9);        // 8 + 1.3
