@@ -530,8 +530,10 @@ void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& r
     // of selects, and this loop indexes by the node's axis at every step.
     const float org[3] = {rp.org.x, rp.org.y, rp.org.z};
     const float inv_dir[3] = {rp.inv_dir.x, rp.inv_dir.y, rp.inv_dir.z};
-    const uint32_t above_first[3] = {uint32_t(-rp.near_is_upper[0]), uint32_t(-rp.near_is_upper[1]),
-                                     uint32_t(-rp.near_is_upper[2])};
+    // Bit a set: the ray meets the above child first on axis a. A register, not an
+    // array, because the next node's index depends on it.
+    const uint32_t above_first = uint32_t(rp.near_is_upper[0]) | uint32_t(rp.near_is_upper[1]) << 1 |
+                                 uint32_t(rp.near_is_upper[2]) << 2;
     StackEntry stack[KdTree::kMaxDepthLimit];
     int top = 0;
     uint32_t index = 0;
@@ -542,7 +544,7 @@ void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& r
             const int axis = node.axis();
             const float t_split = (node.split() - org[axis]) * inv_dir[axis];
             const uint32_t below = index + 1, above = node.above_child();
-            const uint32_t swap = (below ^ above) & above_first[axis];
+            const uint32_t swap = (below ^ above) & (0u - ((above_first >> axis) & 1u));
             const uint32_t first = below ^ swap, second = above ^ swap;
             if (t_split > t_max) {
                 index = first;
