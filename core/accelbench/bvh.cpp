@@ -46,9 +46,10 @@ Bvh::Split split_from(const std::string& s) {
 // Moves the references whose centroid lies below `plane` on `axis` to the front; no
 // split when that leaves a side empty.
 std::optional<BvhSplit> partition_at(std::span<BvhPrimRef> refs, int axis, float plane) {
-    auto it = std::partition(refs.begin(), refs.end(),
-                             [axis, plane](const BvhPrimRef& r) { return r.centroid(axis) < plane; });
-    const size_t mid = size_t(it - refs.begin());
+    const size_t mid = with_axis(axis, [&](auto a) {
+        return size_t(std::partition(refs.begin(), refs.end(), [a, plane](const BvhPrimRef& r) { return r.centroid(a) < plane; }) -
+                      refs.begin());
+    });
     if (mid == 0 || mid == refs.size()) return std::nullopt;
     return BvhSplit{mid, axis};
 }
@@ -57,7 +58,8 @@ std::optional<BvhSplit> partition_at(std::span<BvhPrimRef> refs, int axis, float
 // Balanced by construction, blind to the primitives' sizes and to empty space.
 struct MedianSplit {
     std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) const {
-        return detail::split_equal_counts(refs, r.axis);
+        return detail::split_equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis],
+                                          r.centroid_bounds.upper[r.axis]);
     }
 };
 
@@ -75,8 +77,11 @@ struct MidpointSplit {
 // mean 5.29, left {1,3,3}).
 struct MeanSplit {
     std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) const {
-        double sum = 0;  // double: millions of floats
-        for (const BvhPrimRef& ref : refs) sum += ref.centroid(r.axis);
+        const double sum = with_axis(r.axis, [&](auto a) {
+            double acc = 0;  // double: millions of floats
+            for (const BvhPrimRef& ref : refs) acc += ref.centroid(a);
+            return acc;
+        });
         return partition_at(refs, r.axis, float(sum / double(refs.size())));
     }
 };
@@ -94,9 +99,10 @@ public:
     }
 
     std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) const {
-        const int axis = r.axis;
-        std::sort(refs.begin(), refs.end(),
-                  [axis](const BvhPrimRef& a, const BvhPrimRef& b) { return a.centroid(axis) < b.centroid(axis); });
+        with_axis(r.axis, [&](auto a) {
+            std::sort(refs.begin(), refs.end(),
+                      [a](const BvhPrimRef& x, const BvhPrimRef& y) { return x.centroid(a) < y.centroid(a); });
+        });
         double total = 0;
         for (const BvhPrimRef& ref : refs) total += area_[ref.id];
         if (!(total > 0)) return std::nullopt;  // only degenerate triangles: no area to halve
@@ -111,7 +117,7 @@ public:
                 best = mid;
             }
         }
-        return BvhSplit{best, axis};
+        return BvhSplit{best, r.axis};
     }
 
 private:
@@ -140,35 +146,41 @@ public:
         const float scale = float(bins_) * (1.0f - 1e-6f) / (r.centroid_bounds.upper[axis] - lo);
         const uint32_t last = bins_ - 1;
         // Clamped in float before the conversion: a tiny extent can make scale infinite.
-        auto bin_of = [=](const BvhPrimRef& ref) {
-            return uint32_t(std::min(float(last), std::max(0.0f, (ref.centroid(axis) - lo) * scale)));
+        auto bin_of = [=](const BvhPrimRef& ref, auto a) {
+            return uint32_t(std::min(float(last), std::max(0.0f, (ref.centroid(a) - lo) * scale)));
         };
-        std::fill(bin_bounds_.begin(), bin_bounds_.end(), Bounds3{});
-        std::fill(bin_counts_.begin(), bin_counts_.end(), 0u);
-        for (const BvhPrimRef& ref : refs) {
-            const uint32_t b = bin_of(ref);
-            bin_bounds_[b].extend(ref.bounds);
-            ++bin_counts_[b];
-        }
-        // Right sweep: box area and count of bins [i, K).
-        Bounds3 acc;
+        // The bins are empty on entry (cleared after use below).
+        with_axis(axis, [&](auto a) {
+            for (const BvhPrimRef& ref : refs) {
+                const uint32_t b = bin_of(ref, a);
+                bin_bounds_[b].extend(ref);
+                ++bin_counts_[b];
+            }
+        });
+        // Right sweep: box area and count of bins [i, K). An empty bin adds nothing, and
+        // a small range leaves most bins empty: skip them.
+        BvhBoxAccumulator acc;
         uint32_t count = 0;
         for (uint32_t i = last; i > 0; --i) {
-            acc.extend(bin_bounds_[i]);
-            count += bin_counts_[i];
+            if (bin_counts_[i] != 0) {
+                acc.extend(bin_bounds_[i]);
+                count += bin_counts_[i];
+            }
             right_area_[i] = acc.area();
             right_count_[i] = count;
         }
-        // Left sweep: plane i separates bins [0, i) from [i, K).
+        // Left sweep: plane i separates bins [0, i) from [i, K). After an empty bin the
+        // partition equals the previous plane's, so it cannot cost strictly less: skip.
         const float node_area = r.bounds.area();
         float best_cost = kInfinity;
         uint32_t best_plane = 0;
-        acc = Bounds3{};
+        acc = BvhBoxAccumulator{};
         count = 0;
         for (uint32_t i = 1; i < bins_; ++i) {
+            if (bin_counts_[i - 1] == 0) continue;
             acc.extend(bin_bounds_[i - 1]);
             count += bin_counts_[i - 1];
-            if (count == 0 || right_count_[i] == 0) continue;
+            if (right_count_[i] == 0) continue;
             const float cost = traversal_cost_ * node_area +
                                isect_cost_ * (acc.area() * float(count) + right_area_[i] * float(right_count_[i]));
             if (cost < best_cost) {
@@ -176,17 +188,25 @@ public:
                 best_plane = i;
             }
         }
+        for (uint32_t i = 0; i < bins_; ++i) {
+            if (bin_counts_[i] == 0) continue;
+            bin_counts_[i] = 0;
+            bin_bounds_[i] = BvhBoxAccumulator{};
+        }
         if (best_plane == 0) return std::nullopt;
         if (r.leaf_allowed && isect_cost_ * float(refs.size()) * node_area <= best_cost) return std::nullopt;
-        auto it = std::partition(refs.begin(), refs.end(),
-                                 [&](const BvhPrimRef& ref) { return bin_of(ref) < best_plane; });
-        return BvhSplit{size_t(it - refs.begin()), axis};
+        const size_t mid = with_axis(axis, [&](auto a) {
+            return size_t(std::partition(refs.begin(), refs.end(),
+                                         [&](const BvhPrimRef& ref) { return bin_of(ref, a) < best_plane; }) -
+                          refs.begin());
+        });
+        return BvhSplit{mid, axis};
     }
 
 private:
     uint32_t bins_;
     float traversal_cost_, isect_cost_;
-    std::vector<Bounds3> bin_bounds_;  // allocated once per build, reused by every node
+    std::vector<BvhBoxAccumulator> bin_bounds_;  // allocated once per build, reused by every node
     std::vector<uint32_t> bin_counts_;
     std::vector<float> right_area_;
     std::vector<uint32_t> right_count_;
