@@ -12,6 +12,7 @@
 #include "accelbench/bvh_metrics.h"
 #include "agreement.h"
 #include "bvh_check.h"
+#include "model_registry.h"
 #include "test_scenes.h"
 
 using namespace accelbench;
@@ -372,4 +373,31 @@ TEST(Bvh, ParametersAreValidated) {
     EXPECT_THROW(make_accelerator("bvh", {{"bins", "1"}}), ParamError);
     EXPECT_THROW(make_accelerator("bvh", {{"traversal", "stackless"}}), ParamError);
     EXPECT_NO_THROW(make_accelerator("bvh", {{"split", "sah"}, {"bins", "32"}, {"axis", "round_robin"}}));
+}
+
+// ---- a real model ---------------------------------------------------------------------
+
+TEST(Bvh, StanfordBunnyAgreesWithEmbree) {
+    const ModelRegistry registry = ModelRegistry::load_default();
+    const ModelEntry* entry = registry.find("stanford-bunny");
+    ASSERT_NE(entry, nullptr);
+    ASSERT_FALSE(registry.locate(*entry).path.empty()) << "stanford-bunny.obj not found (../shared/models should hold it)";
+    const Scene scene = registry.load_scene(*entry);
+    const auto rays = probe_rays(scene, 20000, 11);
+    for (const std::map<std::string, std::string>& p : std::vector<std::map<std::string, std::string>>{
+             {}, {{"split", "sah"}}, {{"split", "sah"}, {"max_prims", "8"}, {"traversal", "report"}}}) {
+        auto bvh = built(scene, p);
+        const BuildStats s = bvh->build_stats();
+        if (p.count("max_prims") == 0) {
+            EXPECT_EQ(s.nodes.value(), 2u * 69451 - 1) << describe(p);  // one triangle per leaf
+            EXPECT_EQ(s.leaves.value(), 69451u) << describe(p);
+        }
+        if (p.empty()) {
+            EXPECT_EQ(s.max_depth.value(), 17u);  // median: ceil(log2 69451)
+        }
+        std::printf("[bunny] %s: nodes %llu, depth %llu, sah %.2f, degenerate %g, forced %g\n", describe(p).c_str(),
+                    (unsigned long long)s.nodes.value(), (unsigned long long)s.max_depth.value(), s.sah_cost.value(),
+                    s.extra.at("degenerate_splits"), s.extra.at("forced_leaves"));
+        expect_agrees_with_embree(scene, *bvh, rays, describe(p) + " bunny");
+    }
 }
