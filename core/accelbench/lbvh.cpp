@@ -63,8 +63,10 @@ namespace {
 template <class Code>
 class LbvhBuilder {
 public:
-    LbvhBuilder(const Scene& scene, const std::vector<KeyValue<Code>>& sorted, const Lbvh::Config& config)
-        : scene_(scene), sorted_(sorted), config_(config), free_threads_(config.threads - 1) {}
+    // `sorted_bounds[i]` is the box of the primitive sorted_[i] refers to.
+    LbvhBuilder(const std::vector<KeyValue<Code>>& sorted, const std::vector<Bounds3>& sorted_bounds,
+                const Lbvh::Config& config)
+        : sorted_(sorted), sorted_bounds_(sorted_bounds), config_(config), free_threads_(config.threads - 1) {}
 
     // Builds the subtree over sorted_[begin, end) at `depth`, appending its nodes to `out`
     // in depth-first order (its root first). Node indices are relative to out's start.
@@ -80,7 +82,7 @@ public:
                                          std::to_string(BvhNode::kMaxLeafPrims));
             if (count > config_.max_prims) ++counts.depth_limited_leaves;
             Bounds3 b;
-            for (uint32_t i = begin; i < end; ++i) b.extend(scene_.prim_bounds[sorted_[i].value]);
+            for (uint32_t i = begin; i < end; ++i) b.extend(sorted_bounds_[i]);
             out[self] = BvhNode::leaf(b, begin, count);
             return b;
         }
@@ -137,9 +139,18 @@ private:
         if (first == last) return {begin + (end - begin) / 2, -1};
         const int bit = std::bit_width(Code(first ^ last)) - 1;
         const Code mask = Code(1) << bit;
-        const auto it = std::partition_point(sorted_.begin() + begin, sorted_.begin() + end,
-                                             [mask](const KeyValue<Code>& kv) { return (kv.key & mask) == 0; });
-        return {uint32_t(it - sorted_.begin()), morton_bit_axis(bit)};
+        // Branch-free lower bound: `base` only ever moves onto codes with the bit clear
+        // (it starts on the first code, which has it clear as first < last), and the first
+        // code with the bit set stays within (base, base + size]. A conditional move picks
+        // the half, not a branch: which half wins is a coin toss a predictor would lose
+        // half the time.
+        uint32_t base = begin, size = end - begin;
+        while (size > 1) {
+            const uint32_t half = size / 2;
+            base = (sorted_[base + half].key & mask) == 0 ? base + half : base;
+            size -= half;
+        }
+        return {base + 1, morton_bit_axis(bit)};
     }
 
     // Appends a subtree built in its own buffer: its inner nodes' second-child indices
@@ -161,8 +172,8 @@ private:
     }
     void release_thread() { free_threads_.fetch_add(1, std::memory_order_acq_rel); }
 
-    const Scene& scene_;
     const std::vector<KeyValue<Code>>& sorted_;
+    const std::vector<Bounds3>& sorted_bounds_;
     const Lbvh::Config& config_;
     std::atomic<int> free_threads_;
 };
@@ -192,12 +203,19 @@ void Lbvh::build_with(const Scene& scene) {
         counts.sort_skipped_passes = uint64_t(sort.skipped_passes);
         scratch = {};
 
+        // The leaves' boxes come from the primitives' boxes in sorted order. Gathering them
+        // here, in one loop of independent loads, is much cheaper than gathering them in
+        // the recursion, where each leaf's load misses the cache on its own.
         bvh.prim_ids.resize(n);
-        for (size_t i = 0; i < n; ++i) bvh.prim_ids[i] = sorted[i].value;
+        std::vector<Bounds3> sorted_bounds(n);
+        for (size_t i = 0; i < n; ++i) {
+            bvh.prim_ids[i] = sorted[i].value;
+            sorted_bounds[i] = scene.prim_bounds[sorted[i].value];
+        }
         // A binary tree over n leaves at most has 2n - 1 nodes: reserving that up front
         // means no reallocation during the build (task buffers reserve theirs likewise).
         bvh.nodes.reserve(2 * n - 1);
-        LbvhBuilder<Code> builder(scene, sorted, config_);
+        LbvhBuilder<Code> builder(sorted, sorted_bounds, config_);
         builder.build(0, uint32_t(n), 0, bvh.nodes, counts);
         // Leaves holding several primitives leave most of the reservation unused.
         if (bvh.nodes.capacity() > bvh.nodes.size() + bvh.nodes.size() / 4) bvh.nodes.shrink_to_fit();

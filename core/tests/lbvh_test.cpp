@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cstring>
 #include <string>
+#include <utility>
+
+#include "accelbench/morton_code.h"
 
 #include "agreement.h"
 
@@ -123,6 +127,44 @@ void expect_valid_tree(const Scene& scene, const FlatBvh& bvh, uint32_t max_dept
     EXPECT_LE(bvh.depth, max_depth);
 }
 
+// Checks the tree against the split rule itself, from Morton codes recomputed here: the
+// leaves are in code order (equal codes by primitive index), and every inner node over
+// the slots [b, e) splits at m where it must — at the first code with the highest bit
+// in which codes[b] and codes[e-1] differ, or in the middle when they are equal.
+// (64-bit codes serve every width: spreading 10 bits gives the same value in both types.)
+void expect_morton_splits(const Scene& scene, const FlatBvh& bvh, int bits) {
+    const MortonQuantizer q(point_bounds(scene.centroids), bits);
+    std::vector<uint64_t> codes;
+    for (uint32_t id : bvh.prim_ids) codes.push_back(q.code<uint64_t>(scene.centroids[id]));
+    for (size_t i = 1; i < codes.size(); ++i) {
+        ASSERT_LE(codes[i - 1], codes[i]) << "slot " << i;
+        if (codes[i - 1] == codes[i]) {
+            ASSERT_LT(bvh.prim_ids[i - 1], bvh.prim_ids[i]) << "slot " << i;
+        }
+    }
+    size_t checked = 0;
+    // Returns the slot range of the subtree at `node`.
+    auto walk = [&](auto&& self, uint32_t node) -> std::pair<uint32_t, uint32_t> {
+        const BvhNode& n = bvh.nodes[node];
+        if (n.is_leaf()) return {n.first_prim(), n.first_prim() + n.prim_count()};
+        const auto [b, m] = self(self, node + 1);
+        const auto [m2, e] = self(self, n.second_child());
+        EXPECT_EQ(m, m2) << "children of node " << node << " are not adjacent";
+        if (codes[b] == codes[e - 1]) {
+            EXPECT_EQ(m, b + (e - b) / 2) << "node " << node;
+        } else {
+            const int bit = std::bit_width(codes[b] ^ codes[e - 1]) - 1;
+            EXPECT_EQ(codes[m - 1] >> bit & 1, 0u) << "node " << node;
+            EXPECT_EQ(codes[m] >> bit & 1, 1u) << "node " << node;
+            EXPECT_EQ(n.axis(), bit % 3) << "node " << node;
+        }
+        ++checked;
+        return {b, e};
+    };
+    if (!bvh.empty()) walk(walk, 0);
+    EXPECT_EQ(checked, bvh.nodes.size() - (bvh.nodes.size() + 1) / 2);  // inner nodes
+}
+
 void expect_same_tree(const FlatBvh& a, const FlatBvh& b, const std::string& what) {
     ASSERT_EQ(a.nodes.size(), b.nodes.size()) << what;
     ASSERT_EQ(a.prim_ids, b.prim_ids) << what;
@@ -143,6 +185,7 @@ TEST(Lbvh, AgreesWithEmbreeOnRandomSoups) {
                     {"bits", bits}, {"max_prims", max_prims}, {"traversal", traversal}};
                 auto lbvh = build_lbvh(scene, p);
                 expect_valid_tree(scene, lbvh->tree());
+                expect_morton_splits(scene, lbvh->tree(), std::stoi(bits));
                 test::expect_agrees_with_embree(scene, *lbvh, rays, "lbvh soup " + describe(p));
             }
 }
@@ -312,6 +355,7 @@ TEST(Lbvh, DenseClusterWithFarOutlier) {
     for (const char* bits : {"10", "21"}) {
         auto lbvh = build_lbvh(scene, {{"bits", bits}});
         expect_valid_tree(scene, lbvh->tree());
+        expect_morton_splits(scene, lbvh->tree(), std::stoi(bits));
         EXPECT_EQ(lbvh->tree().nodes.size(), 2 * scene.triangle_count() - 1);
         const double equal_splits = lbvh->build_stats().extra.at("equal_code_splits");
         if (std::string(bits) == "10") {
@@ -351,6 +395,7 @@ TEST(Lbvh, AnyBitsFromOneToTwentyOne) {
     for (int bits : {1, 2, 5, 10, 11, 15, 21}) {
         auto lbvh = build_lbvh(scene, {{"bits", std::to_string(bits)}});
         expect_valid_tree(scene, lbvh->tree());
+        expect_morton_splits(scene, lbvh->tree(), bits);
         EXPECT_EQ(lbvh->build_stats().extra.at("morton_bits"), double(bits));
         test::expect_agrees_with_embree(scene, *lbvh, rays, "bits=" + std::to_string(bits));
     }
