@@ -57,13 +57,14 @@ public:
         Counts& operator+=(const Counts& o);
     };
 
+    // The parameters, as declared in info() (the defaults live there only).
     struct Config {
-        int bits = 21;
-        uint32_t max_prims = 1;
-        uint32_t max_depth = 50;
-        int threads = 1;
-        uint32_t task_threshold = 100;
-        int sort_digit_bits = 8;
+        int bits = 0;
+        uint32_t max_prims = 0;
+        uint32_t max_depth = 0;
+        int threads = 0;
+        uint32_t task_threshold = 0;
+        int sort_digit_bits = 0;
     };
 
 private:

@@ -8,6 +8,8 @@
 #include <utility>
 
 #include "accelbench/morton_code.h"
+#include "accelbench/procedural.h"
+#include "accelbench/random.h"
 
 #include "agreement.h"
 
@@ -15,42 +17,16 @@ using namespace accelbench;
 
 namespace {
 
-// xorshift64 -> [0, 1): deterministic scenes without a dependency on <random>'s
-// implementation-defined distributions.
-struct Xorshift {
-    uint64_t x;
-    float next() {
-        x ^= x << 13;
-        x ^= x >> 7;
-        x ^= x << 17;
-        return float(x >> 40) / float(1 << 24);
-    }
-    Vec3 point() { return {next(), next(), next()}; }
-};
-
 void add_triangle(Scene& s, Vec3 a, Vec3 b, Vec3 c) {
     const uint32_t base = uint32_t(s.vertices.size());
     s.vertices.insert(s.vertices.end(), {a, b, c});
     s.triangles.push_back({base, base + 1, base + 2});
 }
 
-// n triangles of size ~`size` with centres uniform in the box [lo, lo + extent].
-void add_soup(Scene& s, int n, uint64_t seed, Vec3 lo = {0, 0, 0}, Vec3 extent = {1, 1, 1}, float size = 0.2f) {
-    Xorshift r{seed};
-    for (int i = 0; i < n; ++i) {
-        const Vec3 c = lo + r.point() * extent;
-        auto corner = [&] { return c + (r.point() - Vec3{0.5f, 0.5f, 0.5f}) * size; };
-        const Vec3 a = corner(), b = corner();
-        add_triangle(s, a, b, corner());
-    }
-}
-
-Scene random_soup(int n, uint64_t seed) {
-    Scene s;
-    s.name = "soup";
-    add_soup(s, n, seed);
-    s.finalize();
-    return s;
+// The shared procedural soup: random triangles of edge `size` in the unit box.
+Scene random_soup(int n, uint64_t seed, float size = 0.2f) {
+    return make_procedural("soup", {{"triangles", std::to_string(n)}, {"seed", std::to_string(seed)},
+                                    {"size", std::to_string(size)}});
 }
 
 // A w x h grid of squares (two triangles each) in the plane z = 0, slightly warped in z
@@ -283,10 +259,10 @@ TEST(Lbvh, EqualCentroidsDifferentTriangles) {
     scene.name = "equal-centroids";
     // Corners c + d, c - d and c + (d.x, -d.y, d.z) / 2 have a box symmetric about c;
     // d in multiples of 1/64 keeps every sum exact, so the centroids are exactly equal.
-    Xorshift r{5};
+    SplitMix64 rng(5);
     const Vec3 c{1, 2, 3};
     for (int i = 0; i < 64; ++i) {
-        auto coord = [&] { return float(int(r.next() * 128) - 64) / 64.0f; };
+        auto coord = [&] { return float(int(rng.below(129)) - 64) / 64.0f; };
         const Vec3 d{coord(), coord(), coord()};
         add_triangle(scene, c + d, c - d, c + Vec3{d.x, -d.y, d.z} * 0.5f);
     }
@@ -343,14 +319,11 @@ TEST(Lbvh, DenseClusterWithFarOutlier) {
     // 2000 triangles in a unit box and one at 1e6: with 10 bits the whole cluster falls
     // into the first grid cell (cells are ~1000 wide), so only middle splits separate it;
     // with 21 bits the cells are ~0.5 wide and the codes still tell it apart.
-    Scene scene;
+    const Scene cluster = random_soup(2000, 77, 0.05f);  // rays aim here: the interesting hits
+    Scene scene = cluster;
     scene.name = "cluster-outlier";
-    add_soup(scene, 2000, 77, {0, 0, 0}, {1, 1, 1}, 0.05f);
     add_triangle(scene, {1e6f, 1e6f, 1e6f}, {1e6f + 1, 1e6f, 1e6f}, {1e6f, 1e6f + 1, 1e6f});
     scene.finalize();
-    Scene cluster;  // rays aimed at the cluster, where the interesting hits are
-    add_soup(cluster, 2000, 77, {0, 0, 0}, {1, 1, 1}, 0.05f);
-    cluster.finalize();
     const auto rays = test::probe_rays(cluster, 2000);
     for (const char* bits : {"10", "21"}) {
         auto lbvh = build_lbvh(scene, {{"bits", bits}});
