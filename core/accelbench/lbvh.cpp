@@ -75,23 +75,34 @@ public:
 
     // Builds the subtree over sorted_[begin, end) at `depth`, appending its nodes to `out`
     // in depth-first order (its root first). Node indices are relative to out's start.
-    // Returns the subtree's bounds.
+    // Returns the subtree's bounds. Small enough to be inlined into build_inner, so that
+    // the leaves — half of all nodes — cost no call of their own.
     Bounds3 build(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts) {
-        const uint32_t self = uint32_t(out.size());
-        out.emplace_back();
         const uint32_t count = end - begin;
-        if (count <= config_.max_prims || depth >= config_.max_depth) {
+        if (count <= config_.max_prims || depth >= config_.max_depth) return build_leaf(begin, end, out, counts);
+        return build_inner(begin, end, depth, out, counts);
+    }
+
+private:
+    Bounds3 build_leaf(uint32_t begin, uint32_t end, std::vector<BvhNode>& out, Lbvh::Counts& counts) const {
+        const uint32_t count = end - begin;
+        if (count > config_.max_prims) {
             if (count > BvhNode::kMaxLeafPrims)
                 throw std::runtime_error("lbvh: a leaf of " + std::to_string(count) + " primitives at max_depth " +
                                          std::to_string(config_.max_depth) + " exceeds the node format's " +
                                          std::to_string(BvhNode::kMaxLeafPrims));
-            if (count > config_.max_prims) ++counts.depth_limited_leaves;
-            Bounds3 b;
-            for (uint32_t i = begin; i < end; ++i) b.extend(sorted_bounds_[i]);
-            out[self] = BvhNode::leaf(b, begin, count);
-            return b;
+            ++counts.depth_limited_leaves;
         }
+        Bounds3 b = sorted_bounds_[begin];
+        for (uint32_t i = begin + 1; i < end; ++i) b.extend(sorted_bounds_[i]);
+        out.push_back(BvhNode::leaf(b, begin, count));
+        return b;
+    }
 
+    Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out,
+                        Lbvh::Counts& counts) {
+        const uint32_t self = uint32_t(out.size());
+        out.emplace_back();  // written once the children's bounds are known
         const Split split = find_split(begin, end);
         if (split.axis < 0) ++counts.equal_code_splits;
 
@@ -127,7 +138,6 @@ public:
         return b;
     }
 
-private:
     struct Split {
         uint32_t index;  // first primitive of the second child
         int axis;        // the axis of the code bit split at; -1: all codes equal
@@ -194,40 +204,55 @@ void Lbvh::build(const Scene& scene) {
 
 template <class Code>
 void Lbvh::build_with(const Scene& scene) {
-    FlatBvh bvh;
-    Counts counts;
+    SortBuffers<Code>& buffers = [this]() -> SortBuffers<Code>& {
+        if constexpr (sizeof(Code) == 4) return sort32_; else return sort64_;
+    }();
+    std::vector<KeyValue<Code>>& sorted = buffers.sorted;
+    // The tree is rebuilt in place, reusing its arrays' capacity; a build that throws
+    // leaves an empty tree behind, not half of one.
+    bvh_.nodes.clear();
+    bvh_.prim_ids.clear();
+    counts_ = {};
     const size_t n = scene.triangle_count();
-    if (n > 0) {
-        if (n > UINT32_MAX / 2) throw std::runtime_error("lbvh: scene '" + scene.name + "' has too many triangles");
-        // Codes over the centroid bounds, then one sort.
-        const MortonQuantizer quantizer(point_bounds(scene.centroids), config_.bits);
-        std::vector<KeyValue<Code>> sorted(n), scratch;
-        for (size_t i = 0; i < n; ++i) sorted[i] = {quantizer.code<Code>(scene.centroids[i]), uint32_t(i)};
-        const RadixSortStats sort = radix_sort(sorted, scratch, 3 * config_.bits, config_.sort_digit_bits);
-        counts.sort_passes = uint64_t(sort.passes);
-        counts.sort_skipped_passes = uint64_t(sort.skipped_passes);
-        scratch = {};
+    try {
+        if (n > 0) {
+            if (n > UINT32_MAX / 2)
+                throw std::runtime_error("lbvh: scene '" + scene.name + "' has too many triangles");
+            // Codes over the centroid bounds, then one sort.
+            const MortonQuantizer quantizer(point_bounds(scene.centroids), config_.bits);
+            sorted.resize(n);
+            for (size_t i = 0; i < n; ++i) sorted[i] = {quantizer.code<Code>(scene.centroids[i]), uint32_t(i)};
+            const RadixSortStats sort = radix_sort(sorted, buffers.scratch, 3 * config_.bits, config_.sort_digit_bits);
+            counts_.sort_passes = uint64_t(sort.passes);
+            counts_.sort_skipped_passes = uint64_t(sort.skipped_passes);
 
-        // The leaves' boxes come from the primitives' boxes in sorted order. Gathering them
-        // here, in one loop of independent loads, is much cheaper than gathering them in
-        // the recursion, where each leaf's load misses the cache on its own.
-        bvh.prim_ids.resize(n);
-        std::vector<Bounds3> sorted_bounds(n);
-        for (size_t i = 0; i < n; ++i) {
-            bvh.prim_ids[i] = sorted[i].value;
-            sorted_bounds[i] = scene.prim_bounds[sorted[i].value];
+            // The leaves' boxes come from the primitives' boxes in sorted order. Gathering
+            // them here, in one loop of independent loads, is much cheaper than gathering
+            // them in the recursion, where each leaf's load misses the cache on its own.
+            bvh_.prim_ids.resize(n);
+            sorted_bounds_.resize(n);
+            for (size_t i = 0; i < n; ++i) {
+                bvh_.prim_ids[i] = sorted[i].value;
+                sorted_bounds_[i] = scene.prim_bounds[sorted[i].value];
+            }
+            // A binary tree over n leaves has at most 2n - 1 nodes: reserving that up front
+            // means no reallocation during the build (task buffers reserve theirs likewise).
+            bvh_.nodes.reserve(2 * n - 1);
+            LbvhBuilder<Code> builder(sorted, sorted_bounds_, config_);
+            builder.build(0, uint32_t(n), 0, bvh_.nodes, counts_);
         }
-        // A binary tree over n leaves at most has 2n - 1 nodes: reserving that up front
-        // means no reallocation during the build (task buffers reserve theirs likewise).
-        bvh.nodes.reserve(2 * n - 1);
-        LbvhBuilder<Code> builder(sorted, sorted_bounds, config_);
-        builder.build(0, uint32_t(n), 0, bvh.nodes, counts);
-        // Leaves holding several primitives leave most of the reservation unused.
-        if (bvh.nodes.capacity() > bvh.nodes.size() + bvh.nodes.size() / 4) bvh.nodes.shrink_to_fit();
+        bvh_.finalize(scene);
+    } catch (...) {
+        bvh_ = FlatBvh{};
+        counts_ = {};
+        throw;
     }
-    bvh.finalize(scene);
-    bvh_ = std::move(bvh);
-    counts_ = counts;
+}
+
+uint64_t Lbvh::reserved_bytes() const {
+    auto bytes = [](const auto& v) { return uint64_t(v.capacity()) * sizeof(v[0]); };
+    return bytes(bvh_.nodes) + bytes(bvh_.prim_ids) + bytes(bvh_.triangles) + bytes(sort32_.sorted) +
+           bytes(sort32_.scratch) + bytes(sort64_.sorted) + bytes(sort64_.scratch) + bytes(sorted_bounds_);
 }
 
 BuildStats Lbvh::build_stats() const {
@@ -238,6 +263,9 @@ BuildStats Lbvh::build_stats() const {
     s.extra["build_tasks"] = double(counts_.tasks);
     s.extra["sort_passes"] = double(counts_.sort_passes);
     s.extra["sort_skipped_passes"] = double(counts_.sort_skipped_passes);
+    // memory_bytes is the tree; this is everything held, build buffers and unused
+    // capacity (e.g. the 2n - 1 node reservation when leaves hold several primitives).
+    s.extra["reserved_bytes"] = double(reserved_bytes());
     return s;
 }
 

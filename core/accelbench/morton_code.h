@@ -81,22 +81,24 @@ constexpr int morton_bit_axis(int bit) { return bit % 3; }
 // quantises to cell 0 on that axis instead of dividing by zero.
 class MortonQuantizer {
 public:
-    MortonQuantizer(const Bounds3& box, int bits) : cells_(uint32_t(1) << bits) {
+    MortonQuantizer(const Bounds3& box, int bits) : last_cell_(double((uint32_t(1) << bits) - 1)) {
         for (int a = 0; a < 3; ++a) {
             lower_[a] = box.lower[a];
             const double extent = double(box.upper[a]) - double(box.lower[a]);
             // Cells of equal width extent / 2^bits; the upper face itself falls into cell
             // 2^bits and is clamped into the last cell below.
-            scale_[a] = extent > 0 ? double(cells_) / extent : 0.0;
+            scale_[a] = extent > 0 ? double(uint32_t(1) << bits) / extent : 0.0;
         }
     }
 
     uint32_t cell(float v, int axis) const {
         const double q = (double(v) - lower_[axis]) * scale_[axis];
-        // Points outside the box (not expected, but cheap to be safe against) clamp to
-        // the border cells.
-        if (!(q > 0)) return 0;
-        return q >= double(cells_ - 1) ? cells_ - 1 : uint32_t(q);
+        // Clamped without branches (min/max instructions; this runs three times per
+        // primitive): the upper face lands on 2^bits and belongs to the last cell, and
+        // points outside the box (not expected, but free to be safe against) go to the
+        // border cells. (Argument order: std::max(0.0, q) would map a NaN to 0 too,
+        // though none can arise from finite input; see the class comment.)
+        return uint32_t(std::min(last_cell_, std::max(0.0, q)));
     }
 
     template <class Code>
@@ -107,7 +109,7 @@ public:
 private:
     double lower_[3];
     double scale_[3];
-    uint32_t cells_;
+    double last_cell_;
 };
 
 // Bounds of a set of points (the centroid bounds the codes are normalised to).
