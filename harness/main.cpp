@@ -1,2 +1,37 @@
+// accelbench: the command line. A thin dispatcher; each subcommand lives in its own file.
 #include <cstdio>
-int main() { return 0; }
+#include <cstring>
+
+#include "cli.h"
+
+namespace {
+
+struct Command {
+    const char* name;
+    int (*run)(int, char**);
+    const char* help;
+};
+
+const Command kCommands[] = {
+    {"render", accelbench::render_command, "render one model with one accelerator, print what it measured"},
+    {"list", accelbench::list_command, "accelerators with their parameters and defaults; procedural scenes"},
+    {"models", accelbench::models_command, "the model registry: where each file was found (--fetch: download missing)"},
+};
+
+int usage(FILE* to) {
+    std::fprintf(to, "usage: accelbench COMMAND [ARGS]\n\ncommands:\n");
+    for (const auto& c : kCommands) std::fprintf(to, "  %-8s %s\n", c.name, c.help);
+    return to == stdout ? 0 : 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 2) return usage(stderr);
+    if (!std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help"))
+        return usage(stdout);
+    for (const auto& c : kCommands)
+        if (!std::strcmp(argv[1], c.name)) return c.run(argc - 2, argv + 2);
+    std::fprintf(stderr, "accelbench: unknown command '%s'\n", argv[1]);
+    return usage(stderr);
+}
