@@ -37,6 +37,15 @@
 
 namespace accelbench {
 
+// The per-ray loops inline everything they call (box and triangle tests): GCC otherwise
+// keeps intersect_box out of line in these large loops, and the call costs more than
+// the slab test itself.
+#if defined(__GNUC__)
+#define ACCELBENCH_BVH_HOT [[gnu::flatten]]
+#else
+#define ACCELBENCH_BVH_HOT
+#endif
+
 enum class BvhTraversal { ordered, report };
 
 // The `traversal` parameter as both BVH structures declare it, and its value.
@@ -118,7 +127,7 @@ inline bool occluded_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const Wat
 
 // Ordered traversal, closest hit. `hit` must come in empty (Hit{}).
 template <class C>
-void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+ACCELBENCH_BVH_HOT void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
     if (bvh.empty()) return;
     const RayPrecomp rp(ray);
     float tmax = ray.tmax;  // the closest hit so far: nothing beyond it matters
@@ -165,7 +174,7 @@ void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
 
 // Ordered traversal, any hit: the order does not matter, only stopping at the first hit.
 template <class C>
-bool occluded_bvh_ordered(const FlatBvh& bvh, const Ray& ray, C& c) {
+ACCELBENCH_BVH_HOT bool occluded_bvh_ordered(const FlatBvh& bvh, const Ray& ray, C& c) {
     if (bvh.empty()) return false;
     const RayPrecomp rp(ray);
     c.box();
@@ -197,7 +206,7 @@ bool occluded_bvh_ordered(const FlatBvh& bvh, const Ray& ray, C& c) {
 // The report's Algorithm 1, closest hit: every node whose box the ray hits over its whole
 // interval is visited, left child before right child.
 template <class C>
-void intersect_bvh_report(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+ACCELBENCH_BVH_HOT void intersect_bvh_report(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
     if (bvh.empty()) return;
     const RayPrecomp rp(ray);
     const WatertightRay wr(ray);
@@ -224,7 +233,7 @@ void intersect_bvh_report(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
 
 // The report's Algorithm 1, any hit: the same visiting order, stopping at the first hit.
 template <class C>
-bool occluded_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c) {
+ACCELBENCH_BVH_HOT bool occluded_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c) {
     if (bvh.empty()) return false;
     const RayPrecomp rp(ray);
     const WatertightRay wr(ray);

@@ -1,6 +1,7 @@
 #include "accelbench/registry.h"
 
 #include "accelbench/brute_force.h"
+#include "accelbench/bvh.h"
 #include "accelbench/embree_accel.h"
 #include "accelbench/lbvh.h"
 
@@ -9,6 +10,7 @@ namespace accelbench {
 const std::vector<AcceleratorInfo>& accelerator_registry() {
     static const std::vector<AcceleratorInfo> registry = {
         BruteForce::info(),
+        Bvh::info(),
         EmbreeAccel::info(),
         Lbvh::info(),
     };
