@@ -1,3 +1,5 @@
+// The LBVH: the tree against the split rule itself, agreement with Embree, the same tree
+// for any thread count, exact trees on hand-made scenes and degenerate input.
 #include "accelbench/lbvh.h"
 
 #include <gtest/gtest.h>
@@ -10,18 +12,15 @@
 #include "accelbench/morton_code.h"
 #include "accelbench/procedural.h"
 #include "accelbench/random.h"
-
 #include "agreement.h"
+#include "bvh_check.h"
+#include "model_registry.h"
+#include "test_scenes.h"
 
 using namespace accelbench;
+using test::add_triangle;
 
 namespace {
-
-void add_triangle(Scene& s, Vec3 a, Vec3 b, Vec3 c) {
-    const uint32_t base = uint32_t(s.vertices.size());
-    s.vertices.insert(s.vertices.end(), {a, b, c});
-    s.triangles.push_back({base, base + 1, base + 2});
-}
 
 // The shared procedural soup: random triangles of edge `size` in the unit box.
 Scene random_soup(int n, uint64_t seed, float size = 0.2f) {
@@ -74,33 +73,6 @@ std::string describe(const std::map<std::string, std::string>& params) {
     std::string s;
     for (const auto& [k, v] : params) s += (s.empty() ? "" : " ") + k + "=" + v;
     return s;
-}
-
-// The structural invariants of any tree this builder makes: every primitive in exactly
-// one leaf, every box containing its children's boxes or its triangles' boxes.
-void expect_valid_tree(const Scene& scene, const FlatBvh& bvh, uint32_t max_depth = 50) {
-    ASSERT_EQ(bvh.prim_ids.size(), scene.triangle_count());
-    std::vector<int> seen(scene.triangle_count(), 0);
-    for (uint32_t id : bvh.prim_ids) ++seen[id];
-    for (size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << "primitive " << i;
-    auto contains = [](const Bounds3& outer, const Bounds3& inner) {
-        return outer.lower.x <= inner.lower.x && outer.lower.y <= inner.lower.y && outer.lower.z <= inner.lower.z &&
-               outer.upper.x >= inner.upper.x && outer.upper.y >= inner.upper.y && outer.upper.z >= inner.upper.z;
-    };
-    uint64_t leaf_slots = 0;
-    for (size_t i = 0; i < bvh.nodes.size(); ++i) {
-        const BvhNode& n = bvh.nodes[i];
-        if (n.is_leaf()) {
-            leaf_slots += n.prim_count();
-            for (uint32_t s = n.first_prim(); s < n.first_prim() + n.prim_count(); ++s)
-                ASSERT_TRUE(contains(n.bounds, scene.prim_bounds[bvh.prim_ids[s]])) << "leaf " << i;
-        } else {
-            ASSERT_TRUE(contains(n.bounds, bvh.nodes[i + 1].bounds)) << "node " << i;
-            ASSERT_TRUE(contains(n.bounds, bvh.nodes[n.second_child()].bounds)) << "node " << i;
-        }
-    }
-    EXPECT_EQ(leaf_slots, scene.triangle_count());
-    EXPECT_LE(bvh.depth, max_depth);
 }
 
 // Checks the tree against the split rule itself, from Morton codes recomputed here: the
@@ -160,7 +132,7 @@ TEST(Lbvh, AgreesWithEmbreeOnRandomSoups) {
                 const std::map<std::string, std::string> p{
                     {"bits", bits}, {"max_prims", max_prims}, {"traversal", traversal}};
                 auto lbvh = build_lbvh(scene, p);
-                expect_valid_tree(scene, lbvh->tree());
+                test::expect_valid_bvh(lbvh->tree(), scene, /*tight=*/true, "lbvh");
                 expect_morton_splits(scene, lbvh->tree(), std::stoi(bits));
                 test::expect_agrees_with_embree(scene, *lbvh, rays, "lbvh soup " + describe(p));
             }
@@ -174,7 +146,7 @@ TEST(Lbvh, AgreesWithEmbreeOnHandMadeScenes) {
             for (const char* traversal : {"ordered", "report"}) {
                 const std::map<std::string, std::string> p{{"bits", bits}, {"traversal", traversal}};
                 auto lbvh = build_lbvh(*scene, p);
-                expect_valid_tree(*scene, lbvh->tree());
+                test::expect_valid_bvh(lbvh->tree(), *scene, /*tight=*/true, "lbvh");
                 test::expect_agrees_with_embree(*scene, *lbvh, test::probe_rays(*scene, 2000),
                                                 "lbvh " + scene->name + " " + describe(p));
             }
@@ -248,7 +220,7 @@ TEST(Lbvh, IdenticalTrianglesSplitInTheMiddle) {
         EXPECT_EQ(lbvh->tree().nodes.size(), 199u);
         EXPECT_EQ(lbvh->tree().depth, 7u);
         EXPECT_EQ(lbvh->build_stats().extra.at("equal_code_splits"), 99.0);
-        expect_valid_tree(scene, lbvh->tree());
+        test::expect_valid_bvh(lbvh->tree(), scene, /*tight=*/true, "lbvh");
         test::expect_agrees_with_embree(scene, *lbvh, test::probe_rays(scene, 500), std::string("identical bits=") + bits);
     }
 }
@@ -279,7 +251,7 @@ TEST(Lbvh, FlatSceneWithZeroExtentAxis) {
     Scene scene = grid_mesh(25, 25, true);  // every centroid has z = 0
     for (const char* bits : {"10", "21"}) {
         auto lbvh = build_lbvh(scene, {{"bits", bits}});
-        expect_valid_tree(scene, lbvh->tree());
+        test::expect_valid_bvh(lbvh->tree(), scene, /*tight=*/true, "lbvh");
         EXPECT_EQ(lbvh->tree().nodes.size(), 2 * scene.triangle_count() - 1);
         for (const BvhNode& n : lbvh->tree().nodes)
             if (!n.is_leaf()) {
@@ -327,7 +299,7 @@ TEST(Lbvh, DenseClusterWithFarOutlier) {
     const auto rays = test::probe_rays(cluster, 2000);
     for (const char* bits : {"10", "21"}) {
         auto lbvh = build_lbvh(scene, {{"bits", bits}});
-        expect_valid_tree(scene, lbvh->tree());
+        test::expect_valid_bvh(lbvh->tree(), scene, /*tight=*/true, "lbvh");
         expect_morton_splits(scene, lbvh->tree(), std::stoi(bits));
         EXPECT_EQ(lbvh->tree().nodes.size(), 2 * scene.triangle_count() - 1);
         const double equal_splits = lbvh->build_stats().extra.at("equal_code_splits");
@@ -367,7 +339,7 @@ TEST(Lbvh, AnyBitsFromOneToTwentyOne) {
     const auto rays = test::probe_rays(scene, 1000);
     for (int bits : {1, 2, 5, 10, 11, 15, 21}) {
         auto lbvh = build_lbvh(scene, {{"bits", std::to_string(bits)}});
-        expect_valid_tree(scene, lbvh->tree());
+        test::expect_valid_bvh(lbvh->tree(), scene, /*tight=*/true, "lbvh");
         expect_morton_splits(scene, lbvh->tree(), bits);
         EXPECT_EQ(lbvh->build_stats().extra.at("morton_bits"), double(bits));
         test::expect_agrees_with_embree(scene, *lbvh, rays, "bits=" + std::to_string(bits));
@@ -389,4 +361,27 @@ TEST(Lbvh, RefusesOutOfRangeParameters) {
     EXPECT_THROW(make_accelerator("lbvh", {{"max_prims", "0"}}), ParamError);
     EXPECT_THROW(make_accelerator("lbvh", {{"traversal", "stackless"}}), ParamError);
     EXPECT_THROW(make_accelerator("lbvh", {{"task_threshold", "0"}}), ParamError);
+}
+
+TEST(Lbvh, StanfordBunnyAgreesWithEmbree) {
+    const ModelRegistry registry = ModelRegistry::load_default();
+    const ModelEntry* entry = registry.find("stanford-bunny");
+    ASSERT_NE(entry, nullptr);
+    ASSERT_FALSE(registry.locate(*entry).path.empty()) << "stanford-bunny.obj not found (../shared/models should hold it)";
+    const Scene scene = registry.load_scene(*entry);
+    const auto rays = test::probe_rays(scene, 20000, 11);
+    for (const std::map<std::string, std::string>& p : std::vector<std::map<std::string, std::string>>{
+             {}, {{"bits", "21"}, {"traversal", "report"}}, {{"max_prims", "4"}, {"threads", "2"}}}) {
+        auto lbvh = build_lbvh(scene, p);
+        test::expect_valid_bvh(lbvh->tree(), scene, /*tight=*/true, "lbvh bunny");
+        expect_morton_splits(scene, lbvh->tree(), p.count("bits") ? 21 : 10);
+        const BuildStats s = lbvh->build_stats();
+        if (p.count("max_prims") == 0) {
+            EXPECT_EQ(s.nodes.value(), 2u * 69451 - 1) << describe(p);  // one triangle per leaf
+        }
+        std::printf("[bunny] lbvh %s: nodes %llu, depth %llu, sah %.3f, equal-code splits %g\n", describe(p).c_str(),
+                    (unsigned long long)s.nodes.value(), (unsigned long long)s.max_depth.value(), s.sah_cost.value(),
+                    s.extra.at("equal_code_splits"));
+        test::expect_agrees_with_embree(scene, *lbvh, rays, "lbvh bunny " + describe(p));
+    }
 }
