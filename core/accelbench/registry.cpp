@@ -3,6 +3,7 @@
 #include "accelbench/brute_force.h"
 #include "accelbench/bvh.h"
 #include "accelbench/embree_accel.h"
+#include "accelbench/lbvh.h"
 
 namespace accelbench {
 
@@ -11,6 +12,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
         BruteForce::info(),
         Bvh::info(),
         EmbreeAccel::info(),
+        Lbvh::info(),
     };
     return registry;
 }
