@@ -1,2 +1,36 @@
+// accelbench: the command line. A thin dispatcher; each subcommand lives in its own file.
 #include <cstdio>
-int main() { return 0; }
+#include <cstring>
+
+#include "run_command.h"
+
+namespace {
+
+struct Command {
+    const char* name;
+    int (*run)(int, char**);
+    const char* help;
+};
+
+const Command kCommands[] = {
+    {"run", accelbench::run_command, "measure a config (configs/*.yaml) and write its results CSV"},
+    {"merge", accelbench::merge_command, "join result files (shards) that share a provenance"},
+};
+
+int usage(FILE* to) {
+    std::fprintf(to, "usage: accelbench COMMAND [ARGS]\n\ncommands:\n");
+    for (const auto& c : kCommands) std::fprintf(to, "  %-8s %s\n", c.name, c.help);
+    return to == stdout ? 0 : 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc < 2) return usage(stderr);
+    if (!std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help"))
+        return usage(stdout);
+    for (const auto& c : kCommands)
+        if (!std::strcmp(argv[1], c.name)) return c.run(argc - 2, argv + 2);
+    std::fprintf(stderr, "accelbench: unknown command '%s'\n", argv[1]);
+    return usage(stderr);
+}
