@@ -34,6 +34,17 @@ std::string combination_key(const ModelSpec& model, const RenderSettings& r, con
     return model.key + "|" + render + "|" + accel + "|" + params.canonical();
 }
 
+namespace {
+
+// `max_depth: auto` names the structure's own scene-dependent default: not a given value.
+bool is_scene_dependent_default(const AcceleratorInfo& info, const std::string& name, const std::string& value) {
+    for (const auto& s : info.params)
+        if (s.name == name) return s.scene_dependent_default && value == s.default_value;
+    return false;
+}
+
+}  // namespace
+
 std::vector<Combination> expand(const Config& config) {
     std::vector<Combination> out;
     std::vector<ConfigIssue> issues;
@@ -57,8 +68,10 @@ std::vector<Combination> expand(const Config& config) {
                 for (size_t k = 0; k < a.axes.size(); ++k) {
                     const ParamAxis& axis = a.axes[k];
                     for (size_t n = 0; n < axis.names.size(); ++n) {
-                        c.given[axis.names[n]] = axis.values[pos[k]][n];
-                        append_item(shown, ",", axis.names[n], "=", axis.values[pos[k]][n]);
+                        const std::string& name = axis.names[n];
+                        const std::string& value = axis.values[pos[k]][n];
+                        append_item(shown, ",", name, "=", value);
+                        if (!is_scene_dependent_default(*info, name, value)) c.given[name] = value;
                     }
                 }
                 if (has_threads && !c.given.count("threads"))

@@ -307,6 +307,9 @@ std::optional<std::string> read_param_value(Checker& c, const YAML::Node& n, con
                              n.Scalar() + "'");
         return std::nullopt;
     }
+    // A default that depends on the scene (the kd-tree's max_depth "auto") can be named, so
+    // a zipped group can pair it with other values; it means "not given".
+    if (spec.scene_dependent_default && n.Scalar() == spec.default_value) return spec.default_value;
     try {
         return format_param(parse_param(owner, spec, n.Scalar()));
     } catch (const ParamError& e) {
@@ -514,7 +517,7 @@ private:
                               "'procedural' (generated scene)");
             return;
         }
-        const std::vector<std::string> common = {"camera", "rays", "label"};
+        const std::vector<std::string> common = {"camera", "rays", "label", "repetitions"};
         bool ok = true;
         std::vector<std::string> allowed = common;
         const ProceduralInfo* proc = nullptr;
@@ -607,6 +610,10 @@ private:
         }
         if (auto* e = f.find("label"))
             if (auto s = read_string(c_, e->value, f.child("label"))) m.label = *s;
+        if (auto* e = f.find("repetitions")) {
+            if (auto v = read_int(c_, e->value, f.child("repetitions"), 1, 1000)) m.repetitions = int(*v);
+            else ok = false;
+        }
         if (ok) finish_model(std::move(m));
     }
 
@@ -844,7 +851,8 @@ private:
                 }
             }
         }
-        if (!f.has("accel") && !f.has("model") && !f.has("triangles_above") && !f.has("triangles_below")) {
+        if (!f.has("accel") && !f.has("model") && !f.has("triangles_above") && !f.has("triangles_below") &&
+            !f.has("params")) {
             c_.error(n, path, "a skip rule needs at least one condition (accel, model, triangles_above, "
                               "triangles_below, params)");
             ok = false;

@@ -65,6 +65,7 @@ struct ModelSpec {
     std::string procedural_canonical;  // Kind::Procedural: all parameters, defaults filled in
     std::optional<Camera> camera;      // overrides the registry's / the auto-fit view
     std::shared_ptr<const RaySet> rays;  // trace these instead of camera rays
+    std::optional<int> repetitions;      // overrides Config::repetitions for this model
     std::string label;  // the CSV's `model` column
     std::string key;    // config-independent identity (the combination id hashes it)
     SourceMark mark;

@@ -27,6 +27,13 @@ double seconds_between(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double>(b - a).count();
 }
 
+// A time limit as the config wrote it (0.1, not 0.10000000000000001).
+std::string limit_text(double s) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", s);
+    return buf;
+}
+
 // ---- deterministic values: every run that produces them must agree ------------------
 
 bool same_real(double a, double b) { return a == b || std::fabs(a - b) <= 1e-9 * std::max(std::fabs(a), std::fabs(b)); }
@@ -121,11 +128,13 @@ public:
     bool ReportContext(const Context& context) override { return console_.ReportContext(context); }
 
     void ReportRuns(const std::vector<Run>& runs) override {
-        bool has_aggregates = false;
-        for (const auto& r : runs) has_aggregates |= r.run_type == Run::RT_Aggregate;
+        // GB reports the repetitions and then, in a second call, their aggregates (mean,
+        // median, stddev, cv): by default the console shows the aggregates, and a single
+        // repetition or a failed one as it is.
         std::vector<Run> shown;
         for (const auto& r : runs)
-            if (settings_.show_repetitions || !has_aggregates || r.run_type == Run::RT_Aggregate) shown.push_back(r);
+            if (settings_.show_repetitions || r.run_type == Run::RT_Aggregate || r.repetitions <= 1 || r.error_occurred)
+                shown.push_back(r);
         if (!shown.empty()) console_.ReportRuns(shown);
         if (settings_.json) json_.ReportRuns(runs);
         for (const auto& r : runs) {
@@ -169,8 +178,7 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
         m.stage = s;
         if (stage) stage(s);
         if (settings.timeout_s > 0 && seconds_between(start, Clock::now()) > settings.timeout_s)
-            throw StageTimeout("exceeded the time limit (timeout_s = " + opt_text(std::optional<double>(settings.timeout_s)) +
-                               " s) before " + s);
+            throw StageTimeout("exceeded the time limit (timeout_s = " + limit_text(settings.timeout_s) + " s) before " + s);
     };
     auto fail = [&](benchmark::State& st, const std::exception& e) {
         if (failure.empty()) {
@@ -552,7 +560,7 @@ Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work,
     m.stage = stage;
     if (timed_out) {
         m.status = "timeout";
-        m.message = "exceeded the time limit (timeout_s = " + opt_text(std::optional<double>(timeout_s)) + " s) during " + stage;
+        m.message = "exceeded the time limit (timeout_s = " + limit_text(timeout_s) + " s) during " + stage;
     } else if (WIFSIGNALED(status)) {
         m.status = "error";
         m.message = "the measurement process died from signal " + std::to_string(WTERMSIG(status)) + " (" +
