@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "cli.h"
 #include "run_command.h"
 
 namespace {
@@ -13,8 +14,11 @@ struct Command {
 };
 
 const Command kCommands[] = {
-    {"run", accelbench::run_command, "measure a config (configs/*.yaml) and write its results CSV"},
+    {"run", accelbench::run_command, "measure a config (configs/*.yaml): combinations, Google Benchmark, results CSV"},
     {"merge", accelbench::merge_command, "join result files (shards) that share a provenance"},
+    {"render", accelbench::render_command, "render one model with one accelerator, print what it measured"},
+    {"list", accelbench::list_command, "accelerators with their parameters and defaults; procedural scenes"},
+    {"models", accelbench::models_command, "the model registry: where each file was found (--fetch: download missing)"},
 };
 
 int usage(FILE* to) {

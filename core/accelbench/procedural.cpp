@@ -426,7 +426,7 @@ ProceduralScene make_city(const ParamSet& p) {
     const int palms_per_block = int(std::min<int64_t>(4, target / 20000));
 
     // Streets: one big asphalt quad reaching well beyond the grid, so no view shows its edge.
-    const float g = half + 4.0f * pitch;
+    const float g = 3.0f * half + 2.0f * pitch;
     mesh.quad({-g, 0, -g}, {-g, 0, g}, {g, 0, g}, {g, 0, -g}, kAsphalt);
 
     std::vector<Tier> tiers;

@@ -1,0 +1,499 @@
+"""The report's claims (sections 5.1 to 6), checked against its own numbers and against ours.
+
+Each claim is a small function over a *source* of numbers: the report's (report-tables.csv)
+or ours (the harness CSV, through the same cell mapping as the tables). The same function
+computes both columns, so a verdict is never typed in: it follows from the data. A claim
+whose numbers are missing on one side, or whose rows on our side come from different
+builds/machines, is "not comparable", with the reason.
+
+Tolerances (what "~", "about the same" and "best" mean here) are the constants below.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import pandas as pd
+
+from .reference import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, reference_value
+from .render import fmt_sig, md_escape
+from .schema import Results
+from .selection import Picker, setting_spec
+from .tables import METRIC, preferred_variant
+
+# "~N x": the measured factor must lie within a factor APPROX_FACTOR of N, and never closer
+# to 1 than APPROX_MIN_EFFECT of the claimed effect in log terms, so that "~1.2x" is not
+# satisfied by "no change" (1.2x accepts 1.10x-1.31x, 2x accepts 1.60x-2.50x).
+APPROX_FACTOR = 1.25
+APPROX_MIN_EFFECT = 0.5
+# "about the same": the two values within this factor of each other.
+SIMILAR_FACTOR = 1.25
+# "the same tree" (depth saturation): node counts within 1%.
+SAME_TREE_RTOL = 0.01
+# "best of the settings tried": within 5% of the smallest total.
+BEST_TOL = 0.05
+# Monotone trends over a sweep may reverse by at most this much between two steps
+# (timing noise where the tree no longer changes).
+TREND_NOISE = 0.05
+
+HOLDS, FAILS, NOT_COMPARABLE = "holds", "does not hold", "not comparable"
+STRUCTURE_SHORT = {"bvh": "BVH", "lbvh": "LBVH", "kdtree": "kd-tree"}
+ALL_MODELS = TABLE4_MODELS + TABLE5_MODELS
+LARGE_MODELS = ["asian-dragon", "happy-buddha"]
+SMALL_MODELS = ["stanford-bunny", "igea"]
+BUNNY = "stanford-bunny"
+
+
+class Missing(Exception):
+    """A number the claim needs is not there (or a premise does not carry over)."""
+
+
+# ---- sources ----------------------------------------------------------------------------
+
+class ReportSource:
+    name = "report"
+
+    def __init__(self, ref: pd.DataFrame):
+        self.ref = ref
+
+    def begin(self) -> None:
+        pass
+
+    def groups(self) -> set[str]:
+        return set()
+
+    def primitives(self, model: str) -> float:
+        v = self.ref.loc[self.ref["model"] == model, "primitives"]
+        if v.empty:
+            raise Missing(f"#Primitives of {model}")
+        return float(v.iloc[0])
+
+    def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
+        if metric == "total":
+            return self.get(model, structure, "build", setting) + self.get(model, structure, "render", setting)
+        v = reference_value(self.ref, model, structure, setting, METRIC[metric].report)
+        if v is None or math.isnan(v):
+            raise Missing(f"report has no {metric} for {structure} {setting} on {model}")
+        return v
+
+
+class OurSource:
+    name = "ours"
+
+    def __init__(self, results: Results, ref: pd.DataFrame):
+        self.results = results
+        self.picker = Picker(results)
+        self.depths = [s.split("=")[1] for s in ref.loc[ref["table"] == 2, "setting"]
+                       if s.startswith("maxDepth=")]
+        self._groups: set[str] = set()
+        self.variants_used: set[str] = set()
+
+    def begin(self) -> None:
+        self._groups = set()
+
+    def groups(self) -> set[str]:
+        return self._groups
+
+    def model(self, report_model: str) -> str:
+        return our_model(report_model, self.picker.models)
+
+    def primitives(self, model: str) -> float:
+        rows = self.results.rows[self.results.rows["model"] == self.model(model)]
+        if rows.empty:
+            raise Missing(f"no rows for {self.model(model)}")
+        return float(rows["triangles"].iloc[0])
+
+    def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
+        if metric == "total":
+            return self.get(model, structure, "build", setting) + self.get(model, structure, "render", setting)
+        ours = self.model(model)
+        spec = setting_spec(setting, structure, self.picker, ours, self.depths)
+        variant = preferred_variant(self.picker.variants([ours], spec))
+        pick = self.picker.pick(ours, spec, variant)
+        what = f"{STRUCTURE_SHORT[structure]} ({setting}) on {ours}"
+        if not pick.ok:
+            raise Missing(f"{what}: {pick.reason}")
+        v = pick.value(METRIC[metric].ours)
+        if v is None:
+            raise Missing(f"{what} has no {metric}")
+        self._groups.add(str(pick.row["prov_group"]))
+        if variant:
+            self.variants_used.add(variant)
+        return v
+
+
+# ---- building blocks (each returns (holds, evidence)) -------------------------------------
+
+def short(model: str) -> str:
+    return REPORT_MODEL[model].short
+
+
+def approx_range(target: float) -> tuple[float, float]:
+    half = min(math.log(APPROX_FACTOR), APPROX_MIN_EFFECT * abs(math.log(target)))
+    return target * math.exp(-half), target * math.exp(half)
+
+
+def approx(x: float, target: float) -> bool:
+    lo, hi = approx_range(target)
+    return x > 0 and lo <= x <= hi
+
+
+def quantify(flags: list[bool], quantifier: str) -> bool:
+    if quantifier == "all":
+        return all(flags)
+    if quantifier == "most":
+        return sum(flags) * 2 > len(flags)
+    raise ValueError(quantifier)
+
+
+def count_text(flags: list[bool], quantifier: str) -> str:
+    need = "all" if quantifier == "all" else "more than half"
+    return f"{sum(flags)}/{len(flags)} (needs {need})"
+
+
+def ranking(src, models, metric, winner, extreme="min", quantifier="all",
+            structures=("bvh", "lbvh", "kdtree")):
+    flags, parts = [], []
+    for m in models:
+        vals = {s: src.get(m, s, metric) for s in structures}
+        order = sorted(vals, key=vals.get)
+        best = order[0] if extreme == "min" else order[-1]
+        flags.append(best == winner)
+        parts.append(f"{short(m)} {'✓' if flags[-1] else '✗'} " +
+                     " < ".join(f"{STRUCTURE_SHORT[s]} {fmt_sig(vals[s])}" for s in order))
+    return quantify(flags, quantifier), f"{count_text(flags, quantifier)}: " + "; ".join(parts)
+
+
+def factor(src, pairs, target, label):
+    """pairs: list of (numerator, denominator) thunks; geometric mean of the ratios vs ~target."""
+    ratios = [num() / den() for num, den in pairs]
+    gm = math.exp(sum(math.log(r) for r in ratios) / len(ratios))
+    lo, hi = approx_range(target)
+    each = "" if len(ratios) == 1 else " (geometric mean of " + ", ".join(
+        f"{fmt_sig(r)}" for r in ratios) + ")"
+    return approx(gm, target), (f"{label} {fmt_sig(gm)}x{each}; ~{target:g}x accepts "
+                                f"{fmt_sig(lo)}-{fmt_sig(hi)}x")
+
+
+def similar(src, models, a, b, metric, quantifier, within=SIMILAR_FACTOR):
+    flags, parts = [], []
+    for m in models:
+        r = src.get(m, a, metric) / src.get(m, b, metric)
+        flags.append(1 / within <= r <= within)
+        parts.append(f"{short(m)} {fmt_sig(r)}{'' if flags[-1] else ' ✗'}")
+    return quantify(flags, quantifier), (
+        f"{STRUCTURE_SHORT[a]}/{STRUCTURE_SHORT[b]} {metric}: {', '.join(parts)}; "
+        f"within {within}x on {count_text(flags, quantifier)}")
+
+
+def compare(src, models, a, b, metric, quantifier="all"):
+    """a < b on the models."""
+    flags, parts = [], []
+    for m in models:
+        va, vb = src.get(m, a, metric), src.get(m, b, metric)
+        flags.append(va < vb)
+        parts.append(f"{short(m)} {fmt_sig(va)} {'<' if flags[-1] else '≥'} {fmt_sig(vb)}")
+    return quantify(flags, quantifier), (
+        f"{STRUCTURE_SHORT[a]} vs {STRUCTURE_SHORT[b]} {metric}: {'; '.join(parts)}; "
+        f"{count_text(flags, quantifier)}")
+
+
+def more_than(src, model, num, den, metric, minimum):
+    ratios = {d: src.get(model, num, metric) / src.get(model, d, metric) for d in den}
+    ok = all(r > minimum for r in ratios.values())
+    return ok, (f"{short(model)}: " + ", ".join(
+        f"{STRUCTURE_SHORT[num]}/{STRUCTURE_SHORT[d]} {metric} {fmt_sig(r)}x"
+        for d, r in ratios.items()) + f" (needs > {minimum}x each)")
+
+
+def kd(src, metric, setting):
+    return src.get(BUNNY, "kdtree", metric, setting)
+
+
+def kd_factor(src, metric, num, den, target):
+    """A Table 2 claim "num vs den changes metric ~target x" (kd-tree on the bunny)."""
+    label = f"{metric}({num.split('=')[1]})/{metric}({den.split('=')[1]})"
+    return factor(src, [(lambda: kd(src, metric, num), lambda: kd(src, metric, den))], target, label)
+
+
+def best_setting(src, settings, winner, metric="total"):
+    vals = {s: kd(src, metric, s) for s in settings}
+    low = min(vals.values())
+    ok = vals[winner] <= low * (1 + BEST_TOL)
+    return ok, (", ".join(f"{s}: {fmt_sig(v)}" for s, v in vals.items()) +
+                f" (build + render; best within {BEST_TOL:.0%} of the lowest)")
+
+
+def trend(src, settings, metric, rising):
+    vals = [kd(src, metric, s) for s in settings]
+    ok = all((b >= a * (1 - TREND_NOISE)) if rising else (b <= a * (1 + TREND_NOISE))
+             for a, b in zip(vals, vals[1:]))
+    return ok, f"{metric} " + " → ".join(fmt_sig(v) for v in vals)
+
+
+# ---- the claims -------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Claim:
+    id: str
+    section: str
+    text: str
+    check: Callable
+
+
+CLAIMS: list[Claim] = []
+
+
+def claim(id_: str, section: str, text: str):
+    def register(fn):
+        CLAIMS.append(Claim(id_, section, text, fn))
+        return fn
+    return register
+
+
+MP = ("maxPrims=1", "maxPrims=10", "maxPrims=100")
+DEPTHS = ("maxDepth=5", "maxDepth=10", "maxDepth=28", "maxDepth=100")
+
+
+# Table 2 claims of the form "setting A -> B changes a metric ~N x": (id, text, metric,
+# numerator setting, denominator setting, N).
+KD_FACTOR_CLAIMS = [
+    ("5.1-a", "maxPrims 1 → 100 cuts kd-tree build time ~2x (the text says 'increased'; its "
+     "table shows a fall)", "build", "maxPrims=1", "maxPrims=100", 2),
+    ("5.1-b", "maxPrims 1 → 100 cuts #nodes ~418x", "nodes", "maxPrims=1", "maxPrims=100", 418),
+    ("5.1-c", "maxPrims 1 → 100 raises #int. tests ~61x", "prim_tests", "maxPrims=100", "maxPrims=1", 61),
+    ("5.1-d", "maxPrims 1 → 100 raises render time ~1.2x", "render", "maxPrims=100", "maxPrims=1", 1.2),
+    ("5.1-g", "max_depth 5 → 10 cuts total (build + render) time ~3x", "total", "maxDepth=5", "maxDepth=10", 3),
+    ("5.1-h", "max_depth 10 → 28 improves total time ~1.2x", "total", "maxDepth=10", "maxDepth=28", 1.2),
+]
+for _id, _text, _metric, _num, _den, _target in KD_FACTOR_CLAIMS:
+    claim(_id, "5.1", _text)(
+        lambda src, m=_metric, n=_num, d=_den, t=_target: kd_factor(src, m, n, d, t))
+
+
+@claim("5.1-e", "5.1", "maxPrims=10 is the best trade-off of 1/10/100 (lowest build + render)")
+def _(src):
+    return best_setting(src, MP, "maxPrims=10")
+
+
+@claim("5.1-f", "5.1", "A deeper kd-tree (depth 5 → 10 → 28 → 100) builds slower and renders faster")
+def _(src):
+    ok_b, ev_b = trend(src, DEPTHS, "build", rising=True)
+    ok_r, ev_r = trend(src, DEPTHS, "render", rising=False)
+    return ok_b and ok_r, (f"{ev_b}; {ev_r} (steps may reverse by ≤ {TREND_NOISE:.0%})")
+
+
+@claim("5.1-i", "5.1", "Depth saturates above ~28: depth 28 and 100 give the same tree (#nodes)")
+def _(src):
+    a, b = kd(src, "nodes", "maxDepth=28"), kd(src, "nodes", "maxDepth=100")
+    return abs(b - a) <= SAME_TREE_RTOL * a, (f"nodes {fmt_sig(a)} vs {fmt_sig(b)} "
+                                              f"(same within {SAME_TREE_RTOL:.0%})")
+
+
+@claim("5.1-j", "5.1", "Depth 28 (Equation 5) gives the best total of the depths tried")
+def _(src):
+    return best_setting(src, DEPTHS, "maxDepth=28")
+
+
+@claim("5.2-a", "5.2", "BVH builds fastest (Table 4 models)")
+def _(src):
+    return ranking(src, TABLE4_MODELS, "build", "bvh")
+
+
+@claim("5.2-b", "5.2", "kd-tree builds slowest (Table 4 models)")
+def _(src):
+    return ranking(src, TABLE4_MODELS, "build", "kdtree", extreme="max")
+
+
+@claim("5.2-c", "5.2", "LBVH builds ~2x slower than BVH")
+def _(src):
+    return factor(src, [((lambda m=m: src.get(m, "lbvh", "build")), (lambda m=m: src.get(m, "bvh", "build")))
+                        for m in TABLE4_MODELS], 2, "LBVH/BVH build")
+
+
+@claim("5.2-d", "5.2", "BVH and LBVH render about the same")
+def _(src):
+    return similar(src, TABLE4_MODELS, "lbvh", "bvh", "render", "most")
+
+
+@claim("5.2-e", "5.2", "BVH spends less build + render time than LBVH")
+def _(src):
+    return compare(src, TABLE4_MODELS, "bvh", "lbvh", "total", "most")
+
+
+@claim("5.2-f", "5.2", "kd-tree spends the most build + render time (its expensive build)")
+def _(src):
+    return ranking(src, TABLE4_MODELS, "total", "kdtree", extreme="max", quantifier="most")
+
+
+@claim("5.2-g", "5.2", "BVH and LBVH build trees of about the same size (#nodes)")
+def _(src):
+    return similar(src, TABLE4_MODELS, "lbvh", "bvh", "nodes", "all", within=1.1)
+
+
+@claim("5.2-h", "5.2", "kd-tree has more nodes than BVH on the small models (bunny, Igea) and "
+       "fewer on the large ones (Dragon, Buddha)")
+def _(src):
+    ok_s, ev_s = compare(src, SMALL_MODELS, "bvh", "kdtree", "nodes")
+    ok_l, ev_l = compare(src, LARGE_MODELS, "kdtree", "bvh", "nodes")
+    return ok_s and ok_l, f"{ev_s}. {ev_l}"
+
+
+@claim("5.2-i", "5.2", "kd-tree needs fewer #int. tests than BVH on the large models (Dragon, Buddha)")
+def _(src):
+    return compare(src, LARGE_MODELS, "kdtree", "bvh", "prim_tests")
+
+
+@claim("5.3-a", "5.3", "kd-tree renders fastest on complex scenes (Trees, City)")
+def _(src):
+    return ranking(src, TABLE5_MODELS, "render", "kdtree")
+
+
+@claim("5.3-b", "5.3", "kd-tree renders more than 2x faster than BVH and LBVH on Trees")
+def _(src):
+    ratios = {s: src.get("trees", s, "render") / src.get("trees", "kdtree", "render") for s in ("bvh", "lbvh")}
+    return all(r > 2 for r in ratios.values()), (
+        "Trees: " + ", ".join(f"{STRUCTURE_SHORT[s]}/kd-tree render {fmt_sig(r)}x" for s, r in ratios.items())
+        + " (needs > 2x each)")
+
+
+@claim("5.3-c", "5.3", "kd-tree takes more than twice as long to build as BVH and LBVH on Trees")
+def _(src):
+    return more_than(src, "trees", "kdtree", ("bvh", "lbvh"), "build", 2)
+
+
+@claim("5.3-d", "5.3", "BVH and LBVH spend about the same build + render time on Trees and City")
+def _(src):
+    return similar(src, TABLE5_MODELS, "lbvh", "bvh", "total", "all")
+
+
+@claim("5.3-e", "5.3", "City: BVH builds faster than LBVH, but LBVH renders faster than BVH")
+def _(src):
+    ok_b, ev_b = compare(src, ["sci-fi-city"], "bvh", "lbvh", "build")
+    ok_r, ev_r = compare(src, ["sci-fi-city"], "lbvh", "bvh", "render")
+    return ok_b and ok_r, f"{ev_b}. {ev_r}"
+
+
+@claim("5.3-f", "5.3", "BVH and LBVH render the City slower than Igea although it has fewer primitives")
+def _(src):
+    pc, pi = src.primitives("sci-fi-city"), src.primitives("igea")
+    if pc >= pi:
+        raise Missing(f"the premise fails: City {fmt_sig(pc)} ≥ Igea {fmt_sig(pi)} primitives")
+    parts, flags = [], []
+    for s in ("bvh", "lbvh"):
+        r = src.get("sci-fi-city", s, "render") / src.get("igea", s, "render")
+        flags.append(r > 1)
+        parts.append(f"{STRUCTURE_SHORT[s]} City/Igea render {fmt_sig(r)}x")
+    return all(flags), f"{', '.join(parts)} (primitives {fmt_sig(pc)} vs {fmt_sig(pi)})"
+
+
+@claim("6-a", "6", "BVH builds fastest in most scenes (all six)")
+def _(src):
+    return ranking(src, ALL_MODELS, "build", "bvh", quantifier="most")
+
+
+@claim("6-b", "6", "BVH and LBVH render about the same in most scenes (all six)")
+def _(src):
+    return similar(src, ALL_MODELS, "lbvh", "bvh", "render", "most")
+
+
+@claim("6-c", "6", "kd-tree renders faster than BVH and LBVH (most scenes of all six)")
+def _(src):
+    return ranking(src, ALL_MODELS, "render", "kdtree", quantifier="most")
+
+
+@claim("6-d", "6", "kd-tree invests the most build time (all six)")
+def _(src):
+    return ranking(src, ALL_MODELS, "build", "kdtree", extreme="max")
+
+
+CLAIMS.sort(key=lambda c: (c.section, c.id))  # ids follow the report's sections
+
+
+# ---- evaluation and output ----------------------------------------------------------------
+
+@dataclass
+class Finding:
+    verdict: str
+    evidence: str
+
+
+def evaluate(c: Claim, src) -> Finding:
+    src.begin()
+    try:
+        holds, evidence = c.check(src)
+    except Missing as e:
+        return Finding(NOT_COMPARABLE, f"missing data: {e}")
+    except ZeroDivisionError:
+        return Finding(NOT_COMPARABLE, "a value the claim divides by is zero")
+    groups = src.groups()
+    if len(groups) > 1:
+        return Finding(NOT_COMPARABLE, f"{evidence} — but the rows come from different "
+                                       f"provenance groups ({', '.join(sorted(groups))})")
+    return Finding(HOLDS if holds else FAILS, evidence)
+
+
+@dataclass
+class ClaimRow:
+    claim: Claim
+    report: Finding
+    ours: Finding
+
+
+def evaluate_all(results: Results, ref: pd.DataFrame) -> tuple[list[ClaimRow], OurSource]:
+    rsrc, osrc = ReportSource(ref), OurSource(results, ref)
+    return [ClaimRow(c, evaluate(c, rsrc), evaluate(c, osrc)) for c in CLAIMS], osrc
+
+
+def tolerance_text() -> str:
+    lo12, hi12 = approx_range(1.2)
+    lo2, hi2 = approx_range(2)
+    return (f"Tolerances (accelbench_analysis/claims.py): '~N x' holds when the measured factor "
+            f"lies within a factor {APPROX_FACTOR} of N and keeps at least "
+            f"{APPROX_MIN_EFFECT:.0%} of the claimed effect in log terms (~1.2x accepts "
+            f"{fmt_sig(lo12)}-{fmt_sig(hi12)}x, ~2x accepts {fmt_sig(lo2)}-{fmt_sig(hi2)}x); "
+            f"'about the same' = within a factor {SIMILAR_FACTOR} (node counts: 1.1); 'the same "
+            f"tree' = node counts within {SAME_TREE_RTOL:.0%}; 'best' = within {BEST_TOL:.0%} "
+            f"of the lowest; trends may reverse by at most {TREND_NOISE:.0%} per step. 'most' "
+            f"= more than half of the models. Our side uses medians.")
+
+
+def claims_markdown(rows: list[ClaimRow], results: Results, osrc: OurSource) -> str:
+    out = ["# The report's claims, checked", ""]
+    out += [f"> **Warning:** {md_escape(w)}" + "\n" for w in results.warnings]
+    counts = {v: sum(r.ours.verdict == v for r in rows) for v in (HOLDS, FAILS, NOT_COMPARABLE)}
+    unsupported = [r.claim.id for r in rows if r.report.verdict == FAILS]
+    out += [
+        "Each claim of the report's sections 5.1-6, evaluated twice by the same code: on the "
+        "report's own numbers (results/report/report-tables.csv) and on ours. Model stand-ins "
+        "as in the tables (Stanford dragon for the Asian Dragon, happy-buddha-100k for the "
+        "Happy Buddha, procedural forest/city for Trees/City); a claim about a stand-in tests "
+        "the claim's idea, not the report's scene.",
+        "",
+        f"Ours: {counts[HOLDS]} hold, {counts[FAILS]} do not hold, {counts[NOT_COMPARABLE]} not "
+        f"comparable. The report's own numbers do not support: "
+        f"{', '.join(unsupported) if unsupported else 'none'}.",
+        "",
+        tolerance_text(),
+        "",
+    ]
+    if osrc.variants_used:
+        out += [f"Our BVH/LBVH rows use traversal={', '.join(sorted(osrc.variants_used))} "
+                f"(the report's order is preferred where both modes were measured).", ""]
+    out += ["| # | claim | report's evidence | report's data | our evidence | verdict (ours) |",
+            "|:---|:---|:---|:---|:---|:---|"]
+    for r in rows:
+        out.append(f"| {r.claim.id} | {md_escape(r.claim.text)} | {md_escape(r.report.evidence)} | "
+                   f"{r.report.verdict} | {md_escape(r.ours.evidence)} | **{r.ours.verdict}** |")
+    return "\n".join(out) + "\n"
+
+
+def write_claims(results: Results, ref: pd.DataFrame, out_dir: Path) -> tuple[Path, list[ClaimRow]]:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    rows, osrc = evaluate_all(results, ref)
+    path = out_dir / "claims.md"
+    path.write_text(claims_markdown(rows, results, osrc))
+    return path, rows

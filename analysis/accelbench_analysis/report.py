@@ -1,0 +1,124 @@
+"""results/REPORT.md: one page that says where the numbers come from and links the tables,
+the claims and the figures, each with a one-line caption."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow
+from .figures import FIGURES, Skipped
+from .reference import REPORT_MACHINE, REPORT_MODELS
+from .render import md_escape
+from .schema import Results
+
+TABLE_CAPTIONS = {
+    "table2": "Table 2: kd-tree maxPrims and maxDepth sweeps on the Stanford bunny.",
+    "table4": "Table 4: BVH, LBVH and kd-tree (plus binned-SAH BVH and Embree) on bunny, Igea, "
+              "dragon and Buddha; with a 'relative to BVH' table.",
+    "table5": "Table 5: the complex scenes (procedural forest and city); with a 'relative to "
+              "BVH' table.",
+}
+REGENERATE = "make reproduce-tables"
+
+
+def provenance_lines(results: Results) -> list[str]:
+    rows = results.rows
+    ts = sorted(t for t in rows["timestamp"] if t)
+    threads = sorted({f"{t:g}" for t in rows["threads"].dropna()})
+    out = []
+    for g in results.groups:
+        f = g.fields
+        head = f"group {g.label}: " if results.mixed else ""
+        out.append(f"- {head}**Machine:** {f['cpu']}" +
+                   (f" (threads: {', '.join(threads)})" if threads and not results.mixed else ""))
+        out.append(f"  **Commit:** `{f['git_sha']}`" +
+                   (" **(dirty work tree)**" if f["git_dirty"] == "true" else "") +
+                   f"; {f['compiler']}, {f['build_type']}; Embree {f['embree_version']}; "
+                   f"{g.rows} rows")
+    if ts:
+        out.append(f"- **Measured:** {ts[0]}" + (f" to {ts[-1]}" if ts[-1] != ts[0] else ""))
+    out.append("- **CSV:** " + ", ".join(f"`{f}`" for f in results.files))
+    return out
+
+
+def stand_in_lines() -> list[str]:
+    same = [m.label for m in REPORT_MODELS if m.stand_in is None]
+    out = [f"- {', '.join(same)}: the report's own models (same meshes)."]
+    out += [f"- {m.label}: {m.stand_in}." for m in REPORT_MODELS if m.stand_in]
+    return out
+
+
+def claims_lines(rows: list[ClaimRow] | None) -> list[str]:
+    if not rows:
+        return ["- [The report's claims, checked](tables/claims.md)"]
+    n = {v: sum(r.ours.verdict == v for r in rows) for v in (HOLDS, FAILS, NOT_COMPARABLE)}
+    out = [f"- [The report's claims, checked](tables/claims.md): each claim of sections 5.1-6 "
+           f"evaluated on the report's numbers and on ours. Ours: **{n[HOLDS]} hold, "
+           f"{n[FAILS]} do not hold, {n[NOT_COMPARABLE]} not comparable**."]
+    fails = [r for r in rows if r.ours.verdict == FAILS]
+    if fails:
+        out.append("  Not holding here: " + "; ".join(f"{r.claim.id} {md_escape(r.claim.text)}"
+                                                     for r in fails) + ".")
+    unsupported = [r for r in rows if r.report.verdict == FAILS]
+    if unsupported:
+        out.append("  Not supported by the report's own numbers: " + "; ".join(
+            f"{r.claim.id} ({md_escape(r.report.evidence)})" for r in unsupported) + ".")
+    return out
+
+
+def figure_lines(out_dir: Path, figures: dict | None) -> list[str]:
+    out = []
+    for name, (caption, _) in FIGURES.items():
+        rel = f"figures/{name}.png"
+        result = (figures or {}).get(name)
+        if isinstance(result, Skipped):
+            out.append(f"- {caption}: not drawn, {result.reason}.")
+        elif (out_dir / rel).is_file():
+            out.append(f"- [{caption}]({rel})")
+        else:
+            out.append(f"- {caption}: not generated yet (`python -m accelbench_analysis "
+                       f"figures ...`).")
+    return out
+
+
+def report_markdown(results: Results, out_dir: Path, claims: list[ClaimRow] | None,
+                    figures: dict | None) -> str:
+    out = ["# accelbench results", "",
+           "A reproduction of the report \"Implementation and Analysis of Acceleration Data "
+           "Structures in Ray Tracing\" (Freiburg 2022): its Tables 2, 4 and 5 and the claims "
+           "of its sections 5.1-6, measured again, plus structures it did not have (binned-SAH "
+           "BVH, Embree).", ""]
+    out += [f"> **Warning:** {md_escape(w)}\n" for w in results.warnings]
+    out += ["## Where these numbers come from", ""] + provenance_lines(results)
+    out += ["", "## Stand-ins", ""] + stand_in_lines()
+    out += ["", "## Tables", ""]
+    for name, caption in TABLE_CAPTIONS.items():
+        if (out_dir / "tables" / f"{name}.md").is_file():
+            out.append(f"- [{caption}](tables/{name}.md) ([LaTeX](tables/{name}.tex))")
+        else:
+            out.append(f"- {caption} Not generated yet.")
+    out += claims_lines(claims)
+    out += ["- [The report's numbers](report/report-tables.csv) as printed "
+            "([provenance](report/README.md))."]
+    out += ["", "## Figures", ""] + figure_lines(out_dir, figures)
+    out += ["", "## Reading the comparison", "",
+            f"- The report measured on another machine ({REPORT_MACHINE}) with a much slower "
+            f"implementation: compare orderings and ratios (the 'relative to BVH' tables and "
+            f"figure), not seconds.",
+            "- The report's \"#Primitives\" are vertex counts (bunny, Igea) and its Table 4 BVH "
+            "node counts are 2 x #Primitives - 1; the tables show our triangle and vertex counts "
+            "side by side and check both facts in their notes.",
+            "- Our \"#int. tests\" are primitive tests summed over all rays (primary + shadow); "
+            "the report does not define its count.",
+            "", "## Regenerate", "",
+            f"`{REGENERATE}` (runs the harness, then `python -m accelbench_analysis all "
+            f"<csv> --out results`; see analysis/README.md).", ""]
+    return "\n".join(out)
+
+
+def write_report(results: Results, out_dir: Path, claims: list[ClaimRow] | None = None,
+                 figures: dict | None = None) -> Path:
+    out_dir.mkdir(parents=True, exist_ok=True)
+    path = out_dir / "REPORT.md"
+    path.write_text(report_markdown(results, out_dir, claims, figures))
+    return path

@@ -1,0 +1,352 @@
+"""The CSV contract between the C++ harness and this package, and the loader that enforces it.
+
+The harness writes one row per accelerator x params x model combination (see
+analysis/README.md for the column list). Loading checks that contract before anything is
+computed: a file missing required columns, with an unknown status or with text where a
+number belongs is rejected with an error that names the file, the columns and the rows.
+
+Provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version) is grouped: rows
+that differ in any of these fields belong to different groups, labelled A, B, ... in file
+order. More than one group is never an error (comparing two machines is legitimate), but
+it is never silent either: every output carries a warning, table cells are tagged with
+their group, and a claim that would compare rows of different groups is "not comparable".
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+KEY_COLUMNS = ["config", "model", "accel", "params"]
+
+
+def stat_columns(measure: str) -> list[str]:
+    """The five summary columns the harness writes for one timed measure."""
+    return [f"{measure}_{s}" for s in ("median", "mean", "stddev", "ci_lo", "ci_hi")]
+
+
+IDENTITY_COLUMNS = ["config", "model", "triangles", "vertices", "accel", "params"]
+STATUS_COLUMNS = ["status", "message", "repetitions"]
+TIMING_COLUMNS = stat_columns("build_s") + stat_columns("render_s")
+COUNT_COLUMNS = [
+    "rays", "hits", "shadow_rays", "shadow_hits", "mrays_per_s", "nodes", "leaves",
+    "max_depth", "memory_bytes", "sah_cost", "prim_tests", "node_visits",
+]
+PROVENANCE_COLUMNS = [
+    "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version",
+    "timestamp",
+]
+REQUIRED_COLUMNS = (IDENTITY_COLUMNS + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
+                    + PROVENANCE_COLUMNS)
+
+# Written by the harness once the reference comparison exists; every consumer must cope
+# with their absence (has_error_columns()).
+ERROR_COLUMNS = [
+    "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max",
+    "nan_results", "image_rmse", "hole_pixels",
+]
+
+NUMERIC_COLUMNS = (["triangles", "vertices", "repetitions"] + TIMING_COLUMNS + COUNT_COLUMNS
+                   + ["threads"] + ERROR_COLUMNS)
+
+STATUSES = ("ok", "skipped", "timeout", "error")
+
+# Rows differing in any of these fields were not measured with the same code on the same
+# machine. `threads` and `timestamp` are per-run facts, not identity.
+PROVENANCE_IDENTITY = ["git_sha", "git_dirty", "compiler", "build_type", "cpu", "embree_version"]
+
+# Build types whose timings are representative (the Makefile builds RelWithDebInfo).
+OPTIMISED_BUILD_TYPES = {"release", "relwithdebinfo"}
+
+REPS_REQUIRED_COLUMNS = KEY_COLUMNS + ["repetition", "build_s", "render_s"]
+
+# Prefix of the per-parameter columns once read: parameter names (max_depth, threads)
+# may equal statistic or provenance column names, so the harness's per-parameter columns
+# (those between `params` and `status`) are renamed to "param.<name>" on load.
+PARAM_PREFIX = "param."
+
+# Median of the .reps.csv must reproduce the summary's median to this relative tolerance.
+REPS_MEDIAN_RTOL = 1e-6
+
+
+class ContractError(ValueError):
+    """A CSV that does not follow the harness's contract."""
+
+
+@dataclass
+class ProvenanceGroup:
+    label: str
+    fields: dict[str, str]
+    files: list[str]
+    rows: int
+
+    def describe(self) -> str:
+        sha = self.fields["git_sha"]
+        dirty = " (dirty)" if self.fields["git_dirty"] == "true" else ""
+        return (f"{self.label}: commit {sha[:12]}{dirty}, cpu {self.fields['cpu']}, "
+                f"{self.fields['compiler']}, {self.fields['build_type']}, "
+                f"Embree {self.fields['embree_version']} ({self.rows} rows from "
+                f"{', '.join(self.files)})")
+
+
+@dataclass
+class Results:
+    """All rows of the loaded CSVs plus what loading found out about them."""
+
+    rows: pd.DataFrame
+    groups: list[ProvenanceGroup]
+    warnings: list[str] = field(default_factory=list)
+    reps: pd.DataFrame | None = None
+    files: list[str] = field(default_factory=list)
+
+    @property
+    def mixed(self) -> bool:
+        return len(self.groups) > 1
+
+    def has_error_columns(self) -> bool:
+        return all(c in self.rows.columns for c in ("false_misses", "false_hits")) and \
+            self.rows[["false_misses", "false_hits"]].notna().any().any()
+
+    def ok(self) -> pd.DataFrame:
+        return self.rows[self.rows["status"] == "ok"]
+
+
+def parse_params(text: str) -> dict[str, str]:
+    """The canonical "k=v;k=v" text of the `params` column as a dict (values normalised)."""
+    out: dict[str, str] = {}
+    text = (text or "").strip()
+    if not text:
+        return out
+    for item in text.split(";"):
+        if not item.strip():
+            continue
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ContractError(f"malformed params entry {item!r} in {text!r} (expected k=v;k=v)")
+        out[key.strip()] = normalise_value(value)
+    return out
+
+
+def normalise_value(value: str) -> str:
+    """Canonical text of a parameter value, so that "1", "1.0" and " 1" compare equal."""
+    v = str(value).strip()
+    low = v.lower()
+    if low in ("true", "false"):
+        return low
+    try:
+        f = float(v)
+    except ValueError:
+        return v
+    if math.isfinite(f) and f == int(f):
+        return str(int(f))
+    return repr(f)
+
+
+def _read_header(path: Path) -> list[str]:
+    with path.open(newline="") as fh:
+        try:
+            return next(csv.reader(fh))
+        except StopIteration:
+            raise ContractError(f"{path}: empty file (no header)") from None
+
+
+def _rename_param_columns(header: list[str]) -> list[str]:
+    """Per-parameter columns sit between `params` and `status`; prefix them (see PARAM_PREFIX)."""
+    names = [h.strip() for h in header]
+    if "params" in names and "status" in names:
+        lo, hi = names.index("params"), names.index("status")
+        names = [PARAM_PREFIX + n if lo < i < hi else n for i, n in enumerate(names)]
+    return names
+
+
+def _to_numbers(df: pd.DataFrame, columns: list[str], path: Path) -> list[str]:
+    """Converts the columns in place (empty text = missing); returns the problems found."""
+    problems = []
+    for col in columns:
+        if col not in df.columns:
+            continue
+        text = df[col].astype(str).str.strip()
+        nums = pd.to_numeric(text.where(text != ""), errors="coerce")
+        bad = (text != "") & nums.isna() & ~text.str.lower().isin(["nan", "inf", "-inf"])
+        if bad.any():
+            rows = [int(i) + 2 for i in df.index[bad][:5]]  # +2: header line, 1-based
+            problems.append(f"column {col!r} has non-numeric values on lines {rows} "
+                            f"(e.g. {text[bad].iloc[0]!r})")
+        df[col] = nums.astype(float)
+    return problems
+
+
+def read_csv(path: str | Path) -> pd.DataFrame:
+    """Reads one harness CSV and checks it against the contract; raises ContractError."""
+    path = Path(path)
+    if not path.is_file():
+        raise ContractError(f"{path}: no such file")
+    if path.name.endswith(".reps.csv"):
+        raise ContractError(f"{path}: this is a per-repetition file; pass the summary CSV "
+                            f"beside it (its .reps.csv is read automatically)")
+    header = _read_header(path)
+    names = _rename_param_columns(header)
+    missing = [c for c in REQUIRED_COLUMNS if c not in names]
+    if missing:
+        raise ContractError(f"{path}: missing required columns: {', '.join(missing)}")
+    dups = sorted({n for n in names if names.count(n) > 1})
+    if dups:
+        raise ContractError(f"{path}: duplicate column names: {', '.join(dups)}")
+
+    try:
+        df = pd.read_csv(path, header=0, names=names, dtype=str, keep_default_na=False)
+    except (pd.errors.ParserError, ValueError) as e:
+        raise ContractError(f"{path}: not a well-formed CSV ({e})") from None
+    if df.empty:
+        raise ContractError(f"{path}: no data rows")
+    problems = _to_numbers(df, NUMERIC_COLUMNS, path)
+
+    status = df["status"].str.strip().str.lower()
+    bad_status = ~status.isin(STATUSES)
+    if bad_status.any():
+        problems.append(f"column 'status' must be one of {', '.join(STATUSES)}; found "
+                        f"{sorted(set(df['status'][bad_status]))}")
+    df["status"] = status
+
+    for col in ("model", "accel", "config"):
+        empty = df[col].str.strip() == ""
+        if empty.any():
+            problems.append(f"column {col!r} is empty on lines {[int(i) + 2 for i in df.index[empty][:5]]}")
+
+    try:
+        df["param_dict"] = [parse_params(p) for p in df["params"]]
+    except ContractError as e:
+        problems.append(str(e))
+
+    dirty = df["git_dirty"].str.strip().str.lower()
+    dirty = dirty.replace({"1": "true", "0": "false", "yes": "true", "no": "false"})
+    if not dirty.isin(["true", "false"]).all():
+        problems.append(f"column 'git_dirty' must be true/false; found "
+                        f"{sorted(set(df['git_dirty'][~dirty.isin(['true', 'false'])]))}")
+    df["git_dirty"] = dirty
+
+    if problems:
+        raise ContractError(f"{path}: " + "; ".join(problems))
+
+    dup = df.duplicated(KEY_COLUMNS, keep=False)
+    if dup.any():
+        keys = df.loc[dup, KEY_COLUMNS].drop_duplicates().head(3).to_dict("records")
+        raise ContractError(f"{path}: the key (config, model, accel, params) must be unique; "
+                            f"repeated: {keys}")
+    df["source"] = str(path)
+    for col in PROVENANCE_IDENTITY + ["timestamp"]:
+        df[col] = df[col].astype(str).str.strip()
+    return df
+
+
+def read_reps(path: Path) -> pd.DataFrame:
+    header = [h.strip() for h in _read_header(path)]
+    missing = [c for c in REPS_REQUIRED_COLUMNS if c not in header]
+    if missing:
+        raise ContractError(f"{path}: missing required columns: {', '.join(missing)}")
+    df = pd.read_csv(path, dtype=str, keep_default_na=False)
+    df.columns = [c.strip() for c in df.columns]
+    problems = _to_numbers(df, ["repetition", "build_s", "render_s"], path)
+    if problems:
+        raise ContractError(f"{path}: " + "; ".join(problems))
+    df["source"] = str(path)
+    return df
+
+
+def reps_path(path: str | Path) -> Path:
+    p = Path(path)
+    return p.with_name(p.name[:-4] + ".reps.csv" if p.name.endswith(".csv") else p.name + ".reps.csv")
+
+
+def _check_reps(rows: pd.DataFrame, reps: pd.DataFrame) -> list[str]:
+    """The summary's medians must be the medians of its repetitions."""
+    warnings = []
+    med = reps.groupby(KEY_COLUMNS)[["build_s", "render_s"]].median().reset_index()
+    merged = rows.merge(med, on=KEY_COLUMNS, how="inner")
+    for measure in ("build_s", "render_s"):
+        a, b = merged[f"{measure}_median"], merged[measure]
+        bad = ~np.isclose(a, b, rtol=REPS_MEDIAN_RTOL, equal_nan=True)
+        for _, r in merged[bad].head(5).iterrows():
+            warnings.append(f"{measure}_median of {r['accel']} [{r['params']}] on {r['model']} "
+                            f"is {r[f'{measure}_median']:.6g} but the median of its repetitions "
+                            f"in the .reps.csv is {r[measure]:.6g}")
+    return warnings
+
+
+def _provenance_groups(df: pd.DataFrame) -> tuple[pd.Series, list[ProvenanceGroup]]:
+    keys = df[PROVENANCE_IDENTITY].astype(str).apply(tuple, axis=1)
+    order: dict[tuple, str] = {}
+    for k in keys:
+        if k not in order:
+            order[k] = chr(ord("A") + len(order)) if len(order) < 26 else f"G{len(order)}"
+    labels = keys.map(order)
+    groups = []
+    for k, label in order.items():
+        sel = labels == label
+        groups.append(ProvenanceGroup(
+            label=label, fields=dict(zip(PROVENANCE_IDENTITY, k)),
+            files=sorted(set(df.loc[sel, "source"])), rows=int(sel.sum())))
+    return labels, groups
+
+
+def _provenance_warnings(groups: list[ProvenanceGroup]) -> list[str]:
+    warnings = []
+    if len(groups) > 1:
+        differing = [f for f in PROVENANCE_IDENTITY
+                     if len({g.fields[f] for g in groups}) > 1]
+        warnings.append(
+            f"MIXED PROVENANCE: the rows come from {len(groups)} different builds/machines "
+            f"(differing in {', '.join(differing)}). Table cells are tagged with their group; "
+            f"claims comparing rows of different groups are marked not comparable. Groups: "
+            + "; ".join(g.describe() for g in groups))
+    for g in groups:
+        if g.fields["git_dirty"] == "true":
+            warnings.append(f"Group {g.label} was measured from a dirty work tree "
+                            f"(git_dirty=true): commit {g.fields['git_sha'][:12]} does not "
+                            f"identify the code that ran.")
+        if g.fields["build_type"].lower() not in OPTIMISED_BUILD_TYPES:
+            warnings.append(f"Group {g.label} comes from build type "
+                            f"{g.fields['build_type']!r}: its timings are not representative "
+                            f"of an optimised build.")
+        if g.fields["git_sha"] in ("", "unknown"):
+            warnings.append(f"Group {g.label} has no git commit (git_sha="
+                            f"{g.fields['git_sha']!r}).")
+    return warnings
+
+
+def load_results(paths: list[str | Path]) -> Results:
+    """Loads and checks one or more harness CSVs (and their .reps.csv where present)."""
+    if not paths:
+        raise ContractError("no CSV given")
+    frames, rep_frames, warnings = [], [], []
+    for p in paths:
+        df = read_csv(p)
+        frames.append(df)
+        rp = reps_path(p)
+        if rp.is_file():
+            reps = read_reps(rp)
+            warnings += [f"{rp}: {w}" for w in _check_reps(df, reps)]
+            rep_frames.append(reps)
+    rows = pd.concat(frames, ignore_index=True)
+    labels, groups = _provenance_groups(rows)
+    rows["prov_group"] = labels.values
+    warnings = _provenance_warnings(groups) + warnings
+
+    if len(frames) > 1:
+        dup = rows.duplicated(KEY_COLUMNS, keep=False)
+        if dup.any():
+            n = int(rows[dup].drop_duplicates(KEY_COLUMNS).shape[0])
+            warnings.append(f"{n} (config, model, accel, params) keys occur in more than one "
+                            f"file; where such a row fills a table cell the newest timestamp "
+                            f"is used and the cell's note says so.")
+    for col in ERROR_COLUMNS:
+        if col not in rows.columns:
+            rows[col] = np.nan
+    reps = pd.concat(rep_frames, ignore_index=True) if rep_frames else None
+    return Results(rows=rows, groups=groups, warnings=warnings, reps=reps,
+                   files=[str(p) for p in paths])

@@ -1,0 +1,238 @@
+"""Which of our CSV rows stands for which cell of the report's tables.
+
+A cell of the report is (model, structure, setting). Our rows are (model, accel, params).
+The mapping is explicit here and nowhere else:
+
+- the report's "default" setting is its Table 3: BVH median split, maxPrims 1, depth 50;
+  LBVH maxPrims 1, depth 50; kd-tree maxPrims 1 with the scene-dependent depth
+  8 + 1.3 log2(N) (pbrt's formula, which the report cites as its Equation 5);
+- Table 2's settings vary one kd-tree parameter (maxPrims or maxDepth) on the bunny;
+- our extra structures, the binned-SAH BVH (accel=bvh, split=sah) and Embree, have no
+  report numbers but appear in every table.
+
+Parameters a row does not have at all (its accelerator does not declare them) cannot
+differ and so do not exclude it. Parameters the report does not fix are free; when several
+rows differ only in free parameters, `preferred` values decide (single-threaded builds, as
+in the report, and pbrt's kd-tree costs, which the report used), then the newest
+timestamp, and the cell's note lists what else matched. Rows that differ in `traversal`
+(ordered vs the report's fixed left-first order) are never collapsed: each becomes its own
+labelled row.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+from .schema import Results
+
+AUTO = "<auto>"  # the kd-tree's scene-dependent default depth (see kd_auto_depths)
+AUTO_TEXT = {"", "auto", "default"}
+
+SINGLE_THREAD = (("threads", "1"),)
+# pbrt-v4's kd-tree defaults, which the report (section 4.2.1) adopted.
+KD_PREFERRED = SINGLE_THREAD + (("isect_cost", "80"), ("traversal_cost", "1"),
+                                ("empty_bonus", "0.5"))
+EMBREE_PREFERRED = SINGLE_THREAD + (("quality", "medium"), ("robust", "false"),
+                                    ("compact", "false"))
+SPLIT_BY = ("traversal",)
+
+
+def kd_auto_depths(triangles: float) -> set[int]:
+    """Depths that count as the kd-tree's automatic default for a scene of N triangles.
+
+    pbrt-v4 uses round(8 + 1.3 * Log2Int(N)); the report writes 8 + 1.3 log(N). Both
+    roundings (integer and real log2) are accepted because the harness may record either.
+    """
+    if not triangles or triangles <= 0 or math.isnan(triangles):
+        return set()
+    lg = math.log2(triangles)
+    return {math.floor(8 + 1.3 * math.floor(lg) + 0.5), math.floor(8 + 1.3 * lg + 0.5)}
+
+
+@dataclass(frozen=True)
+class Spec:
+    accel: str
+    required: tuple[tuple[str, str], ...] = ()
+    preferred: tuple[tuple[str, str], ...] = SINGLE_THREAD
+
+    def describe(self) -> str:
+        req = ", ".join(f"{k}={'auto' if v == AUTO else v}" for k, v in self.required)
+        return f"{self.accel}" + (f" ({req})" if req else "")
+
+
+@dataclass(frozen=True)
+class Structure:
+    key: str
+    label: str
+    spec: Spec
+    report_accel: str | None  # the report's accelerator name; None: no report numbers
+
+
+STRUCTURES = [
+    Structure("bvh", "BVH (median)",
+              Spec("bvh", (("split", "median"), ("max_prims", "1"), ("max_depth", "50"))), "bvh"),
+    Structure("lbvh", "LBVH", Spec("lbvh", (("max_prims", "1"), ("max_depth", "50"))), "lbvh"),
+    Structure("kdtree", "kd-tree", Spec("kdtree", (("max_prims", "1"), ("max_depth", AUTO)),
+                                        KD_PREFERRED), "kdtree"),
+    Structure("bvh-sah", "BVH (binned SAH)", Spec("bvh", (("split", "sah"),)), None),
+    Structure("embree", "Embree", Spec("embree", (), EMBREE_PREFERRED), None),
+]
+STRUCTURE = {s.key: s for s in STRUCTURES}
+
+
+def parse_setting(setting: str) -> tuple[str, str] | None:
+    """The report's Table 2 setting text ("maxPrims=10") as (our parameter, value)."""
+    if setting == "default":
+        return None
+    name, _, value = setting.partition("=")
+    ours = {"maxPrims": "max_prims", "maxDepth": "max_depth"}.get(name)
+    if ours is None:
+        raise ValueError(f"unknown report setting {setting!r}")
+    return ours, value
+
+
+def param_matches(params: dict[str, str], triangles: float, name: str, want: str) -> bool:
+    if name not in params:
+        return True  # the accelerator has no such parameter: it cannot differ
+    have = params[name]
+    if want == AUTO:
+        if have.lower() in AUTO_TEXT:
+            return True
+        try:
+            return int(float(have)) in kd_auto_depths(triangles)
+        except ValueError:
+            return False
+    return have == want
+
+
+@dataclass
+class Pick:
+    row: pd.Series | None
+    reason: str = ""                     # why there is no row (when row is None)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return self.row is not None
+
+    def value(self, column: str) -> float | None:
+        if self.row is None:
+            return None
+        v = self.row.get(column)
+        return None if v is None or pd.isna(v) else float(v)
+
+
+def _fmt_params(params: dict[str, str]) -> str:
+    return ";".join(f"{k}={v}" for k, v in params.items()) or "(none)"
+
+
+class Picker:
+    """Finds the row for a (model, spec[, traversal variant]) cell."""
+
+    def __init__(self, results: Results):
+        self.results = results
+        self.rows = results.rows
+        self.models = set(self.rows["model"])
+
+    def candidates(self, model: str, spec: Spec, variant: str | None = None) -> pd.DataFrame:
+        df = self.rows[(self.rows["model"] == model) & (self.rows["accel"] == spec.accel)]
+        keep = []
+        for _, r in df.iterrows():
+            p = r["param_dict"]
+            ok = all(param_matches(p, r["triangles"], k, v) for k, v in spec.required)
+            if ok and variant is not None:
+                ok = variant_of(p) == variant
+            keep.append(ok)
+        return df[keep] if len(df) else df
+
+    def variants(self, models: list[str], spec: Spec) -> list[str]:
+        """Traversal variants present for this spec on any of the models."""
+        seen = set()
+        for m in models:
+            for _, r in self.candidates(m, spec).iterrows():
+                seen.add(variant_of(r["param_dict"]))
+        return sorted(seen, key=lambda v: (v != "", v != "ordered", v))
+
+    def pick(self, model: str, spec: Spec, variant: str | None = None) -> Pick:
+        cands = self.candidates(model, spec, variant)
+        if cands.empty:
+            return Pick(None, "no row", self._what_exists(model, spec))
+        ok = cands[cands["status"] == "ok"]
+        if ok.empty:
+            r = cands.iloc[0]
+            msg = str(r.get("message", "")).strip()
+            return Pick(None, r["status"] + (f": {msg}" if msg else ""))
+        score = ok["param_dict"].map(
+            lambda p: sum(1 for k, v in spec.preferred if p.get(k) == v))
+        best = ok[score == score.max()]
+        best = best.sort_values("timestamp", ascending=False, kind="stable")
+        chosen = best.iloc[0]
+        notes = []
+        if len(best) > 1:
+            distinct = {r["params"] for _, r in best.iterrows()}
+            where = f"{spec.accel} on {model}"
+            if len(distinct) > 1:
+                notes.append(f"{len(best)} rows fit {where} equally well "
+                             f"({'; '.join(sorted('[' + d + ']' for d in distinct))}); "
+                             f"used [{chosen['params']}] (newest)")
+            else:
+                runs = sorted(f"{r['config']} in {r['source']}" for _, r in best.iterrows())
+                notes.append(f"{where} [{chosen['params']}] was measured {len(best)} times "
+                             f"({'; '.join(runs)}); used the newest ({chosen['timestamp']}, "
+                             f"{chosen['config']})")
+        return Pick(chosen, notes=notes)
+
+    def _what_exists(self, model: str, spec: Spec) -> list[str]:
+        df = self.rows[(self.rows["model"] == model) & (self.rows["accel"] == spec.accel)]
+        if df.empty:
+            return []
+        shown = sorted(set(df["params"]))[:3]
+        more = f" and {len(set(df['params'])) - 3} more" if len(set(df["params"])) > 3 else ""
+        return [f"no {spec.describe()} row on {model}; its {spec.accel} rows have "
+                f"{'; '.join('[' + s + ']' for s in shown)}{more}"]
+
+
+def variant_of(params: dict[str, str]) -> str:
+    return params.get("traversal", "")
+
+
+def variant_label(label: str, variant: str, variants: list[str]) -> str:
+    if len(variants) <= 1 or not variant:
+        return label
+    return f"{label} [traversal={variant}]"
+
+
+def depth_sweep_max_prims(picker: Picker, model: str, depths: list[str]) -> str | None:
+    """The max_prims value at which our kd-tree depth sweep was run.
+
+    The report does not state the maxPrims of its depth sweep. Ours is whichever max_prims
+    covers the most of the report's depths on this model (ties: the smallest value).
+    """
+    df = picker.rows[(picker.rows["model"] == model) & (picker.rows["accel"] == "kdtree")]
+    cover: dict[str, set[str]] = {}
+    for _, r in df.iterrows():
+        p = r["param_dict"]
+        if p.get("max_depth") in depths and "max_prims" in p:
+            cover.setdefault(p["max_prims"], set()).add(p["max_depth"])
+    if not cover:
+        return None
+    return min(cover, key=lambda mp: (-len(cover[mp]), float(mp)))
+
+
+def setting_spec(setting: str, structure: str, picker: Picker, model: str,
+                 depths: list[str]) -> Spec:
+    """Our spec for one of the report's settings ("default" or a Table 2 setting)."""
+    parsed = parse_setting(setting)
+    if parsed is None:
+        return STRUCTURE[structure].spec
+    if structure != "kdtree":
+        raise ValueError(f"Table 2 settings apply to the kd-tree only, not {structure}")
+    name, value = parsed
+    if name == "max_prims":
+        return Spec("kdtree", (("max_prims", value), ("max_depth", AUTO)), KD_PREFERRED)
+    fixed = depth_sweep_max_prims(picker, model, depths)
+    req = (("max_depth", value),) + ((("max_prims", fixed),) if fixed is not None else ())
+    return Spec("kdtree", req, KD_PREFERRED)

@@ -1,0 +1,23 @@
+from pathlib import Path
+
+import pytest
+
+from accelbench_analysis.reference import load_reference
+from accelbench_analysis.schema import load_results
+from synthetic import realistic_rows, write_csv
+
+
+@pytest.fixture(scope="session")
+def ref():
+    return load_reference()
+
+
+@pytest.fixture(scope="session")
+def realistic_csv(tmp_path_factory) -> Path:
+    return write_csv(tmp_path_factory.mktemp("realistic") / "run.csv", realistic_rows(),
+                     with_errors=True)
+
+
+@pytest.fixture(scope="session")
+def realistic(realistic_csv):
+    return load_results([realistic_csv])

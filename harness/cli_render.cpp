@@ -1,0 +1,257 @@
+// `accelbench render`, `accelbench list` and `accelbench models`: the interactive side of
+// the harness — one model, one accelerator, one image, with everything it measured.
+#include "cli.h"
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "accelbench/embree_accel.h"
+#include "accelbench/mesh_io.h"
+#include "accelbench/procedural.h"
+#include "accelbench/registry.h"
+#include "accelbench/renderer.h"
+#include "model_registry.h"
+
+namespace accelbench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+int usage_error(const std::string& msg) {
+    std::fprintf(stderr, "accelbench render: %s\n", msg.c_str());
+    std::fprintf(stderr,
+                 "usage: accelbench render --model NAME|PATH|procedural:KIND[,k=v...] --accel NAME\n"
+                 "         [--param k=v ...] [--out img.png] [--width W] [--height H] [--spp N]\n"
+                 "         [--no-light] [--threads N]\n");
+    return 2;
+}
+
+std::pair<std::string, std::string> split_kv(const std::string& kv) {
+    auto eq = kv.find('=');
+    if (eq == std::string::npos || eq == 0) throw ParamError("expected k=v, got '" + kv + "'");
+    return {kv.substr(0, eq), kv.substr(eq + 1)};
+}
+
+int parse_int(const std::string& flag, const std::string& v, int lo, int hi) {
+    try {
+        size_t used = 0;
+        int x = std::stoi(v, &used);
+        if (used == v.size() && x >= lo && x <= hi) return x;
+    } catch (const std::exception&) {
+    }
+    throw ParamError(flag + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
+}
+
+}  // namespace
+
+ResolvedModel resolve_model(const std::string& spec, const ModelRegistry& registry, float aspect) {
+    ResolvedModel m;
+    std::optional<Camera> camera;
+    std::optional<Light> light;
+    if (spec.rfind("procedural:", 0) == 0) {
+        // procedural:KIND[,k=v,k=v]
+        std::string rest = spec.substr(11);
+        std::string kind = rest.substr(0, rest.find(','));
+        std::map<std::string, std::string> params;
+        for (size_t pos = rest.find(','); pos != std::string::npos;) {
+            size_t next = rest.find(',', pos + 1);
+            params.insert(split_kv(rest.substr(pos + 1, next == std::string::npos ? std::string::npos : next - pos - 1)));
+            pos = next;
+        }
+        ProceduralScene p = generate_procedural(kind, params);
+        m.scene = std::move(p.scene);
+        m.albedo = std::move(p.albedo);
+        camera = p.camera;
+        light = p.light;
+    } else if (const ModelEntry* entry = registry.find(spec)) {
+        m.scene = registry.load_scene(*entry);
+        camera = entry->camera;
+        light = entry->light;
+    } else if (std::filesystem::exists(spec)) {
+        m.scene = load_mesh(spec);
+    } else {
+        std::string names;
+        for (const auto& e : registry.entries()) names += (names.empty() ? "" : ", ") + e.name;
+        throw std::runtime_error("model '" + spec + "' is not a registry name (" + names +
+                                 "), not procedural:KIND, and no such file exists");
+    }
+    m.camera = camera ? *camera : Camera::fit(m.scene.bounds, aspect);
+    m.light = light ? *light : default_light(m.scene.bounds, m.camera);
+    return m;
+}
+
+int render_command(int argc, char** argv) {
+    std::string model, accel_name, out;
+    std::map<std::string, std::string> params;
+    TraceRequest req;
+    req.counts = CountMode::Totals;
+    try {
+        for (int i = 0; i < argc; ++i) {
+            std::string a = argv[i];
+            auto value = [&]() -> std::string {
+                if (i + 1 >= argc) throw ParamError(a + " needs a value");
+                return argv[++i];
+            };
+            if (a == "--model") model = value();
+            else if (a == "--accel") accel_name = value();
+            else if (a == "--param") {
+                auto [k, v] = split_kv(value());
+                if (!params.emplace(k, v).second) throw ParamError("--param " + k + " given twice");
+            } else if (a == "--out") out = value();
+            else if (a == "--width") req.settings.width = parse_int(a, value(), 1, 16384);
+            else if (a == "--height") req.settings.height = parse_int(a, value(), 1, 16384);
+            else if (a == "--spp") req.settings.spp = parse_int(a, value(), 1, 4096);
+            else if (a == "--threads") req.settings.threads = parse_int(a, value(), 1, 1024);
+            else if (a == "--no-light") req.settings.light = false;
+            else return usage_error("unknown option '" + a + "'");
+        }
+    } catch (const ParamError& e) {
+        return usage_error(e.what());
+    }
+    if (model.empty() || accel_name.empty()) return usage_error("--model and --accel are required");
+    req.settings.shading = !out.empty();  // no image asked for: no shading work
+
+    std::unique_ptr<Accelerator> accel;
+    ParamSet resolved;
+    try {
+        accel = make_accelerator(accel_name, params, &resolved);
+    } catch (const ParamError& e) {
+        std::fprintf(stderr, "accelbench render: %s\n", e.what());
+        return 2;
+    }
+    try {
+        const auto t_load = Clock::now();
+        ModelRegistry registry = ModelRegistry::load_default();
+        ResolvedModel m = resolve_model(model, registry, float(req.settings.width) / float(req.settings.height));
+        req.light = m.light;
+        req.albedo = m.albedo;
+        std::printf("model      %s: %zu triangles, %zu vertices (loaded in %.3f s)\n", m.scene.name.c_str(),
+                    m.scene.triangle_count(), m.scene.vertex_count(), seconds_since(t_load));
+        std::printf("accel      %s %s\n", accel_name.c_str(), resolved.canonical().c_str());
+
+        const auto t_build = Clock::now();
+        accel->build(m.scene);
+        const double build_s = seconds_since(t_build);
+
+        // The timed render traces without counters; a second, counting pass gives the
+        // statistics (counting would otherwise slow the timed pass).
+        TraceRequest timed = req;
+        timed.counts = CountMode::Off;
+        const auto t_render = Clock::now();
+        TraceOutput r = render(*accel, m.scene, m.camera, timed);
+        const double render_s = seconds_since(t_render);
+        TraceRequest counting = req;
+        counting.settings.shading = false;
+        TraceOutput c = render(*accel, m.scene, m.camera, counting);
+
+        BuildStats bs = accel->build_stats();
+        auto opt = [](const std::optional<uint64_t>& v) { return v ? std::to_string(*v) : std::string("n/a"); };
+        std::printf("build      %.4f s\n", build_s);
+        std::printf("render     %.4f s  (%dx%d, %d spp, light %s, %d thread%s)\n", render_s, req.settings.width,
+                    req.settings.height, req.settings.spp, req.settings.light ? "on" : "off", req.settings.threads,
+                    req.settings.threads == 1 ? "" : "s");
+        std::printf("rays       %llu primary, %llu hits; %llu shadow, %llu occluded\n", (unsigned long long)r.rays,
+                    (unsigned long long)r.hits, (unsigned long long)r.shadow_rays, (unsigned long long)r.shadow_hits);
+        std::printf("speed      %.2f Mrays/s (primary + shadow)\n",
+                    double(r.rays + r.shadow_rays) / render_s * 1e-6);
+        std::printf("tree       nodes %s, leaves %s, max depth %s, memory %s bytes\n", opt(bs.nodes).c_str(),
+                    opt(bs.leaves).c_str(), opt(bs.max_depth).c_str(), opt(bs.memory_bytes).c_str());
+        if (bs.sah_cost) std::printf("sah cost   %.4f\n", *bs.sah_cost);
+        for (const auto& [k, v] : bs.extra) std::printf("extra      %s = %g\n", k.c_str(), v);
+        if (accel_name == "embree") {
+            std::printf("counters   n/a (Embree does not expose traversal statistics)\n");
+        } else {
+            const RayStats& p = c.primary_stats;
+            const RayStats& s = c.shadow_stats;
+            std::printf("counters   primary: %llu prim tests, %llu node visits, %llu box tests\n",
+                        (unsigned long long)p.prim_tests, (unsigned long long)p.node_visits,
+                        (unsigned long long)p.box_tests);
+            std::printf("           shadow:  %llu prim tests, %llu node visits, %llu box tests\n",
+                        (unsigned long long)s.prim_tests, (unsigned long long)s.node_visits,
+                        (unsigned long long)s.box_tests);
+        }
+        if (!out.empty()) {
+            r.image->write_png(out);
+            std::printf("image      %s\n", out.c_str());
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "accelbench render: %s\n", e.what());
+        return 2;
+    }
+    return 0;
+}
+
+int list_command(int, char**) {
+    auto print_params = [](const std::vector<ParamSpec>& specs) {
+        for (const auto& p : specs) {
+            std::string domain;
+            if (p.type == ParamType::Enum) {
+                for (const auto& c : p.choices) domain += (domain.empty() ? "{" : ", ") + c;
+                domain += "}";
+            } else if (p.type != ParamType::Bool) {
+                char buf[96];
+                std::snprintf(buf, sizeof buf, "[%g, %g]", p.min, p.max);
+                domain = buf;
+            }
+            std::printf("    %-16s %-5s default %-8s %-28s %s\n", p.name.c_str(), to_string(p.type),
+                        p.default_value.c_str(), domain.c_str(), p.help.c_str());
+        }
+    };
+    std::printf("accelerators:\n");
+    for (const auto& info : accelerator_registry()) {
+        std::printf("  %s — %s\n", info.name.c_str(), info.description.c_str());
+        print_params(info.params);
+    }
+    std::printf("\nprocedural scenes (--model procedural:KIND,k=v,...):\n");
+    for (const auto& kind : procedural_registry()) {
+        std::printf("  %s — %s\n", kind.name.c_str(), kind.description.c_str());
+        print_params(kind.params);
+    }
+    return 0;
+}
+
+int models_command(int argc, char** argv) {
+    bool fetch = false;
+    for (int i = 0; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--fetch") == 0) fetch = true;
+        else {
+            std::fprintf(stderr, "accelbench models: unknown option '%s'\nusage: accelbench models [--fetch]\n", argv[i]);
+            return 2;
+        }
+    }
+    int missing = 0;
+    try {
+        ModelRegistry registry = ModelRegistry::load_default();
+        std::printf("%-20s %10s %10s  %-10s %s\n", "model", "triangles", "vertices", "found", "path");
+        for (const auto& e : registry.entries()) {
+            ModelLocation loc;
+            try {
+                loc = fetch ? registry.fetch(e) : registry.locate(e);
+            } catch (const std::exception& ex) {
+                loc = {"", std::string("error: ") + ex.what()};
+            }
+            if (loc.path.empty()) ++missing;
+            std::printf("%-20s %10llu %10llu  %-10s %s\n", e.name.c_str(), (unsigned long long)e.triangles,
+                        (unsigned long long)e.vertices, loc.path.empty() ? "missing" : loc.where.c_str(),
+                        loc.path.empty() ? (loc.where == "missing" ? "(run `make models`)" : loc.where.c_str())
+                                         : loc.path.c_str());
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "accelbench models: %s\n", e.what());
+        return 2;
+    }
+    return missing == 0 ? 0 : 1;
+}
+
+}  // namespace accelbench
