@@ -11,7 +11,21 @@ namespace fs = std::filesystem;
 
 namespace accelbench {
 
-std::string param_column(const std::string& param) { return "param_" + param; }
+namespace {
+const std::string kParamKey = "param:";
+}
+
+std::string param_column(const std::string& param) { return kParamKey + param; }
+
+std::string column_header(const std::string& key) {
+    return key.rfind(kParamKey, 0) == 0 ? key.substr(kParamKey.size()) : key;
+}
+
+std::vector<std::string> column_headers(const std::vector<std::string>& keys) {
+    std::vector<std::string> h;
+    for (const auto& k : keys) h.push_back(column_header(k));
+    return h;
+}
 
 std::vector<std::string> result_columns() {
     std::vector<std::string> c = {"config", "combo_id", "model", "triangles", "vertices", "ray_source", "accel",
@@ -72,14 +86,15 @@ CsvAppender::CsvAppender(const std::string& path, std::vector<std::string> colum
     const bool fresh = !fs::exists(path) || fs::file_size(path) == 0;
     if (!fresh) {
         CsvData existing = read_csv(path);
-        if (auto m = header_mismatch(path, existing.header, columns_); !m.empty()) throw std::runtime_error(m);
+        if (auto m = header_mismatch(path, existing.header, column_headers(columns_)); !m.empty())
+            throw std::runtime_error(m);
         if (existing.incomplete_tail) fs::resize_file(path, existing.complete_bytes);
     }
     if (!fs::path(path).parent_path().empty()) fs::create_directories(fs::path(path).parent_path());
     out_.open(path, std::ios::app | std::ios::binary);
     if (!out_) throw std::runtime_error("cannot open '" + path + "' for writing");
     if (fresh) {
-        out_ << csv_line(columns_);
+        out_ << csv_line(column_headers(columns_));
         out_.flush();
     }
 }
@@ -129,14 +144,16 @@ std::set<std::string> prepare_resume(const std::string& results_path, const std:
     std::set<std::string> done;
     if (!fs::exists(results_path) || fs::file_size(results_path) == 0) return done;
     CsvData d = read_csv(results_path);
-    if (auto m = header_mismatch(results_path, d.header, columns); !m.empty()) throw std::runtime_error(m);
+    if (auto m = header_mismatch(results_path, d.header, column_headers(columns)); !m.empty())
+        throw std::runtime_error(m);
     if (d.incomplete_tail) fs::resize_file(results_path, d.complete_bytes);
     const size_t id = column_index(d, "combo_id", results_path);
     for (const auto& r : d.rows) done.insert(r[id]);
     const std::string reps = repetitions_path(results_path);
     if (fs::exists(reps) && fs::file_size(reps) > 0) {
         CsvData rd = read_csv(reps);
-        if (auto m = header_mismatch(reps, rd.header, rep_columns); !m.empty()) throw std::runtime_error(m);
+        if (auto m = header_mismatch(reps, rd.header, column_headers(rep_columns)); !m.empty())
+            throw std::runtime_error(m);
         filter_rows(reps, done);
     }
     return done;

@@ -12,14 +12,19 @@ namespace accelbench {
 
 using Row = std::map<std::string, std::string>;
 
-// The column of an accelerator parameter: "param_" + its name. The prefix keeps
-// parameters apart from measured columns of the same name (kd-tree `max_depth` the limit
-// vs `max_depth` the depth reached) and from provenance (`threads`).
+// Columns are named by keys. A parameter's column has the key "param:<name>" and the
+// header text <name>: the contract (and analysis/README.md) puts one column per
+// parameter name between `params` and `status`, so a parameter may share its header text
+// with a measured column (`max_depth`, the limit vs the depth reached) or provenance
+// (`threads`); readers tell them apart by position, the harness by key.
 std::string param_column(const std::string& param);
+// The header text of a column key.
+std::string column_header(const std::string& key);
+std::vector<std::string> column_headers(const std::vector<std::string>& keys);
 
-// One row per combination: identification, one param_ column per parameter name of every
+// One row per combination: identification, one column per parameter name of every
 // accelerator in the registry (so the header is the same for every config), status,
-// timing statistics, counters, render settings and provenance.
+// timing statistics, counters, render settings and provenance. Keys, in order.
 std::vector<std::string> result_columns();
 
 // One row per counted repetition (<results>.reps.csv).
@@ -32,7 +37,7 @@ const std::vector<std::string>& provenance_columns();
 std::string repetitions_path(const std::string& results_path);
 
 // Appends rows to a CSV file, writing the header first when the file is new or empty;
-// an existing file must have exactly `columns` as its header. Each row is written and
+// an existing file must have exactly the headers of `columns` (keys) as its header. Each row is written and
 // flushed at once, so an interrupted run keeps every finished row.
 class CsvAppender {
 public:
@@ -51,7 +56,8 @@ private:
 // For --resume: the combo_ids already in the results file. Cuts a last line left without
 // its newline by a killed run, checks the header, and drops repetition rows of combinations
 // that have no results row (their results row was never written, so they run again).
-// Throws std::runtime_error when the existing header differs from `columns`.
+// Throws std::runtime_error when the existing header differs from the headers of
+// `columns` (keys).
 std::set<std::string> prepare_resume(const std::string& results_path, const std::vector<std::string>& columns,
                                      const std::vector<std::string>& rep_columns);
 

@@ -47,10 +47,20 @@ TEST(ResultsTest, TheIssueColumnsAndOneColumnPerParameterOfEveryAccelerator) {
           "node_visits", "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version",
           "timestamp", "combo_id"})
         EXPECT_NE(std::find(cols.begin(), cols.end(), c), cols.end()) << c;
+    // One column per parameter name of every accelerator, between `params` and `status`,
+    // headed by the bare name.
+    const auto first = std::find(cols.begin(), cols.end(), "params") + 1;
+    const auto last = std::find(cols.begin(), cols.end(), "status");
+    std::set<std::string> names;
     for (const auto& info : accelerator_registry())
-        for (const auto& p : info.params)
-            EXPECT_EQ(std::count(cols.begin(), cols.end(), param_column(p.name)), 1) << p.name;
-    EXPECT_EQ(std::set<std::string>(cols.begin(), cols.end()).size(), cols.size()) << "a column appears twice";
+        for (const auto& p : info.params) names.insert(p.name);
+    EXPECT_EQ(size_t(last - first), names.size());
+    for (const auto& n : names) {
+        EXPECT_EQ(std::count(first, last, param_column(n)), 1) << n;
+        EXPECT_EQ(column_header(param_column(n)), n);
+    }
+    EXPECT_EQ(std::set<std::string>(cols.begin(), cols.end()).size(), cols.size()) << "a column key appears twice";
+    EXPECT_EQ(column_header("max_depth"), "max_depth");
     EXPECT_EQ(repetitions_path("results/runs/x-1.csv"), "results/runs/x-1.reps.csv");
 }
 
