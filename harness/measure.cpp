@@ -14,10 +14,23 @@
 #include <cstdio>
 #include <cstring>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 
 namespace accelbench {
+
+const std::vector<BuildStatField>& build_stat_fields() {
+    static const std::vector<BuildStatField> fields = {
+        {"nodes", &BuildStats::nodes, nullptr},
+        {"leaves", &BuildStats::leaves, nullptr},
+        {"max_depth", &BuildStats::max_depth, nullptr},
+        {"memory_bytes", &BuildStats::memory_bytes, nullptr},
+        {"sah_cost", nullptr, &BuildStats::sah_cost},
+        {"avg_leaf_size", nullptr, &BuildStats::avg_leaf_size},
+    };
+    return fields;
+}
 
 namespace {
 
@@ -47,29 +60,26 @@ std::string opt_text(const std::optional<T>& v) {
     return s.str();
 }
 
-// Empty when equal; otherwise which statistic differs and how.
+// Empty when equal; otherwise which statistic differs and how. Counts must be equal,
+// reals (SAH cost, averages) equal to a relative 1e-9.
 std::string build_stats_difference(const BuildStats& a, const BuildStats& b) {
-    auto exact = [](const char* what, const std::optional<uint64_t>& x, const std::optional<uint64_t>& y) {
-        return x == y ? std::string() : std::string(what) + " " + opt_text(x) + " vs " + opt_text(y);
+    auto differ = [](const std::optional<double>& x, const std::optional<double>& y) {
+        return x.has_value() != y.has_value() || (x && !same_real(*x, *y));
     };
-    auto real = [](const char* what, const std::optional<double>& x, const std::optional<double>& y) {
-        if (x.has_value() == y.has_value() && (!x || same_real(*x, *y))) return std::string();
-        return std::string(what) + " " + opt_text(x) + " vs " + opt_text(y);
+    auto describe = [](const std::string& what, const std::optional<double>& x, const std::optional<double>& y) {
+        return what + " " + opt_text(x) + " vs " + opt_text(y);
     };
-    for (const std::string& d : {exact("nodes", a.nodes, b.nodes), exact("leaves", a.leaves, b.leaves),
-                                 exact("max_depth", a.max_depth, b.max_depth),
-                                 exact("memory_bytes", a.memory_bytes, b.memory_bytes),
-                                 real("avg_leaf_size", a.avg_leaf_size, b.avg_leaf_size),
-                                 real("sah_cost", a.sah_cost, b.sah_cost)})
-        if (!d.empty()) return d;
-    for (const auto& [k, v] : a.extra) {
-        auto it = b.extra.find(k);
-        if (it == b.extra.end() || !same_real(v, it->second))
-            return k + " " + opt_text(std::optional<double>(v)) + " vs " +
-                   (it == b.extra.end() ? "missing" : opt_text(std::optional<double>(it->second)));
-    }
-    for (const auto& [k, v] : b.extra)
-        if (!a.extra.count(k)) return k + " missing vs " + opt_text(std::optional<double>(v));
+    for (const auto& f : build_stat_fields())
+        if (differ(f.get(a), f.get(b))) return describe(f.name, f.get(a), f.get(b));
+    std::set<std::string> keys;
+    for (const auto& [k, v] : a.extra) keys.insert(k);
+    for (const auto& [k, v] : b.extra) keys.insert(k);
+    auto extra = [](const BuildStats& s, const std::string& k) {
+        auto it = s.extra.find(k);
+        return it == s.extra.end() ? std::nullopt : std::optional<double>(it->second);
+    };
+    for (const auto& k : keys)
+        if (differ(extra(a, k), extra(b, k))) return describe(k, extra(a, k), extra(b, k));
     return "";
 }
 
@@ -239,15 +249,9 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
             else if (auto d = build_stats_difference(*first_build, bs); !d.empty())
                 throw Nondeterministic("nondeterministic build: " + d + " (first build vs repetition " +
                                        std::to_string(rep) + ")");
-            auto set = [&](const char* k, const auto& v) {
-                if (v) st.counters[k] = double(*v);
-            };
             st.counters["triangles"] = double(model.scene.triangle_count());
-            set("nodes", bs.nodes);
-            set("leaves", bs.leaves);
-            set("max_depth", bs.max_depth);
-            set("memory_bytes", bs.memory_bytes);
-            set("sah_cost", bs.sah_cost);
+            for (const auto& f : build_stat_fields())
+                if (auto v = f.get(bs)) st.counters[f.name] = *v;
         } catch (const std::exception& e) {
             fail(st, e);
         }
@@ -399,23 +403,13 @@ std::vector<double> parse_list(const std::string& s) {
 std::string serialize(const Measurement& m) {
     std::string s;
     auto put = [&](const std::string& k, const std::string& v) { s += k + "=" + escape(v) + "\n"; };
-    auto put_u = [&](const std::string& k, const std::optional<uint64_t>& v) {
-        if (v) put(k, std::to_string(*v));
-    };
-    auto put_d = [&](const std::string& k, const std::optional<double>& v) {
-        if (v) put(k, real_text(*v));
-    };
     put("status", m.status);
     put("message", m.message);
     put("stage", m.stage);
     put("build_s", list_text(m.build_s));
     put("render_s", list_text(m.render_s));
-    put_u("nodes", m.build.nodes);
-    put_u("leaves", m.build.leaves);
-    put_u("max_depth", m.build.max_depth);
-    put_u("memory_bytes", m.build.memory_bytes);
-    put_d("avg_leaf_size", m.build.avg_leaf_size);
-    put_d("sah_cost", m.build.sah_cost);
+    for (const auto& f : build_stat_fields())
+        if (auto v = f.get(m.build)) put(std::string("build.") + f.name, f.count ? std::to_string(*(m.build.*f.count)) : real_text(*v));
     for (const auto& [k, v] : m.build.extra) put("extra." + k, real_text(v));
     put("rays", std::to_string(m.rays));
     put("hits", std::to_string(m.hits));
@@ -448,13 +442,14 @@ Measurement deserialize(const std::string& text) {
         else if (k == "stage") m.stage = v;
         else if (k == "build_s") m.build_s = parse_list(v);
         else if (k == "render_s") m.render_s = parse_list(v);
-        else if (k == "nodes") m.build.nodes = u();
-        else if (k == "leaves") m.build.leaves = u();
-        else if (k == "max_depth") m.build.max_depth = u();
-        else if (k == "memory_bytes") m.build.memory_bytes = u();
-        else if (k == "avg_leaf_size") m.build.avg_leaf_size = d();
-        else if (k == "sah_cost") m.build.sah_cost = d();
-        else if (k.rfind("extra.", 0) == 0) m.build.extra[k.substr(6)] = d();
+        else if (k.rfind("build.", 0) == 0) {
+            const BuildStatField* f = nullptr;
+            for (const auto& field : build_stat_fields())
+                if (k.substr(6) == field.name) f = &field;
+            if (!f) throw std::runtime_error("unknown build statistic '" + k + "'");
+            if (f->count) m.build.*(f->count) = u();
+            else m.build.*(f->real) = d();
+        } else if (k.rfind("extra.", 0) == 0) m.build.extra[k.substr(6)] = d();
         else if (k == "rays") m.rays = u();
         else if (k == "hits") m.hits = u();
         else if (k == "shadow_rays") m.shadow_rays = u();

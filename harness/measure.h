@@ -48,6 +48,21 @@ struct Measurement {
     std::string stage;  // the last stage begun, for timeout and crash messages
 };
 
+// The named statistics of BuildStats, in CSV column order: one table for the determinism
+// check, the GB counters, the pipe between processes and the CSV. Exactly one of the two
+// member pointers is set.
+struct BuildStatField {
+    const char* name;
+    std::optional<uint64_t> BuildStats::*count;
+    std::optional<double> BuildStats::*real;
+
+    std::optional<double> get(const BuildStats& s) const {
+        if (count) return (s.*count) ? std::optional<double>(double(*(s.*count))) : std::nullopt;
+        return s.*real;
+    }
+};
+const std::vector<BuildStatField>& build_stat_fields();
+
 using StageFn = std::function<void(const std::string&)>;
 
 // Measures in this process. Errors (exceptions from build or render, nondeterministic

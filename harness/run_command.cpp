@@ -181,15 +181,8 @@ void add_measurement(Row& r, const Measurement& m) {
     r["shadow_hits"] = std::to_string(m.shadow_hits);
     const uint64_t all_rays = m.rays + m.shadow_rays;
     r["mrays_per_s"] = num(double(all_rays) / summarize(m.render_s).median * 1e-6, 6);
-    auto put = [&](const char* k, const auto& v) {
-        if (v) r[k] = num(double(*v), 12);
-    };
-    put("nodes", m.build.nodes);
-    put("leaves", m.build.leaves);
-    put("max_depth", m.build.max_depth);
-    put("memory_bytes", m.build.memory_bytes);
-    put("sah_cost", m.build.sah_cost);
-    put("avg_leaf_size", m.build.avg_leaf_size);
+    for (const auto& f : build_stat_fields())
+        if (auto v = f.get(m.build)) r[f.name] = f.count ? std::to_string(*(m.build.*f.count)) : num(*v, 12);
     std::string extra;
     for (const auto& [k, v] : m.build.extra) append_item(extra, ";", k, "=", num(v));
     r["build_extra"] = extra;
