@@ -354,9 +354,10 @@ public:
         }
         if (root.IsNull()) throw single_issue(cfg_.path, 1, 1, "the config is empty");
 
+        // `grid:` belongs to the analysis's grid search (analysis/README.md): accepted, unread.
         Fields top(c_, root, "",
                    {"name", "description", "repetitions", "warmup", "timeout_s", "render", "rays", "models",
-                    "accelerators", "skip"});
+                    "accelerators", "skip", "grid"});
         if (!top.ok()) throw ConfigError(c_.issues);
 
         cfg_.name = fs::path(cfg_.path).stem().string();
@@ -734,8 +735,9 @@ private:
             if (v) axis.values.push_back({*v});
             return bool(v);
         }
+        if (n.IsMap()) return read_range(n, path, accel, spec, axis);
         if (!n.IsSequence() || n.size() == 0) {
-            c_.error(n, path, std::string("expected a value or a non-empty list of values, got ") +
+            c_.error(n, path, std::string("expected a value, a non-empty list of values or a range, got ") +
                                   (n.IsSequence() ? "an empty list" : kind_of(n)));
             return false;
         }
@@ -753,6 +755,83 @@ private:
                 continue;
             }
             axis.values.push_back({*v});
+        }
+        return ok;
+    }
+
+    // A range (for grid searches; analysis/README.md "Grid search" and grid_config.py
+    // expand it the same way): {from: a, to: b, step: s} is a, a+s, ... while <= b (with a
+    // 1e-9 x s slack); {from: a, to: b, scale: log2|log10} is a, 2a, 4a, ... (10a, ...)
+    // while <= b. Integer from, to (and step) give integers, other values are rounded to 12
+    // significant digits (0.1 steps read 0.3, not 0.30000000000000004).
+    bool read_range(const YAML::Node& n, const std::string& path, const std::string& accel, const ParamSpec& spec,
+                    ParamAxis& axis) {
+        constexpr size_t kMaxValues = 10000;  // a typo like step: 0.0001 must not hang the expansion
+        Fields f(c_, n, path, {"from", "to", "step", "scale"});
+        const auto* from = f.require("from");
+        const auto* to = f.require("to");
+        if (!from || !to) return false;
+        auto lo = read_number(c_, from->value, f.child("from"), -1e300, 1e300, false);
+        auto hi = read_number(c_, to->value, f.child("to"), -1e300, 1e300, false);
+        if (!lo || !hi) return false;
+        auto integral = [](const YAML::Node& v) {
+            int64_t x;
+            const std::string& t = v.Scalar();
+            auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), x);
+            return ec == std::errc() && p == t.data() + t.size();
+        };
+        if (*lo > *hi) {
+            c_.error(n, path, "`from` (" + from->value.Scalar() + ") is above `to` (" + to->value.Scalar() + ")");
+            return false;
+        }
+        const auto* step = f.find("step");
+        const auto* scale = f.find("scale");
+        if (bool(step) == bool(scale)) {
+            c_.error(n, path, "a range gives exactly one of `step` or `scale` (log2, log10)");
+            return false;
+        }
+        std::vector<double> values;
+        bool integers = integral(from->value) && integral(to->value);
+        if (step) {
+            auto s = read_number(c_, step->value, f.child("step"), 0, 1e300, true);
+            if (!s) return false;
+            integers &= integral(step->value);
+            const double count = std::floor((*hi - *lo) / *s + 1e-9) + 1;
+            for (double i = 0; i < count && values.size() <= kMaxValues; ++i) values.push_back(*lo + i * *s);
+        } else {
+            auto name = read_string(c_, scale->value, f.child("scale"));
+            if (!name) return false;
+            if (*name != "log2" && *name != "log10") {
+                c_.error(scale->value, f.child("scale"), "scale is log2 or log10, got '" + *name + "'");
+                return false;
+            }
+            if (*lo <= 0) {
+                c_.error(from->value, f.child("from"), "a " + *name + " range starts above 0");
+                return false;
+            }
+            const double base = *name == "log2" ? 2.0 : 10.0;
+            integers = integral(from->value);
+            const double count = std::floor(std::log(*hi / *lo) / std::log(base) + 1e-9) + 1;
+            for (double i = 0; i < count && values.size() <= kMaxValues; ++i) values.push_back(*lo * std::pow(base, i));
+        }
+        if (values.size() > kMaxValues) {
+            c_.error(n, path, "the range has more than " + std::to_string(kMaxValues) + " values");
+            return false;
+        }
+        bool ok = true;
+        for (double v : values) {
+            char text[40];
+            if (integers) std::snprintf(text, sizeof text, "%.0f", v);
+            else std::snprintf(text, sizeof text, "%.12g", v);
+            try {
+                const std::string canonical = format_param(parse_param(accel, spec, text));
+                if (std::find(axis.values.begin(), axis.values.end(), std::vector<std::string>{canonical}) ==
+                    axis.values.end())
+                    axis.values.push_back({canonical});
+            } catch (const ParamError& e) {
+                c_.error(n, path, "the range's value " + std::string(text) + ": " + strip_param_prefix(e.what()));
+                ok = false;
+            }
         }
         return ok;
     }

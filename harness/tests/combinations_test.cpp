@@ -79,6 +79,46 @@ accelerators: [{name: embree}]
     EXPECT_EQ(threads[0].given.at("threads"), "2");
 }
 
+TEST_F(CombinationsTest, RangesExpandLikeTheGridSearchExpectsAndGridIsIgnored) {
+    const Config c = load("grid.yaml", R"yaml(name: grid
+models: [{name: igea}]
+accelerators:
+  - name: embree
+    params:
+      threads: {from: 1, to: 12, scale: log2}   # 1 2 4 8
+      quality: [low, high]
+grid:
+  objective: build + k * render
+  anything: [the harness, does not read this]
+)yaml");
+    const auto all = expand(c);
+    ASSERT_EQ(all.size(), 4u * 2u);
+    EXPECT_EQ(all[0].name, "igea/embree:threads=1,quality=low");
+    EXPECT_EQ(all[7].name, "igea/embree:threads=8,quality=high");
+    const auto step = expand(load("step.yaml", R"yaml(models: [igea]
+accelerators: [{name: embree, params: {threads: {from: 0, to: 5, step: 2}}}]
+)yaml"));
+    ASSERT_EQ(step.size(), 3u);
+    EXPECT_EQ(step[2].given.at("threads"), "4");
+}
+
+TEST_F(CombinationsTest, RangeErrors) {
+    const std::string p = write_file(dir.path(), "bad.yaml", R"yaml(models: [igea]
+accelerators:
+  - {name: embree, params: {threads: {from: 8, to: 1, step: 1}}}
+  - {name: embree, params: {threads: {from: 1, to: 8, step: 1, scale: log2}}}
+  - {name: embree, params: {threads: {from: 0, to: 8, scale: log2}}}
+  - {name: embree, params: {threads: {from: 1, to: 2000, step: 500}}}
+  - {name: embree, params: {threads: {from: 1, step: 1}}}
+)yaml");
+    const ConfigError e = load_error(p);
+    EXPECT_TRUE(has_issue(e, 3, 38, "accelerators[0].embree.threads", "`from` (8) is above `to` (1)"));
+    EXPECT_TRUE(has_issue(e, 4, 38, "accelerators[1].embree.threads", "exactly one of `step` or `scale`"));
+    EXPECT_TRUE(has_issue(e, 5, 45, "accelerators[2].embree.threads.from", "a log2 range starts above 0"));
+    EXPECT_TRUE(has_issue(e, 6, 38, "accelerators[3].embree.threads", "the range's value 1501: value 1501 is out of range"));
+    EXPECT_TRUE(has_issue(e, 7, 38, "accelerators[4].embree.threads.to", "missing key 'to'"));
+}
+
 TEST_F(CombinationsTest, TheSameCombinationTwiceIsAnError) {
     const Config c = load("a.yaml", R"yaml(models: [igea]
 accelerators:
