@@ -486,6 +486,15 @@ private:
         return cam;
     }
 
+    bool known_registry_model(const YAML::Node& n, const std::string& path, const std::string& name) {
+        if (registry_.find(name)) return true;
+        std::vector<std::string> names;
+        for (const auto& e : registry_.entries()) names.push_back(e.name);
+        c_.error(n, path, "unknown model '" + name + "': not in the model registry (configs/models.yaml: " +
+                              join(names) + "); a mesh file is written {path: FILE}");
+        return false;
+    }
+
     void read_model(const YAML::Node& n, const std::string& path) {
         ModelSpec m;
         m.mark = {c_.file, n.Mark().line + 1, n.Mark().column + 1};
@@ -493,13 +502,7 @@ private:
         if (n.IsScalar()) {
             m.kind = ModelSpec::Kind::Registry;
             m.name = n.Scalar();
-            if (!registry_.find(m.name)) {
-                std::vector<std::string> names;
-                for (const auto& e : registry_.entries()) names.push_back(e.name);
-                c_.error(n, path, "unknown model '" + m.name + "': not in the model registry (configs/models.yaml: " +
-                                      join(names) + "); a mesh file is written {path: FILE}");
-                return;
-            }
+            if (!known_registry_model(n, path, m.name)) return;
             m.label = m.name;
             m.key = "registry:" + m.name;
             m.rays = default_rays_;
@@ -518,50 +521,36 @@ private:
                               "'procedural' (generated scene)");
             return;
         }
-        const std::vector<std::string> common = {"camera", "rays", "label", "repetitions"};
+        const char* form = has_name ? "name" : has_path ? "path" : "procedural";
+        std::vector<std::string> allowed = {form, "camera", "rays", "label", "repetitions"};
+        const auto* given = f.find(form);
+        auto value = read_string(c_, given->value, f.child(form));
+        if (!value) return;
+        m.name = *value;
         bool ok = true;
-        std::vector<std::string> allowed = common;
         const ProceduralInfo* proc = nullptr;
         if (has_name) {
-            allowed.push_back("name");
-            const auto* e = f.find("name");
-            auto name = read_string(c_, e->value, f.child("name"));
-            if (!name) return;
             m.kind = ModelSpec::Kind::Registry;
-            m.name = *name;
-            if (!registry_.find(m.name)) {
-                c_.error(e->value, f.child("name"), "unknown model '" + m.name + "': not in the model registry");
-                ok = false;
-            }
+            ok = known_registry_model(given->value, f.child(form), m.name);
             m.label = m.name;
             m.key = "registry:" + m.name;
         } else if (has_path) {
-            allowed.push_back("path");
-            const auto* e = f.find("path");
-            auto p = read_string(c_, e->value, f.child("path"));
-            if (!p) return;
             m.kind = ModelSpec::Kind::Path;
-            m.name = *p;
-            m.resolved_path = resolve(*p);
+            m.resolved_path = resolve(m.name);
             if (!fs::is_regular_file(m.resolved_path)) {
-                c_.error(e->value, f.child("path"), "no such mesh file: " + m.resolved_path);
+                c_.error(given->value, f.child(form), "no such mesh file: " + m.resolved_path);
                 ok = false;
             }
-            m.label = *p;
-            m.key = "path:" + fs::path(*p).lexically_normal().string();
+            m.label = m.name;
+            m.key = "path:" + fs::path(m.name).lexically_normal().string();
         } else {
-            allowed.push_back("procedural");
-            const auto* e = f.find("procedural");
-            auto kind = read_string(c_, e->value, f.child("procedural"));
-            if (!kind) return;
             m.kind = ModelSpec::Kind::Procedural;
-            m.name = *kind;
-            proc = find_procedural(*kind);
+            proc = find_procedural(m.name);
             if (!proc) {
                 std::vector<std::string> names;
                 for (const auto& p : procedural_registry()) names.push_back(p.name);
-                c_.error(e->value, f.child("procedural"),
-                         "unknown procedural scene '" + *kind + "' (known: " + join(names) + ")");
+                c_.error(given->value, f.child(form),
+                         "unknown procedural scene '" + m.name + "' (known: " + join(names) + ")");
                 return;
             }
             for (const auto& s : proc->params) allowed.push_back(s.name);
