@@ -1,15 +1,19 @@
 #include "accelbench/registry.h"
 
 #include "accelbench/brute_force.h"
+#include "accelbench/bvh.h"
 #include "accelbench/embree_accel.h"
 #include "accelbench/kdtree.h"
+#include "accelbench/lbvh.h"
 
 namespace accelbench {
 
 const std::vector<AcceleratorInfo>& accelerator_registry() {
     static const std::vector<AcceleratorInfo> registry = {
         BruteForce::info(),
+        Bvh::info(),
         EmbreeAccel::info(),
+        Lbvh::info(),
         KdTree::info(),
     };
     return registry;

@@ -3,30 +3,11 @@
 #include <gtest/gtest.h>
 
 #include "agreement.h"
+#include "test_scenes.h"
 
 using namespace accelbench;
 
-namespace {
-
-// Random triangles in a unit box: many overlaps, many near-grazing hits.
-Scene random_soup(int n, uint64_t seed) {
-    Scene s;
-    s.name = "test-soup";
-    uint64_t x = seed;
-    auto next = [&x] {
-        x ^= x << 13; x ^= x >> 7; x ^= x << 17;
-        return float(x >> 40) / float(1 << 24);
-    };
-    for (int i = 0; i < n; ++i) {
-        Vec3 c{next(), next(), next()};
-        for (int k = 0; k < 3; ++k) s.vertices.push_back(c + Vec3{next() - 0.5f, next() - 0.5f, next() - 0.5f} * 0.2f);
-        s.triangles.push_back({uint32_t(3 * i), uint32_t(3 * i + 1), uint32_t(3 * i + 2)});
-    }
-    s.finalize();
-    return s;
-}
-
-}  // namespace
+using test::random_soup;
 
 TEST(BruteForce, AgreesWithEmbreeOnRandomSoup) {
     Scene scene = random_soup(500, 42);

@@ -1,0 +1,100 @@
+// Least-significant-digit radix sort of (key, value) pairs: the sort the LBVH build is
+// made of (report section 3.1: "we can use a sorting algorithm as a Radix sort",
+// Karras 2012). Keys are Morton codes, values primitive indices.
+//
+// LSD radix sort makes one counting pass per digit, lowest digit first. Each pass is a
+// stable counting sort, so after the pass on digit d the items are ordered by digits
+// 0..d, and after the last pass by the whole key. Stability also means items with equal
+// keys keep their input order; with values given in increasing order, equal Morton codes
+// stay ordered by primitive index, which makes the LBVH deterministic.
+//
+// Two things keep it cheap:
+//  - all digit histograms are counted in ONE read of the input before any scattering,
+//    since a digit's histogram does not depend on the order of the items;
+//  - a pass whose digit is the same for every item (one bucket holds all n) would only
+//    copy the array, so it is skipped. Morton codes of a small grid (bits < 21 in a
+//    64-bit key) or of a flat scene have whole digits that never vary.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <vector>
+
+namespace accelbench {
+
+template <class Key>
+struct KeyValue {
+    Key key;
+    uint32_t value;
+};
+
+struct RadixSortStats {
+    int passes = 0;          // digits the key width needs
+    int skipped_passes = 0;  // of those, digits every key shared
+};
+
+constexpr int kRadixMinDigitBits = 1;
+constexpr int kRadixMaxDigitBits = 16;
+
+// Sorts `items` by key (stable), `digit_bits` per pass. Every key must be below
+// 2^key_bits: only the passes that width needs are made (30-bit Morton codes: 4 passes of
+// 8 bits or 3 of 11), which is the point of passing it. `scratch` is resized to items.size() and used as the other
+// buffer of the ping-pong; passing the same scratch vector again avoids reallocating.
+// On return the sorted items are in `items` (the vectors may have been swapped).
+template <class Key>
+RadixSortStats radix_sort(std::vector<KeyValue<Key>>& items, std::vector<KeyValue<Key>>& scratch, int key_bits,
+                          int digit_bits = 8) {
+    static_assert(std::is_unsigned_v<Key>);
+    if (digit_bits < kRadixMinDigitBits || digit_bits > kRadixMaxDigitBits)
+        throw std::invalid_argument("radix_sort: digit_bits " + std::to_string(digit_bits) + " is outside [" +
+                                    std::to_string(kRadixMinDigitBits) + ", " +
+                                    std::to_string(kRadixMaxDigitBits) + "]");
+    if (key_bits < 0 || key_bits > int(8 * sizeof(Key)))
+        throw std::invalid_argument("radix_sort: key_bits " + std::to_string(key_bits) + " does not fit the key type");
+
+    RadixSortStats stats;
+    const size_t n = items.size();
+    if (n > UINT32_MAX) throw std::invalid_argument("radix_sort: more than 2^32 - 1 items");
+    stats.passes = (key_bits + digit_bits - 1) / digit_bits;
+    if (n <= 1 || stats.passes == 0) return stats;
+
+    const size_t buckets = size_t(1) << digit_bits;
+    const Key mask = Key(buckets - 1);
+    // Every pass's histogram, counted in one read (see the file comment). uint32_t counts
+    // suffice: item values are uint32_t indices, so n fits.
+    std::vector<uint32_t> counts(size_t(stats.passes) * buckets, 0);
+    for (const auto& item : items) {
+        Key k = item.key;
+        for (int p = 0; p < stats.passes; ++p, k >>= digit_bits) ++counts[size_t(p) * buckets + size_t(k & mask)];
+    }
+
+    scratch.resize(n);
+    for (int p = 0; p < stats.passes; ++p) {
+        uint32_t* offsets = counts.data() + size_t(p) * buckets;
+        const int shift = p * digit_bits;
+        // One bucket holding every item: this digit is the same for all keys, and the
+        // pass would reproduce its input.
+        if (std::find(offsets, offsets + buckets, uint32_t(n)) != offsets + buckets) {
+            ++stats.skipped_passes;
+            continue;
+        }
+        // Counts -> start offsets (exclusive prefix sum), then scatter in input order,
+        // which is what makes each pass stable.
+        uint32_t sum = 0;
+        for (size_t b = 0; b < buckets; ++b) {
+            const uint32_t c = offsets[b];
+            offsets[b] = sum;
+            sum += c;
+        }
+        const KeyValue<Key>* in = items.data();
+        KeyValue<Key>* out = scratch.data();
+        for (size_t i = 0; i < n; ++i) out[offsets[size_t((in[i].key >> shift) & mask)]++] = in[i];
+        items.swap(scratch);
+    }
+    return stats;
+}
+
+}  // namespace accelbench

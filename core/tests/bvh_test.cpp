@@ -1,0 +1,403 @@
+// The top-down BVH: agreement with Embree for every parameter combination, exact trees
+// on hand-made scenes, and termination on degenerate input.
+#include "accelbench/bvh.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "accelbench/bvh_metrics.h"
+#include "agreement.h"
+#include "bvh_check.h"
+#include "model_registry.h"
+#include "test_scenes.h"
+
+using namespace accelbench;
+using namespace accelbench::test;
+
+namespace {
+
+const std::vector<std::string> kSplits = {"median", "midpoint", "mean", "spatial_median", "sah"};
+
+std::unique_ptr<Bvh> make_bvh(const std::map<std::string, std::string>& params) {
+    auto accel = make_accelerator("bvh", params);
+    return std::unique_ptr<Bvh>(static_cast<Bvh*>(accel.release()));
+}
+
+std::unique_ptr<Bvh> built(const Scene& scene, const std::map<std::string, std::string>& params) {
+    auto bvh = make_bvh(params);
+    bvh->build(scene);
+    expect_valid_bvh(bvh->tree(), scene, /*tight=*/true, "bvh");
+    return bvh;
+}
+
+std::string describe(const std::map<std::string, std::string>& params) {
+    std::string s = "bvh";
+    for (const auto& [k, v] : params) s += " " + k + "=" + v;
+    return s;
+}
+
+struct Shape {
+    uint64_t nodes, leaves, depth;
+};
+
+void expect_shape(const Bvh& bvh, Shape want, const std::string& what) {
+    const BuildStats s = bvh.build_stats();
+    EXPECT_EQ(s.nodes.value(), want.nodes) << what;
+    EXPECT_EQ(s.leaves.value(), want.leaves) << what;
+    EXPECT_EQ(s.max_depth.value(), want.depth) << what;
+}
+
+double extra(const Bvh& bvh, const std::string& key) { return bvh.build_stats().extra.at(key); }
+
+// Triangles whose boxes all have the centre (0, 0, 0) but different shapes and sizes.
+Scene common_centroid_scene(int n) {
+    Scene s;
+    s.name = "test-common-centroid";
+    TestRandom r(5);
+    for (int i = 0; i < n; ++i) {
+        const float a = 0.1f + r.next(), b = 0.1f + r.next(), c = r.next();
+        add_triangle(s, {-a, -b, -c}, {a, -b, c}, {0, b, 0});
+    }
+    s.finalize();
+    return s;
+}
+
+}  // namespace
+
+// ---- agreement with Embree -----------------------------------------------------------
+
+TEST(Bvh, EveryVariantAgreesWithEmbreeOnRandomSoup) {
+    const Scene scene = random_soup(600, 42);
+    const auto rays = probe_rays(scene, 2000, 3);
+    for (const std::string& split : kSplits)
+        for (const std::string axis : {"longest", "round_robin"})
+            for (const std::string traversal : {"ordered", "report"})
+                for (const std::string max_prims : {"1", "4"}) {
+                    const std::map<std::string, std::string> p = {
+                        {"split", split}, {"axis", axis}, {"traversal", traversal}, {"max_prims", max_prims}};
+                    auto bvh = built(scene, p);
+                    expect_agrees_with_embree(scene, *bvh, rays, describe(p));
+                }
+}
+
+TEST(Bvh, AgreesWithEmbreeOnLargerLeavesAndOtherBinCounts) {
+    const Scene scene = random_soup(2000, 8);
+    const auto rays = probe_rays(scene, 2000, 4);
+    for (const std::map<std::string, std::string>& p : std::vector<std::map<std::string, std::string>>{
+             {{"max_prims", "16"}},
+             {{"split", "sah"}, {"max_prims", "8"}, {"bins", "2"}},
+             {{"split", "sah"}, {"max_prims", "8"}, {"bins", "64"}, {"traversal_cost", "4"}},
+             {{"split", "sah"}, {"traversal_cost", "0"}, {"isect_cost", "10"}},
+             {{"split", "midpoint"}, {"max_prims", "3"}, {"traversal", "report"}}}) {
+        auto bvh = built(scene, p);
+        expect_agrees_with_embree(scene, *bvh, rays, describe(p));
+    }
+}
+
+// A closed surface of shared edges: a ray hitting an edge must hit one of its triangles
+// (watertightness is preserved by the hierarchy: no box may drop a triangle).
+TEST(Bvh, AgreesWithEmbreeOnClosedGrid) {
+    Scene scene;
+    scene.name = "test-grid";
+    const int w = 40;
+    for (int j = 0; j <= w; ++j)
+        for (int i = 0; i <= w; ++i) {
+            const float x = float(i) / w, y = float(j) / w;
+            scene.vertices.push_back({x, y, 0.1f * std::sin(6 * x) * std::cos(5 * y)});
+        }
+    for (int j = 0; j < w; ++j)
+        for (int i = 0; i < w; ++i) {
+            const uint32_t a = uint32_t(j * (w + 1) + i), b = a + 1, c = a + uint32_t(w + 1), d = c + 1;
+            scene.triangles.push_back({a, b, d});
+            scene.triangles.push_back({a, d, c});
+        }
+    scene.finalize();
+    const auto rays = probe_rays(scene, 3000, 7);
+    for (const std::string& split : kSplits)
+        for (const std::string traversal : {"ordered", "report"}) {
+            const std::map<std::string, std::string> p = {{"split", split}, {"traversal", traversal}};
+            expect_agrees_with_embree(scene, *built(scene, p), rays, describe(p) + " grid");
+        }
+}
+
+// ---- exact trees on hand-made scenes ----------------------------------------------------
+
+TEST(Bvh, EightSeparatedTrianglesGiveTheBalancedTree) {
+    const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
+    for (const std::string& split : kSplits) {
+        auto bvh = built(scene, {{"split", split}});
+        expect_shape(*bvh, {15, 8, 3}, split);
+        EXPECT_EQ(extra(*bvh, "degenerate_splits"), 0) << split;
+        EXPECT_EQ(extra(*bvh, "forced_leaves"), 0) << split;
+        EXPECT_DOUBLE_EQ(bvh->build_stats().avg_leaf_size.value(), 1.0) << split;
+        // Every inner node splits along x, the only axis along which the centroids spread.
+        for (const BvhNode& n : bvh->tree().nodes)
+            if (!n.is_leaf()) {
+                EXPECT_EQ(n.axis(), 0) << split;
+            }
+        // The leaves come out in x order: slot k holds triangle k.
+        for (uint32_t k = 0; k < 8; ++k) EXPECT_EQ(bvh->tree().prim_ids[k], k) << split;
+    }
+    expect_shape(*built(scene, {{"max_prims", "2"}}), {7, 4, 2}, "max_prims=2");
+    expect_shape(*built(scene, {{"max_prims", "3"}}), {7, 4, 2}, "max_prims=3");
+    expect_shape(*built(scene, {{"max_prims", "8"}}), {1, 1, 0}, "max_prims=8");
+}
+
+TEST(Bvh, EightSeparatedTrianglesMetrics) {
+    // Triangles of leg 0.5 at x = 0..7, flat in z: box areas are 2 * dx * dy.
+    const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
+    auto bvh = built(scene, {});
+    const BuildStats s = bvh->build_stats();
+    // Inner: root dx 7.5; two of dx 3.5; four of dx 1.5 (dy 0.5). Leaves: 8 of 0.5 x 0.5.
+    const double inner = 2 * 0.5 * (7.5 + 2 * 3.5 + 4 * 1.5), leaves = 8 * 2 * 0.5 * 0.5, root = 2 * 0.5 * 7.5;
+    EXPECT_NEAR(s.sah_cost.value(), (inner + leaves) / root, 1e-12);
+    EXPECT_EQ(s.memory_bytes.value(), 15u * 32 + 8u * 4 + 8u * 36);
+}
+
+TEST(Bvh, DepthLimitMakesForcedLeaves) {
+    const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
+    auto one = built(scene, {{"max_depth", "1"}});
+    expect_shape(*one, {3, 2, 1}, "max_depth=1");
+    EXPECT_EQ(extra(*one, "forced_leaves"), 2);
+    EXPECT_DOUBLE_EQ(one->build_stats().avg_leaf_size.value(), 4.0);
+    auto zero = built(scene, {{"max_depth", "0"}});
+    expect_shape(*zero, {1, 1, 0}, "max_depth=0");
+    EXPECT_EQ(extra(*zero, "forced_leaves"), 1);
+    // A limit the tree never reaches changes nothing.
+    auto deep = built(scene, {{"max_depth", "200"}});
+    expect_shape(*deep, {15, 8, 3}, "max_depth=200");
+    EXPECT_EQ(extra(*deep, "forced_leaves"), 0);
+}
+
+TEST(Bvh, RoundRobinFallsBackOnAxesWithoutSpread) {
+    // Centroids spread along x only: round robin asks y at depth 1 (2 nodes) and z at
+    // depth 2 (4 nodes); those 6 ranges split by count along x instead.
+    const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
+    for (const std::string& split : kSplits) {
+        auto bvh = built(scene, {{"split", split}, {"axis", "round_robin"}});
+        expect_shape(*bvh, {15, 8, 3}, split);
+        EXPECT_EQ(extra(*bvh, "degenerate_splits"), 6) << split;
+    }
+}
+
+TEST(Bvh, SplitCriteriaDifferAsTheReportDescribes) {
+    // Centroids at 0.25, 1.25, 2.25, 100.25 along x.
+    const Scene outlier = triangles_along_x({0, 1, 2, 100});
+    // Object median: 2 | 2.
+    expect_shape(*built(outlier, {{"split", "median"}}), {7, 4, 2}, "median");
+    // Centroid method: plane 50.25 -> {0,1,2} | {100}; then plane 1.25 -> {0} | {1,2}.
+    expect_shape(*built(outlier, {{"split", "midpoint"}}), {7, 4, 3}, "midpoint");
+    // Mean 25.75 -> {0,1,2} | {100}; then mean 1.25 -> {0} | {1,2}.
+    expect_shape(*built(outlier, {{"split", "mean"}}), {7, 4, 3}, "mean");
+    // SAH cuts off the outlier's empty space first.
+    expect_shape(*built(outlier, {{"split", "sah"}}), {7, 4, 3}, "sah");
+
+    // Spatial median, the report's example (Figure 5c): sizes {1, 1, 1, 4} -> areas
+    // {1, 1, 1, 16}: the big one alone on one side.
+    Scene sizes;
+    for (int i = 0; i < 4; ++i) {
+        const float x = 10.0f * float(i), leg = i == 3 ? 4.0f : 1.0f;
+        add_triangle(sizes, {x, 0, 0}, {x + leg, 0, 0}, {x, leg, 0});
+    }
+    sizes.finalize();
+    auto spatial = built(sizes, {{"split", "spatial_median"}});
+    expect_shape(*spatial, {7, 4, 3}, "spatial_median");
+    const BvhNode& root = spatial->tree().nodes[0];
+    const BvhNode& second = spatial->tree().nodes[root.second_child()];
+    ASSERT_TRUE(second.is_leaf());
+    EXPECT_EQ(spatial->tree().prim_ids[second.first_prim()], 3u);
+    expect_shape(*built(sizes, {{"split", "median"}}), {7, 4, 2}, "median sizes");
+}
+
+TEST(Bvh, SahStopsEarlyOnlyWhenALeafIsCheaper) {
+    // Four separated triangles: splitting pays, so SAH makes single-triangle leaves even
+    // though max_prims allows a leaf of 4 (median makes that one leaf).
+    const Scene separated = triangles_along_x({0, 1, 2, 3});
+    expect_shape(*built(separated, {{"split", "sah"}, {"max_prims", "4"}}), {7, 4, 2}, "sah separated");
+    expect_shape(*built(separated, {{"split", "median"}, {"max_prims", "4"}}), {1, 1, 0}, "median separated");
+    // Four nearly coincident triangles: any split costs more than one leaf of 4.
+    const Scene stacked = triangles_along_x({0, 0.01f, 0.02f, 0.03f}, 1.0f);
+    expect_shape(*built(stacked, {{"split", "sah"}, {"max_prims", "4"}}), {1, 1, 0}, "sah stacked");
+    // ... but with max_prims 2 it must split.
+    expect_shape(*built(stacked, {{"split", "sah"}, {"max_prims", "2"}}), {3, 2, 1}, "sah stacked max_prims=2");
+}
+
+TEST(Bvh, CountsOfOrderedTraversalOnHandScene) {
+    // A ray straight down onto triangle 5 of the eight: the root box, then two child boxes
+    // per level on the way down (3 levels), with both children of a level tested; only the
+    // boxes on the path are hit (the others lie beside the ray), so 3 inner nodes + 1 leaf
+    // are entered and one triangle is tested.
+    const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
+    for (const std::string traversal : {"ordered", "report"}) {
+        auto bvh = built(scene, {{"traversal", traversal}});
+        const Ray ray{{5.1f, 0.1f, 1}, 0.0f, {0, 0, -1}, kInfinity};
+        std::vector<Hit> hits(1);
+        std::vector<RayStats> stats(1);
+        bvh->closest_hits({&ray, 1}, hits, stats);
+        EXPECT_EQ(hits[0].prim, 5u) << traversal;
+        EXPECT_EQ(stats[0].prim_tests, 1u) << traversal;
+        if (traversal == "ordered") {
+            EXPECT_EQ(stats[0].node_visits, 4u);
+            EXPECT_EQ(stats[0].box_tests, 1u + 3 * 2);
+        } else {
+            // Algorithm 1 enters both children of each node on the path and tests their
+            // boxes there: root + 2 per level.
+            EXPECT_EQ(stats[0].node_visits, 7u);
+            EXPECT_EQ(stats[0].box_tests, 7u);
+        }
+    }
+}
+
+// ---- degenerate input terminates ------------------------------------------------------
+
+TEST(Bvh, IdenticalTrianglesBuildAndTerminate) {
+    Scene scene;
+    for (int i = 0; i < 100; ++i) add_triangle(scene, {0, 0, 0}, {1, 0, 0}, {0, 1, 0.5f});
+    scene.finalize();
+    for (const std::string& split : kSplits) {
+        auto bvh = built(scene, {{"split", split}});
+        // Every range is split in two by count: 199 nodes, depth ceil(log2 100) = 7.
+        expect_shape(*bvh, {199, 100, 7}, split);
+        EXPECT_EQ(extra(*bvh, "degenerate_splits"), 99) << split;
+        expect_agrees_with_embree(scene, *bvh, probe_rays(scene, 500), "identical " + split);
+    }
+    // SAH with max_prims 100 keeps them in one leaf: nothing separates them.
+    auto leaf = built(scene, {{"split", "sah"}, {"max_prims", "100"}});
+    expect_shape(*leaf, {1, 1, 0}, "sah one leaf");
+    EXPECT_EQ(extra(*leaf, "degenerate_splits"), 0);
+}
+
+TEST(Bvh, CommonCentroidBuildsAndAgrees) {
+    const Scene scene = common_centroid_scene(300);
+    for (const std::string& split : kSplits)
+        for (const std::string traversal : {"ordered", "report"}) {
+            auto bvh = built(scene, {{"split", split}, {"traversal", traversal}});
+            EXPECT_EQ(bvh->build_stats().nodes.value(), 599u) << split;
+            EXPECT_EQ(extra(*bvh, "degenerate_splits"), 299) << split;
+            expect_agrees_with_embree(scene, *bvh, probe_rays(scene, 1000, 2), "common centroid " + split);
+        }
+}
+
+TEST(Bvh, FlatSceneAgrees) {
+    Scene scene = random_soup(800, 17);
+    for (Vec3& v : scene.vertices) v.z = 0.5f;  // zero extent along z
+    scene.finalize();
+    for (const std::string& split : kSplits)
+        for (const std::string axis : {"longest", "round_robin"}) {
+            const std::map<std::string, std::string> p = {{"split", split}, {"axis", axis}};
+            expect_agrees_with_embree(scene, *built(scene, p), probe_rays(scene, 1500, 5), describe(p) + " flat");
+        }
+}
+
+TEST(Bvh, SingleTriangle) {
+    const Scene scene = triangles_along_x({0});
+    for (const std::string& split : kSplits) {
+        auto bvh = built(scene, {{"split", split}});
+        expect_shape(*bvh, {1, 1, 0}, split);
+        std::vector<Ray> rays = {{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity}, {{0.4f, 0.4f, 1}, 0, {0, 0, -1}, kInfinity}};
+        std::vector<Hit> hits(2);
+        bvh->closest_hits(rays, hits);
+        EXPECT_EQ(hits[0].prim, 0u);
+        EXPECT_FLOAT_EQ(hits[0].t, 1.0f);
+        EXPECT_FALSE(hits[1].found());  // beyond the hypotenuse
+    }
+}
+
+TEST(Bvh, EmptySceneBuildsAndMisses) {
+    Scene scene;
+    scene.finalize();
+    for (const std::string traversal : {"ordered", "report"}) {
+        auto bvh = built(scene, {{"traversal", traversal}});
+        const BuildStats s = bvh->build_stats();
+        EXPECT_EQ(s.nodes.value(), 0u);
+        EXPECT_EQ(s.leaves.value(), 0u);
+        EXPECT_FALSE(s.sah_cost.has_value());
+        const Ray ray{{0, 0, 1}, 0, {0, 0, -1}, kInfinity};
+        std::vector<Hit> hits(1);
+        std::vector<uint8_t> occluded(1, 1);
+        bvh->closest_hits({&ray, 1}, hits);
+        bvh->any_hits({&ray, 1}, occluded);
+        EXPECT_FALSE(hits[0].found());
+        EXPECT_EQ(occluded[0], 0);
+    }
+}
+
+TEST(Bvh, DepthLimitsOnSoup) {
+    const Scene scene = random_soup(1000, 99);
+    const auto rays = probe_rays(scene, 1500, 9);
+    for (const std::string& split : kSplits) {
+        auto shallow = built(scene, {{"split", split}, {"max_depth", "1"}});
+        EXPECT_LE(shallow->build_stats().max_depth.value(), 1u) << split;
+        EXPECT_EQ(extra(*shallow, "forced_leaves"), 2) << split;
+        expect_agrees_with_embree(scene, *shallow, rays, "max_depth=1 " + split);
+        auto deep = built(scene, {{"split", split}, {"max_depth", "200"}});
+        EXPECT_EQ(extra(*deep, "forced_leaves"), 0) << split;
+        EXPECT_EQ(deep->build_stats().leaves.value(), 1000u) << split;
+        expect_agrees_with_embree(scene, *deep, rays, "max_depth=200 " + split);
+    }
+}
+
+TEST(Bvh, MidpointOnExponentialSpacingGoesDeepAndStaysCorrect) {
+    // Triangle i spans [x_i, 1.25 x_i] in x (and [0, 1] in y) with x_i = 2.5^(i-45)
+    // (within Embree's coordinate range): the centroid method's plane, about half the
+    // largest centroid, always lies beyond all but the largest triangle, so it peels one
+    // triangle per level and the tree is as deep as the scene is large (deeper than the
+    // traversal's inline stack).
+    Scene scene;
+    const int n = 90;
+    auto x_of = [](int i) { return float(std::pow(2.5, i - 45)); };
+    for (int i = 0; i < n; ++i) add_triangle(scene, {x_of(i), 0, 0}, {1.25f * x_of(i), 0, 0}, {x_of(i), 1, 0});
+    scene.finalize();
+    // Probe rays mostly see the largest triangles; add one ray straight down onto each.
+    std::vector<Ray> rays = probe_rays(scene, 500, 4);
+    for (int i = 0; i < n; ++i) rays.push_back({{1.05f * x_of(i), 0.05f, 1}, 0.0f, {0, 0, -1}, kInfinity});
+    auto bvh = built(scene, {{"split", "midpoint"}, {"max_depth", "200"}});
+    EXPECT_EQ(bvh->build_stats().max_depth.value(), uint64_t(n - 1));
+    expect_agrees_with_embree(scene, *bvh, rays, "midpoint exponential");
+    std::vector<Hit> hits(rays.size());
+    bvh->closest_hits(rays, hits);
+    for (int i = 0; i < n; ++i) EXPECT_EQ(hits[500 + i].prim, uint32_t(i));
+    auto capped = built(scene, {{"split", "midpoint"}, {"max_depth", "50"}});
+    EXPECT_EQ(capped->build_stats().max_depth.value(), 50u);
+    EXPECT_EQ(extra(*capped, "forced_leaves"), 1);
+    expect_agrees_with_embree(scene, *capped, rays, "midpoint exponential capped");
+}
+
+TEST(Bvh, ParametersAreValidated) {
+    EXPECT_THROW(make_accelerator("bvh", {{"split", "hlbvh"}}), ParamError);
+    EXPECT_THROW(make_accelerator("bvh", {{"max_prims", "0"}}), ParamError);
+    EXPECT_THROW(make_accelerator("bvh", {{"bins", "1"}}), ParamError);
+    EXPECT_THROW(make_accelerator("bvh", {{"traversal", "stackless"}}), ParamError);
+    EXPECT_NO_THROW(make_accelerator("bvh", {{"split", "sah"}, {"bins", "32"}, {"axis", "round_robin"}}));
+}
+
+// ---- a real model ---------------------------------------------------------------------
+
+TEST(Bvh, StanfordBunnyAgreesWithEmbree) {
+    const ModelRegistry registry = ModelRegistry::load_default();
+    const ModelEntry* entry = registry.find("stanford-bunny");
+    ASSERT_NE(entry, nullptr);
+    ASSERT_FALSE(registry.locate(*entry).path.empty()) << "stanford-bunny.obj not found (../shared/models should hold it)";
+    const Scene scene = registry.load_scene(*entry);
+    const auto rays = probe_rays(scene, 20000, 11);
+    for (const std::map<std::string, std::string>& p : std::vector<std::map<std::string, std::string>>{
+             {}, {{"split", "sah"}}, {{"split", "sah"}, {"max_prims", "8"}, {"traversal", "report"}}}) {
+        auto bvh = built(scene, p);
+        const BuildStats s = bvh->build_stats();
+        if (p.count("max_prims") == 0) {
+            EXPECT_EQ(s.nodes.value(), 2u * 69451 - 1) << describe(p);  // one triangle per leaf
+            EXPECT_EQ(s.leaves.value(), 69451u) << describe(p);
+        }
+        if (p.empty()) {
+            EXPECT_EQ(s.max_depth.value(), 17u);  // median: ceil(log2 69451)
+        }
+        std::printf("[bunny] %s: nodes %llu, depth %llu, sah %.2f, degenerate %g, forced %g\n", describe(p).c_str(),
+                    (unsigned long long)s.nodes.value(), (unsigned long long)s.max_depth.value(), s.sah_cost.value(),
+                    s.extra.at("degenerate_splits"), s.extra.at("forced_leaves"));
+        expect_agrees_with_embree(scene, *bvh, rays, describe(p) + " bunny");
+    }
+}

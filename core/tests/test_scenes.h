@@ -1,0 +1,58 @@
+// Small scenes for structure tests: random soups and hand-made layouts whose trees can be
+// worked out by hand. Deterministic (xorshift), so a failing case reproduces.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "accelbench/scene.h"
+
+namespace accelbench::test {
+
+// Uniform floats in [0, 1) from a xorshift64 state.
+class TestRandom {
+public:
+    explicit TestRandom(uint64_t seed) : x_(seed ? seed : 1) {}
+    float next() {
+        x_ ^= x_ << 13;
+        x_ ^= x_ >> 7;
+        x_ ^= x_ << 17;
+        return float(x_ >> 40) / float(1 << 24);
+    }
+
+private:
+    uint64_t x_;
+};
+
+inline void add_triangle(Scene& s, Vec3 a, Vec3 b, Vec3 c) {
+    const uint32_t i = uint32_t(s.vertices.size());
+    s.vertices.insert(s.vertices.end(), {a, b, c});
+    s.triangles.push_back({i, i + 1, i + 2});
+}
+
+// Random triangles (size ~0.2) in a unit box: many overlaps, many near-grazing hits.
+inline Scene random_soup(int n, uint64_t seed) {
+    Scene s;
+    s.name = "test-soup";
+    TestRandom r(seed);
+    for (int i = 0; i < n; ++i) {
+        Vec3 c{r.next(), r.next(), r.next()};
+        Vec3 p[3];
+        for (Vec3& v : p) v = c + Vec3{r.next() - 0.5f, r.next() - 0.5f, r.next() - 0.5f} * 0.2f;
+        add_triangle(s, p[0], p[1], p[2]);
+    }
+    s.finalize();
+    return s;
+}
+
+// Right triangles of leg `size` in the plane z = 0, the i-th with its right angle at
+// (xs[i], 0, 0): separated along x when the xs are further apart than `size`.
+inline Scene triangles_along_x(const std::vector<float>& xs, float size = 0.5f) {
+    Scene s;
+    s.name = "test-along-x";
+    for (float x : xs) add_triangle(s, {x, 0, 0}, {x + size, 0, 0}, {x, size, 0});
+    s.finalize();
+    return s;
+}
+
+}  // namespace accelbench::test
