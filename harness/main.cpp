@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "cli.h"
+#include "run_command.h"
 
 namespace {
 
@@ -13,6 +14,8 @@ struct Command {
 };
 
 const Command kCommands[] = {
+    {"run", accelbench::run_command, "measure a config (configs/*.yaml): combinations, Google Benchmark, results CSV"},
+    {"merge", accelbench::merge_command, "join result files (shards) that share a provenance"},
     {"render", accelbench::render_command, "render one model with one accelerator, print what it measured"},
     {"list", accelbench::list_command, "accelerators with their parameters and defaults; procedural scenes"},
     {"models", accelbench::models_command, "the model registry: where each file was found (--fetch: download missing)"},

@@ -1,4 +1,6 @@
-"""Command line: python -m accelbench_analysis {check,tables,claims,figures,report,all} CSV... [--out DIR]"""
+"""Command line: python -m accelbench_analysis {check,tables,claims,figures,report,all} CSV...
+[--out DIR], plus `regress` (the CI regression check) and `grid` / `grid-halve` (parameter
+grid search), both from issue 7."""
 
 from __future__ import annotations
 
@@ -9,6 +11,8 @@ from pathlib import Path
 
 from .reference import DEFAULT_REFERENCE, load_reference
 from .schema import ContractError, load_results
+
+EXIT_BAD_INPUT = 2
 
 COMMANDS = {
     "check": "validate the CSVs against the contract and print provenance and warnings",
@@ -34,7 +38,55 @@ def parser() -> argparse.ArgumentParser:
                        help="output directory (default: results/)")
         s.add_argument("--reference", type=Path, default=DEFAULT_REFERENCE,
                        help="the report's numbers (default: results/report/report-tables.csv)")
+    add_regress(sub)
+    add_grid(sub)
     return p
+
+
+def add_regress(sub) -> None:
+    from .regress import DEFAULT_TIME_FACTOR, INSTRUCTIONS_TOLERANCE
+    s = sub.add_parser(
+        "regress", help="compare a CI run with the committed baseline (exit 0 pass, 1 "
+                        "regression, 2 bad input, 3 time needs a second measurement)",
+        description="Three tiers: deterministic counts equal, instruction counts within "
+                    "+10%%, render time relative to Embree within a factor of the baseline's "
+                    "in two consecutive measurements. Exit codes: 0 pass, 1 regression, 2 bad "
+                    "input, 3 a time exceedance needs a second measurement (rerun with "
+                    "--history).")
+    s.add_argument("--baseline", type=Path, required=True, help="e.g. results/baseline/ci.csv")
+    s.add_argument("--current", type=Path, required=True, help="the fresh run's CSV")
+    s.add_argument("--history", type=Path,
+                   help="the previous run's CSV (or a re-measurement): a time exceedance fails "
+                        "only if it exceeded there too")
+    s.add_argument("--time-factor", type=float, default=DEFAULT_TIME_FACTOR,
+                   help=f"allowed growth of the ratio to Embree (default {DEFAULT_TIME_FACTOR})")
+    s.add_argument("--instructions-tolerance", type=float, default=INSTRUCTIONS_TOLERANCE,
+                   help=f"allowed relative change of instruction counts (default "
+                        f"{INSTRUCTIONS_TOLERANCE})")
+    s.add_argument("--report", type=Path, help="also write the Markdown report here")
+
+
+def add_grid(sub) -> None:
+    s = sub.add_parser("grid", help="rank a grid search's rows: best.yaml, ranked.csv, heatmaps",
+                       description="Reads the grid config's objective and constraints, ranks "
+                                   "the CSV's candidates per model and writes OUT/best.yaml, "
+                                   "OUT/ranked.csv, OUT/heatmap-*.png and OUT/summary.md.")
+    s.add_argument("csv", nargs="+", type=Path,
+                   help="the grid run's CSV(s) (several: shards, or both passes of successive "
+                        "halving; a candidate measured twice counts with its most repetitions)")
+    s.add_argument("--config", type=Path, required=True, help="configs/grid-NAME.yaml")
+    s.add_argument("--out", type=Path, help="output directory (default: results/grid/NAME/)")
+    s.add_argument("--no-heatmaps", action="store_true", help="skip the PNGs")
+    h = sub.add_parser("grid-halve",
+                       help="successive halving: write the second pass's config (top K per model)",
+                       description="From the first (cheap) pass's CSV, writes a config that runs "
+                                   "only the top K candidates of each model, at the repetitions "
+                                   "of grid.successive_halving.repetitions.")
+    h.add_argument("csv", nargs="+", type=Path, help="the first pass's CSV(s)")
+    h.add_argument("--config", type=Path, required=True, help="configs/grid-NAME.yaml")
+    h.add_argument("--keep", type=int,
+                   help="candidates per model to keep (default: grid.successive_halving.keep)")
+    h.add_argument("--out", type=Path, required=True, help="the second pass's config (YAML)")
 
 
 def copy_reference(reference: Path, out: Path) -> None:
@@ -88,12 +140,66 @@ def run(args: argparse.Namespace) -> list[Path]:
     return written
 
 
+def run_regress(args: argparse.Namespace) -> int:
+    from .regress import compare, to_markdown
+    cmp = compare(args.baseline, args.current, args.history, args.time_factor,
+                  args.instructions_tolerance)
+    text = to_markdown(cmp)
+    print(text, end="")
+    if args.report:
+        args.report.parent.mkdir(parents=True, exist_ok=True)
+        args.report.write_text(text)
+    return cmp.exit_code
+
+
+def run_grid(args: argparse.Namespace) -> int:
+    from .grid import analyse, write_outputs
+    from .grid_config import load_grid_config
+    cfg = load_grid_config(args.config)
+    results = load_results(args.csv)
+    for w in results.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    a = analyse(results, cfg)
+    out = args.out or Path("results") / "grid" / cfg.name
+    written = write_outputs(a, out, heatmaps=not args.no_heatmaps)
+    print((out / "summary.md").read_text(), end="")
+    for path in written:
+        print(path)
+    # 1: no model has a candidate that satisfies the constraints (nothing to recommend).
+    return 0 if any(a.best(m) is not None for m in a.models()) else 1
+
+
+def run_grid_halve(args: argparse.Namespace) -> int:
+    from .grid import analyse, dump_yaml, halve
+    from .grid_config import GridConfigError, load_grid_config
+    cfg = load_grid_config(args.config)
+    keep = args.keep if args.keep is not None else cfg.keep
+    if keep is None:
+        raise GridConfigError("give --keep or grid.successive_halving.keep in the config")
+    results = load_results(args.csv)
+    a = analyse(results, cfg)
+    doc, text = halve(a, keep, [str(p) for p in args.csv])
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(dump_yaml(doc, [
+        f"Second pass of successive halving for {cfg.path} (python -m accelbench_analysis "
+        f"grid-halve): {text}."]))
+    for n in a.notes:
+        print(f"note: {n}", file=sys.stderr)
+    print(text)
+    print(args.out)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
+    from .grid_config import GridConfigError
     args = parser().parse_args(argv)
+    handlers = {"regress": run_regress, "grid": run_grid, "grid-halve": run_grid_halve}
     try:
+        if args.command in handlers:
+            return handlers[args.command](args)
         for path in run(args):
             print(path)
-    except ContractError as e:
+    except (ContractError, GridConfigError) as e:
         print(f"error: {e}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     return 0

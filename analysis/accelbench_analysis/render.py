@@ -156,3 +156,13 @@ def to_latex(t: TableDoc) -> str:
         out += [f"\\textit{{Note:}} {tex_escape(n)}\\par" for n in t.notes]
     out.append("\\end{table}")
     return "\n".join(out) + "\n"
+
+
+def md_table(header: list[str], rows: list[list[str]], align: str = "l") -> list[str]:
+    """A plain Markdown table (one line per row). `align` has one letter per column, l or r;
+    columns beyond it are right-aligned (numbers)."""
+    align = align.ljust(len(header), "r")
+    out = ["| " + " | ".join(md_escape(h) for h in header) + " |",
+           "|" + "|".join(":---" if a == "l" else "---:" for a in align) + "|"]
+    out += ["| " + " | ".join(md_escape(str(c)) for c in r) + " |" for r in rows]
+    return out

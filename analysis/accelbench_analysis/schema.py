@@ -51,8 +51,12 @@ ERROR_COLUMNS = [
     "nan_results", "image_rmse", "hole_pixels",
 ]
 
+# Written by the harness for the CI regression runs (tier 2 of `regress`): callgrind's
+# instruction count (Ir) of the measured render, empty where it was not measured.
+INSTRUCTIONS_COLUMN = "instructions"
+
 NUMERIC_COLUMNS = (["triangles", "vertices", "repetitions"] + TIMING_COLUMNS + COUNT_COLUMNS
-                   + ["threads"] + ERROR_COLUMNS)
+                   + ["threads"] + ERROR_COLUMNS + [INSTRUCTIONS_COLUMN])
 
 STATUSES = ("ok", "skipped", "timeout", "error")
 
@@ -344,7 +348,7 @@ def load_results(paths: list[str | Path]) -> Results:
             warnings.append(f"{n} (config, model, accel, params) keys occur in more than one "
                             f"file; where such a row fills a table cell the newest timestamp "
                             f"is used and the cell's note says so.")
-    for col in ERROR_COLUMNS:
+    for col in ERROR_COLUMNS + [INSTRUCTIONS_COLUMN]:
         if col not in rows.columns:
             rows[col] = np.nan
     reps = pd.concat(rep_frames, ignore_index=True) if rep_frames else None

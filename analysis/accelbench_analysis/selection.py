@@ -40,6 +40,16 @@ EMBREE_PREFERRED = SINGLE_THREAD + (("quality", "medium"), ("robust", "false"),
 SPLIT_BY = ("traversal",)
 
 
+def kd_auto_depth_pbrt(triangles: float) -> int:
+    """pbrt's automatic kd-tree depth (maxdepth -1): round(8 + 1.3 * Log2Int(N)), integer log2."""
+    return math.floor(8 + 1.3 * math.floor(math.log2(triangles)) + 0.5)
+
+
+def kd_auto_depth_report(triangles: float) -> int:
+    """The report's Equation 5, depth = 8 + 1.3 log(N), with the real log2, rounded."""
+    return math.floor(8 + 1.3 * math.log2(triangles) + 0.5)
+
+
 def kd_auto_depths(triangles: float) -> set[int]:
     """Depths that count as the kd-tree's automatic default for a scene of N triangles.
 
@@ -48,8 +58,7 @@ def kd_auto_depths(triangles: float) -> set[int]:
     """
     if not triangles or triangles <= 0 or math.isnan(triangles):
         return set()
-    lg = math.log2(triangles)
-    return {math.floor(8 + 1.3 * math.floor(lg) + 0.5), math.floor(8 + 1.3 * lg + 0.5)}
+    return {kd_auto_depth_pbrt(triangles), kd_auto_depth_report(triangles)}
 
 
 @dataclass(frozen=True)

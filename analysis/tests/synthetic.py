@@ -44,8 +44,9 @@ def header(with_errors: bool = False) -> list[str]:
 def row(model: str, accel: str, params: dict, *, build=None, render=None, nodes=None,
         prim_tests=None, node_visits=None, status="ok", message="", config="table4",
         ci=0.02, rays=307200, shadow_rays=150000, errors: dict | None = None,
-        tree_depth=None, **provenance) -> dict:
-    """One CSV row as a dict keyed by the header's positions (see write_csv)."""
+        tree_depth=None, sah_cost=None, extra: dict | None = None, **provenance) -> dict:
+    """One CSV row as a dict keyed by the header's positions (see write_csv). `extra` holds
+    the values of write_csv's extra_columns (combo_id, instructions, ...)."""
     tri, vert = MODELS.get(model, (1000, 600))
     canon = ";".join(f"{k}={v}" for k, v in params.items())
     r = {"config": config, "model": model, "triangles": tri, "vertices": vert, "accel": accel,
@@ -69,9 +70,10 @@ def row(model: str, accel: str, params: dict, *, build=None, render=None, nodes=
               "leaves": "" if nodes is None else (nodes + 1) // 2,
               "stat_max_depth": "" if tree_depth is None else tree_depth,
               "memory_bytes": "" if nodes is None else nodes * 32,
-              "sah_cost": "", "prim_tests": "" if prim_tests is None else prim_tests,
+              "sah_cost": "" if sah_cost is None else repr(sah_cost), "prim_tests": "" if prim_tests is None else prim_tests,
               "node_visits": "" if node_visits is None else node_visits})
     r["errors"] = errors or {}
+    r["extra"] = extra or {}
     prov = dict(PROVENANCE)
     prov.update({k: str(v) for k, v in provenance.items()})
     r["prov"] = prov
@@ -79,9 +81,11 @@ def row(model: str, accel: str, params: dict, *, build=None, render=None, nodes=
 
 
 def write_csv(path: Path, rows: list[dict], with_errors: bool = False,
-              drop: tuple[str, ...] = ()) -> Path:
-    """Writes rows in the harness's column order (duplicate names included)."""
+              drop: tuple[str, ...] = (), extra_columns: tuple[str, ...] = ()) -> Path:
+    """Writes rows in the harness's column order (duplicate names included); extra columns
+    go before the provenance."""
     cols = header(with_errors)
+    cols = cols[:-len(PROVENANCE_COLUMNS)] + list(extra_columns) + cols[-len(PROVENANCE_COLUMNS):]
     lines = []
     for r in rows:
         vals = [r[c] for c in IDENTITY_COLUMNS]
@@ -90,6 +94,7 @@ def write_csv(path: Path, rows: list[dict], with_errors: bool = False,
         vals += [r["stat_max_depth"] if c == "max_depth" else r[c] for c in COUNT_COLUMNS]
         if with_errors:
             vals += [r["errors"].get(c, "") for c in ERROR_COLUMNS]
+        vals += [r["extra"].get(c, "") for c in extra_columns]
         vals += [r["prov"][c] for c in PROVENANCE_COLUMNS]
         lines.append(vals)
     keep = [i for i, c in enumerate(cols) if c not in drop]

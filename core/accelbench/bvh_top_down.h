@@ -169,10 +169,18 @@ constexpr bool may_stop_early() {
 }
 
 inline void fit(std::span<const BvhPrimRef> refs, Bounds3& bounds, Bounds3& centroid_bounds) {
-    BvhBoxAccumulator b, cb;
-    for (const BvhPrimRef& r : refs) b.extend(r, cb);
-    bounds = b.bounds();
-    centroid_bounds = cb.bounds();
+    // Two independent accumulator pairs halve the chain of dependent min/max operations.
+    BvhBoxAccumulator b[2], cb[2];
+    const size_t n = refs.size();
+    for (size_t i = 0; i + 1 < n; i += 2) {
+        b[0].extend(refs[i], cb[0]);
+        b[1].extend(refs[i + 1], cb[1]);
+    }
+    if (n % 2) b[0].extend(refs[n - 1], cb[0]);
+    b[0].extend(b[1]);
+    cb[0].extend(cb[1]);
+    bounds = b[0].bounds();
+    centroid_bounds = cb[0].bounds();
 }
 
 // Splits a range into two halves by count along `axis` (the object median; also the

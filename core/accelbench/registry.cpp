@@ -3,6 +3,7 @@
 #include "accelbench/brute_force.h"
 #include "accelbench/bvh.h"
 #include "accelbench/embree_accel.h"
+#include "accelbench/kdtree.h"
 #include "accelbench/lbvh.h"
 
 namespace accelbench {
@@ -13,6 +14,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
         Bvh::info(),
         EmbreeAccel::info(),
         Lbvh::info(),
+        KdTree::info(),
     };
     return registry;
 }

@@ -1,0 +1,942 @@
+#include "config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+
+#include "accelbench/params.h"
+#include "accelbench/procedural.h"
+#include "accelbench/registry.h"
+#include "model_registry.h"
+#include "ray_file.h"
+#include "text.h"
+
+namespace fs = std::filesystem;
+
+namespace accelbench {
+
+std::string format_issue(const ConfigIssue& issue) {
+    std::string s = issue.mark.file;
+    for (int n : {issue.mark.line, issue.mark.column})
+        if (n > 0) {
+            s += ':';
+            s += std::to_string(n);
+        }
+    s += ": ";
+    if (!issue.key_path.empty()) {
+        s += issue.key_path;
+        s += ": ";
+    }
+    s += issue.message;
+    return s;
+}
+
+namespace {
+
+std::string join_issues(const std::vector<ConfigIssue>& issues) {
+    std::string s;
+    for (const auto& i : issues) {
+        if (!s.empty()) s += '\n';
+        s += format_issue(i);
+    }
+    return s;
+}
+
+}  // namespace
+
+ConfigError::ConfigError(std::vector<ConfigIssue> issues)
+    : std::runtime_error(join_issues(issues)), issues_(std::move(issues)) {}
+
+namespace {
+
+ConfigError single_issue(const std::string& file, int line, int column, const std::string& message) {
+    std::vector<ConfigIssue> issues(1);
+    issues[0].mark.file = file;
+    issues[0].mark.line = line;
+    issues[0].mark.column = column;
+    issues[0].message = message;
+    return ConfigError(std::move(issues));
+}
+
+std::string join(const std::vector<std::string>& v, const char* sep = ", ") {
+    std::string s;
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? sep : "") + v[i];
+    return s;
+}
+
+// Edit distance, for "did you mean" hints on misspelt keys.
+size_t edit_distance(const std::string& a, const std::string& b) {
+    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        cur[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j)
+            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        std::swap(prev, cur);
+    }
+    return prev[b.size()];
+}
+
+std::string suggestion(const std::string& key, const std::vector<std::string>& allowed) {
+    std::string best;
+    size_t best_d = 3;  // only close misspellings
+    for (const auto& a : allowed) {
+        size_t d = edit_distance(key, a);
+        if (d < best_d) best_d = d, best = a;
+    }
+    return best.empty() ? "" : " (did you mean '" + best + "'?)";
+}
+
+const char* kind_of(const YAML::Node& n) {
+    switch (n.Type()) {
+        case YAML::NodeType::Map: return "a mapping";
+        case YAML::NodeType::Sequence: return "a list";
+        case YAML::NodeType::Scalar: return "a scalar";
+        case YAML::NodeType::Null: return "nothing (null)";
+        default: return "an undefined value";
+    }
+}
+
+// A quoted scalar ("1", 'x') is a string in YAML: it is never read as a number or bool.
+bool quoted(const YAML::Node& n) { return n.Tag() == "!"; }
+
+// Collects issues while the loader walks the document.
+struct Checker {
+    std::string file;
+    std::vector<ConfigIssue> issues;
+
+    void error(const YAML::Mark& m, const std::string& path, const std::string& msg) {
+        issues.push_back({{file, m.line + 1, m.column + 1}, path, msg});
+    }
+    void error(const YAML::Node& n, const std::string& path, const std::string& msg) { error(n.Mark(), path, msg); }
+};
+
+// The entries of one mapping, checked for duplicate and unknown keys. yaml-cpp 0.7 keeps
+// both entries of a duplicated key (lookups see the first), so the walk over the entries
+// is what finds them. A missing key has no mark of its own: it is reported at the
+// mapping's mark.
+class Fields {
+public:
+    struct Entry {
+        std::string key;
+        YAML::Node key_node;
+        YAML::Node value;
+    };
+
+    // `allowed` empty: any key (the caller checks them).
+    Fields(Checker& c, const YAML::Node& map, std::string path, const std::vector<std::string>& allowed)
+        : c_(c), map_(map), path_(std::move(path)) {
+        if (!map.IsMap()) {
+            c.error(map, path_, std::string("expected a mapping, got ") + kind_of(map));
+            return;
+        }
+        ok_ = true;
+        std::map<std::string, YAML::Mark> seen;
+        for (auto it = map.begin(); it != map.end(); ++it) {
+            const YAML::Node& k = it->first;
+            std::string key;
+            if (k.IsScalar()) key = k.Scalar();
+            else if (k.IsSequence()) key = flow_key(k);  // [max_prims, max_depth]: ...
+            else {
+                c.error(k, path_, std::string("a key must be a name, got ") + kind_of(k));
+                continue;
+            }
+            if (auto s = seen.find(key); s != seen.end()) {
+                c.error(k, child(key), "duplicate key '" + key + "' (first given at line " +
+                                           std::to_string(s->second.line + 1) + ", column " +
+                                           std::to_string(s->second.column + 1) + ")");
+                continue;
+            }
+            seen.emplace(key, k.Mark());
+            if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+                c.error(k, child(key), "unknown key '" + key + "'" + suggestion(key, allowed) + "; allowed here: " +
+                                           join(allowed));
+                continue;
+            }
+            entries_.push_back({key, k, it->second});
+        }
+    }
+
+    bool ok() const { return ok_; }
+    const std::vector<Entry>& entries() const { return entries_; }
+    const Entry* find(const std::string& key) const {
+        for (const auto& e : entries_)
+            if (e.key == key) return &e;
+        return nullptr;
+    }
+    bool has(const std::string& key) const { return find(key) != nullptr; }
+    const Entry* require(const std::string& key) const {
+        const Entry* e = find(key);
+        if (!e && ok_) c_.error(map_, child(key), "missing key '" + key + "'");
+        return e;
+    }
+    std::string child(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+    const std::string& path() const { return path_; }
+    const YAML::Node& node() const { return map_; }
+
+    // A flow-sequence key, e.g. `[max_prims, max_depth]`, in the canonical spelling a
+    // quoted key uses.
+    static std::string flow_key(const YAML::Node& k) {
+        std::string s = "[";
+        for (size_t i = 0; i < k.size(); ++i) {
+            if (i) s += ", ";
+            s += k[i].IsScalar() ? k[i].Scalar() : std::string("?");
+        }
+        return s + "]";
+    }
+
+private:
+    Checker& c_;
+    YAML::Node map_;
+    std::string path_;
+    bool ok_ = false;
+    std::vector<Entry> entries_;
+};
+
+// ---- scalar readers: each reports its own error and returns nullopt ------------------
+
+std::optional<std::string> read_string(Checker& c, const YAML::Node& n, const std::string& path) {
+    if (!n.IsScalar()) {
+        c.error(n, path, std::string("expected a string, got ") + kind_of(n));
+        return std::nullopt;
+    }
+    if (n.Scalar().empty()) {
+        c.error(n, path, "expected a non-empty string");
+        return std::nullopt;
+    }
+    return n.Scalar();
+}
+
+std::optional<int64_t> read_int(Checker& c, const YAML::Node& n, const std::string& path, int64_t lo, int64_t hi) {
+    const std::string range = concat("[", std::to_string(lo), ", ", std::to_string(hi), "]");
+    if (!n.IsScalar() || quoted(n)) {
+        c.error(n, path, "expected an integer in " + range + ", got " +
+                             (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
+        return std::nullopt;
+    }
+    const std::string& t = n.Scalar();
+    int64_t v = 0;
+    auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+    if (ec != std::errc() || p != t.data() + t.size()) {
+        c.error(n, path, "expected an integer in " + range + ", got '" + t + "'");
+        return std::nullopt;
+    }
+    if (v < lo || v > hi) {
+        c.error(n, path, "value " + t + " is out of range " + range);
+        return std::nullopt;
+    }
+    return v;
+}
+
+// A number in (lo, hi] when lo_open, else [lo, hi].
+std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::string& path, double lo, double hi,
+                                  bool lo_open) {
+    char range[96];
+    std::snprintf(range, sizeof range, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
+    if (!n.IsScalar() || quoted(n)) {
+        c.error(n, path, std::string("expected a number in ") + range + ", got " +
+                             (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
+        return std::nullopt;
+    }
+    const std::string& t = n.Scalar();
+    char* end = nullptr;
+    double v = std::strtod(t.c_str(), &end);
+    if (t.empty() || end != t.c_str() + t.size() || !std::isfinite(v)) {
+        c.error(n, path, std::string("expected a number in ") + range + ", got '" + t + "'");
+        return std::nullopt;
+    }
+    if (v > hi || v < lo || (lo_open && v == lo)) {
+        c.error(n, path, "value " + t + " is out of range " + range);
+        return std::nullopt;
+    }
+    return v;
+}
+
+std::optional<bool> read_bool(Checker& c, const YAML::Node& n, const std::string& path) {
+    if (n.IsScalar() && !quoted(n)) {
+        const std::string& t = n.Scalar();
+        if (t == "true" || t == "yes" || t == "on") return true;
+        if (t == "false" || t == "no" || t == "off") return false;
+    }
+    c.error(n, path, std::string("expected true or false, got ") +
+                         (n.IsScalar() ? "'" + n.Scalar() + "'" : std::string(kind_of(n))));
+    return std::nullopt;
+}
+
+std::optional<Vec3> read_vec3(Checker& c, const YAML::Node& n, const std::string& path) {
+    if (!n.IsSequence() || n.size() != 3) {
+        c.error(n, path, std::string("expected a list of three numbers [x, y, z], got ") +
+                             (n.IsSequence() ? "a list of " + std::to_string(n.size()) : std::string(kind_of(n))));
+        return std::nullopt;
+    }
+    Vec3 v;
+    for (int i = 0; i < 3; ++i) {
+        auto x = read_number(c, n[i], path + "[" + std::to_string(i) + "]", -1e30, 1e30, false);
+        if (!x) return std::nullopt;
+        v[i] = float(*x);
+    }
+    return v;
+}
+
+// parse_param's messages start with "accelerator 'x', parameter 'y': "; the key path
+// already says that.
+std::string strip_param_prefix(const std::string& msg) {
+    const std::string marker = "', parameter '";
+    size_t at = msg.find(marker);
+    if (at == std::string::npos) return msg;
+    size_t end = msg.find("': ", at + marker.size());
+    return end == std::string::npos ? msg : msg.substr(end + 3);
+}
+
+// One parameter value, validated against its declaration; returns its canonical text
+// (so that 1.0 and 1 for a float name the same combination).
+std::optional<std::string> read_param_value(Checker& c, const YAML::Node& n, const std::string& path,
+                                            const std::string& owner, const ParamSpec& spec) {
+    if (!n.IsScalar()) {
+        c.error(n, path, std::string("expected a ") + to_string(spec.type) + " value, got " + kind_of(n));
+        return std::nullopt;
+    }
+    if (quoted(n) && spec.type != ParamType::Enum) {
+        c.error(n, path, std::string("expected a ") + to_string(spec.type) + " value, got the quoted string '" +
+                             n.Scalar() + "'");
+        return std::nullopt;
+    }
+    // A default that depends on the scene (the kd-tree's max_depth "auto") can be named, so
+    // a zipped group can pair it with other values; it means "not given".
+    if (spec.scene_dependent_default && n.Scalar() == spec.default_value) return spec.default_value;
+    try {
+        return format_param(parse_param(owner, spec, n.Scalar()));
+    } catch (const ParamError& e) {
+        c.error(n, path, strip_param_prefix(e.what()));
+        return std::nullopt;
+    }
+}
+
+const ParamSpec* find_spec(const std::vector<ParamSpec>& specs, const std::string& name) {
+    for (const auto& s : specs)
+        if (s.name == name) return &s;
+    return nullptr;
+}
+
+std::vector<std::string> spec_names(const std::vector<ParamSpec>& specs) {
+    std::vector<std::string> names;
+    for (const auto& s : specs) names.push_back(s.name);
+    return names;
+}
+
+std::string format_float(double v) { return format_param(ParamValue(v)); }
+
+// ---- the loader ----------------------------------------------------------------------
+
+class Loader {
+public:
+    Loader(const std::string& path, const ModelRegistry& registry) : registry_(registry) {
+        c_.file = path;
+        cfg_.path = path;
+        fs::path dir = fs::path(path).parent_path();
+        cfg_.dir = dir.empty() ? "." : dir.string();
+    }
+
+    Config load() {
+        YAML::Node root;
+        try {
+            root = YAML::LoadFile(cfg_.path);
+        } catch (const YAML::BadFile&) {
+            throw single_issue(cfg_.path, 0, 0, "cannot open the config file");
+        } catch (const YAML::Exception& e) {
+            throw single_issue(cfg_.path, e.mark.line + 1, e.mark.column + 1, "YAML syntax error: " + e.msg);
+        }
+        if (root.IsNull()) throw single_issue(cfg_.path, 1, 1, "the config is empty");
+
+        // `grid:` belongs to the analysis's grid search (analysis/README.md): accepted, unread.
+        Fields top(c_, root, "",
+                   {"name", "description", "repetitions", "warmup", "timeout_s", "render", "rays", "models",
+                    "accelerators", "skip", "grid"});
+        if (!top.ok()) throw ConfigError(c_.issues);
+
+        cfg_.name = fs::path(cfg_.path).stem().string();
+        if (auto* e = top.find("name"))
+            if (auto s = read_string(c_, e->value, "name")) {
+                if (s->find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-") !=
+                    std::string::npos)
+                    c_.error(e->value, "name", "'" + *s + "' is used in file names: use letters, digits, '.', '_', '-'");
+                else cfg_.name = *s;
+            }
+        if (auto* e = top.find("description")) read_string(c_, e->value, "description");
+        if (auto* e = top.find("repetitions"))
+            if (auto v = read_int(c_, e->value, "repetitions", 1, 1000)) cfg_.repetitions = int(*v);
+        if (auto* e = top.find("warmup"))
+            if (auto v = read_int(c_, e->value, "warmup", 0, 100)) cfg_.warmup = int(*v);
+        if (auto* e = top.find("timeout_s"))
+            if (auto v = read_number(c_, e->value, "timeout_s", 0, 1e7, true)) cfg_.timeout_s = *v;
+        cfg_.render.shading = false;  // timing measures tracing; shading costs every structure the same
+        if (auto* e = top.find("render")) read_render(e->value);
+        if (auto* e = top.find("rays")) default_rays_ = read_rays(e->value, "rays");
+
+        if (auto* e = top.require("models")) read_list(e->value, "models", [&](const YAML::Node& n, const std::string& p) {
+            read_model(n, p);
+        });
+        check_models();
+        if (auto* e = top.require("accelerators"))
+            read_list(e->value, "accelerators", [&](const YAML::Node& n, const std::string& p) { read_accelerator(n, p); });
+        if (auto* e = top.find("skip"))
+            read_list(e->value, "skip", [&](const YAML::Node& n, const std::string& p) { read_skip(n, p); }, true);
+
+        if (!c_.issues.empty()) throw ConfigError(c_.issues);
+        return std::move(cfg_);
+    }
+
+private:
+    template <class F>
+    void read_list(const YAML::Node& n, const std::string& path, F&& each, bool may_be_empty = false) {
+        if (!n.IsSequence()) {
+            c_.error(n, path, std::string("expected a list, got ") + kind_of(n));
+            return;
+        }
+        if (n.size() == 0 && !may_be_empty) c_.error(n, path, "the list is empty");
+        for (size_t i = 0; i < n.size(); ++i) each(n[i], path + "[" + std::to_string(i) + "]");
+    }
+
+    std::string resolve(const std::string& p) const {
+        fs::path fp(p);
+        return (fp.is_absolute() ? fp : fs::path(cfg_.dir) / fp).lexically_normal().string();
+    }
+
+    void read_render(const YAML::Node& n) {
+        Fields f(c_, n, "render", {"width", "height", "spp", "light", "shading", "threads"});
+        RenderSettings& r = cfg_.render;
+        if (auto* e = f.find("width"))
+            if (auto v = read_int(c_, e->value, f.child("width"), 1, 16384)) r.width = int(*v);
+        if (auto* e = f.find("height"))
+            if (auto v = read_int(c_, e->value, f.child("height"), 1, 16384)) r.height = int(*v);
+        if (auto* e = f.find("spp"))
+            if (auto v = read_int(c_, e->value, f.child("spp"), 1, 4096)) r.spp = int(*v);
+        if (auto* e = f.find("threads"))
+            if (auto v = read_int(c_, e->value, f.child("threads"), 1, 1024)) r.threads = int(*v);
+        if (auto* e = f.find("light"))
+            if (auto v = read_bool(c_, e->value, f.child("light"))) r.light = *v;
+        if (auto* e = f.find("shading"))
+            if (auto v = read_bool(c_, e->value, f.child("shading"))) r.shading = *v;
+    }
+
+    std::shared_ptr<const RaySet> read_rays(const YAML::Node& n, const std::string& path) {
+        Fields f(c_, n, path, {"file"});
+        auto* e = f.require("file");
+        if (!e) return nullptr;
+        auto file = read_string(c_, e->value, f.child("file"));
+        if (!file) return nullptr;
+        const std::string resolved = resolve(*file);
+        if (auto it = ray_sets_.find(resolved); it != ray_sets_.end()) return it->second;
+        if (!fs::is_regular_file(resolved)) {
+            c_.error(e->value, f.child("file"), "no such ray file: " + resolved);
+            return nullptr;
+        }
+        RayFileContents contents = read_ray_file(resolved, resolved);
+        if (!contents.issues.empty()) {
+            for (auto& issue : contents.issues) {
+                issue.key_path = f.child("file");
+                c_.issues.push_back(std::move(issue));
+            }
+            return nullptr;
+        }
+        auto set = std::make_shared<RaySet>(RaySet{resolved, fs::path(*file).lexically_normal().string(),
+                                                   std::move(contents.rays)});
+        ray_sets_.emplace(resolved, set);
+        return set;
+    }
+
+    std::optional<Camera> read_camera(const YAML::Node& n, const std::string& path) {
+        Fields f(c_, n, path, {"eye", "look_at", "up", "fov"});
+        if (!f.ok()) return std::nullopt;
+        Camera cam;
+        bool ok = true;
+        auto vec = [&](const char* key, Vec3& out, bool required) {
+            const auto* e = required ? f.require(key) : f.find(key);
+            if (!e) {
+                ok &= !required;
+                return;
+            }
+            if (auto v = read_vec3(c_, e->value, f.child(key))) out = *v;
+            else ok = false;
+        };
+        vec("eye", cam.eye, true);
+        vec("look_at", cam.look_at, true);
+        vec("up", cam.up, false);
+        if (auto* e = f.find("fov")) {
+            if (auto v = read_number(c_, e->value, f.child("fov"), 0, 179, true)) cam.fov_deg = float(*v);
+            else ok = false;
+        }
+        if (!ok) return std::nullopt;
+        const Vec3 view = cam.look_at - cam.eye;
+        if (dot(view, view) == 0.0f) {
+            c_.error(n, path, "eye and look_at are the same point: the camera has no view direction");
+            return std::nullopt;
+        }
+        const Vec3 side = cross(view, cam.up);
+        if (dot(side, side) == 0.0f) {
+            c_.error(n, path, "up is parallel to the view direction (look_at - eye)");
+            return std::nullopt;
+        }
+        return cam;
+    }
+
+    bool known_registry_model(const YAML::Node& n, const std::string& path, const std::string& name) {
+        if (registry_.find(name)) return true;
+        std::vector<std::string> names;
+        for (const auto& e : registry_.entries()) names.push_back(e.name);
+        c_.error(n, path, "unknown model '" + name + "': not in the model registry (configs/models.yaml: " +
+                              join(names) + "); a mesh file is written {path: FILE}");
+        return false;
+    }
+
+    void read_model(const YAML::Node& n, const std::string& path) {
+        ModelSpec m;
+        m.mark = {c_.file, n.Mark().line + 1, n.Mark().column + 1};
+        m.key_path = path;
+        if (n.IsScalar()) {
+            m.kind = ModelSpec::Kind::Registry;
+            m.name = n.Scalar();
+            if (!known_registry_model(n, path, m.name)) return;
+            m.label = m.name;
+            m.key = "registry:" + m.name;
+            m.rays = default_rays_;
+            finish_model(std::move(m));
+            return;
+        }
+        if (!n.IsMap()) {
+            c_.error(n, path, std::string("expected a registry name or a mapping (name:, path: or procedural:), got ") +
+                                  kind_of(n));
+            return;
+        }
+        Fields f(c_, n, path, {});  // keys depend on the form: checked below
+        const bool has_name = f.has("name"), has_path = f.has("path"), has_proc = f.has("procedural");
+        if (int(has_name) + int(has_path) + int(has_proc) != 1) {
+            c_.error(n, path, "a model needs exactly one of 'name' (registry model), 'path' (mesh file) or "
+                              "'procedural' (generated scene)");
+            return;
+        }
+        const char* form = has_name ? "name" : has_path ? "path" : "procedural";
+        std::vector<std::string> allowed = {form, "camera", "rays", "label", "repetitions"};
+        const auto* given = f.find(form);
+        auto value = read_string(c_, given->value, f.child(form));
+        if (!value) return;
+        m.name = *value;
+        bool ok = true;
+        const ProceduralInfo* proc = nullptr;
+        if (has_name) {
+            m.kind = ModelSpec::Kind::Registry;
+            ok = known_registry_model(given->value, f.child(form), m.name);
+            m.label = m.name;
+            m.key = "registry:" + m.name;
+        } else if (has_path) {
+            m.kind = ModelSpec::Kind::Path;
+            m.resolved_path = resolve(m.name);
+            if (!fs::is_regular_file(m.resolved_path)) {
+                c_.error(given->value, f.child(form), "no such mesh file: " + m.resolved_path);
+                ok = false;
+            }
+            m.label = m.name;
+            m.key = "path:" + fs::path(m.name).lexically_normal().string();
+        } else {
+            m.kind = ModelSpec::Kind::Procedural;
+            proc = find_procedural(m.name);
+            if (!proc) {
+                std::vector<std::string> names;
+                for (const auto& p : procedural_registry()) names.push_back(p.name);
+                c_.error(given->value, f.child(form),
+                         "unknown procedural scene '" + m.name + "' (known: " + join(names) + ")");
+                return;
+            }
+            for (const auto& s : proc->params) allowed.push_back(s.name);
+        }
+        for (const auto& e : f.entries()) {
+            if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
+            std::string what = proc ? "procedural scene '" + proc->name + "' has no parameter '" + e.key + "'"
+                                    : "unknown key '" + e.key + "'";
+            c_.error(e.key_node, f.child(e.key), what + suggestion(e.key, allowed) + "; allowed here: " + join(allowed));
+            ok = false;
+        }
+        if (proc) {
+            std::string label;
+            for (const auto& spec : proc->params) {
+                const auto* e = f.find(spec.name);
+                if (!e) continue;
+                auto v = read_param_value(c_, e->value, f.child(spec.name), proc->name, spec);
+                if (!v) {
+                    ok = false;
+                    continue;
+                }
+                m.procedural_params[spec.name] = *v;
+                append_item(label, ",", spec.name, "=", *v);
+            }
+            if (ok) {
+                ParamSet set = resolve_params(proc->name, proc->params, m.procedural_params);
+                m.procedural_canonical = set.canonical();
+            }
+            m.label = label.empty() ? proc->name : proc->name + "(" + label + ")";
+            m.key = "procedural:" + proc->name + ":" + m.procedural_canonical;
+        }
+        if (auto* e = f.find("camera")) {
+            m.camera = read_camera(e->value, f.child("camera"));
+            if (!m.camera) ok = false;
+            else {
+                const Camera& cam = *m.camera;
+                auto v3 = [](Vec3 v) { return format_float(v.x) + "," + format_float(v.y) + "," + format_float(v.z); };
+                m.key += ";camera=" + v3(cam.eye) + ";" + v3(cam.look_at) + ";" + v3(cam.up) + ";" +
+                         format_float(cam.fov_deg);
+            }
+        }
+        if (auto* e = f.find("rays")) {
+            m.rays = read_rays(e->value, f.child("rays"));
+            if (!m.rays) ok = false;
+        } else {
+            m.rays = default_rays_;
+        }
+        if (auto* e = f.find("label"))
+            if (auto s = read_string(c_, e->value, f.child("label"))) m.label = *s;
+        if (auto* e = f.find("repetitions")) {
+            if (auto v = read_int(c_, e->value, f.child("repetitions"), 1, 1000)) m.repetitions = int(*v);
+            else ok = false;
+        }
+        if (ok) finish_model(std::move(m));
+    }
+
+    void finish_model(ModelSpec m) {
+        if (m.rays) m.key += ";rays=" + m.rays->display;
+        cfg_.models.push_back(std::move(m));
+    }
+
+    // Two models with the same identity would be measured twice under one id; two with
+    // the same label could not be told apart in the CSV.
+    void check_models() {
+        for (size_t i = 0; i < cfg_.models.size(); ++i)
+            for (size_t j = 0; j < i; ++j) {
+                const ModelSpec& a = cfg_.models[j];
+                const ModelSpec& b = cfg_.models[i];
+                const SourceMark& m = b.mark;
+                if (a.key == b.key)
+                    c_.issues.push_back({m, b.key_path, "the same model as " + a.key_path + " ('" + a.label + "')"});
+                else if (a.label == b.label)
+                    c_.issues.push_back({m, b.key_path, "the same label '" + b.label + "' as " + a.key_path +
+                                                            ": give one of them a distinct `label:`"});
+            }
+    }
+
+    void read_accelerator(const YAML::Node& n, const std::string& path) {
+        AcceleratorSpec a;
+        a.mark = {c_.file, n.Mark().line + 1, n.Mark().column + 1};
+        a.key_path = path;
+        Fields f(c_, n, path, {"name", "params"});
+        const auto* ne = f.require("name");
+        if (!ne) return;
+        auto name = read_string(c_, ne->value, f.child("name"));
+        if (!name) return;
+        a.name = *name;
+        const AcceleratorInfo* info = find_accelerator(a.name);
+        if (!info) {
+            std::vector<std::string> names;
+            for (const auto& i : accelerator_registry()) names.push_back(i.name);
+            c_.error(ne->value, f.child("name"),
+                     "unknown accelerator '" + a.name + "'" + suggestion(a.name, names) + " (known: " + join(names) + ")");
+            return;
+        }
+        bool ok = true;
+        // Parameter errors name the accelerator, as in `accelerators[2].kdtree.max_depth`.
+        const std::string base = path + "." + a.name;
+        if (auto* pe = f.find("params")) {
+            Fields pf(c_, pe->value, base, {});
+            ok &= pf.ok();
+            std::map<std::string, std::string> used;  // parameter -> the key that gave it
+            for (const auto& e : pf.entries()) {
+                std::vector<std::string> names;
+                const bool group = e.key.size() >= 2 && e.key.front() == '[' && e.key.back() == ']';
+                if (group) {
+                    names = split_group(e.key);
+                    if (names.size() < 2) {
+                        c_.error(e.key_node, pf.child(e.key), "a zipped group names two or more parameters, e.g. "
+                                                              "\"[max_prims, max_depth]\"");
+                        ok = false;
+                        continue;
+                    }
+                } else {
+                    names = {e.key};
+                }
+                bool names_ok = true;
+                std::vector<const ParamSpec*> specs;
+                for (const auto& pn : names) {
+                    const ParamSpec* spec = find_spec(info->params, pn);
+                    if (!spec) {
+                        const auto known = spec_names(info->params);
+                        c_.error(e.key_node, base + "." + pn,
+                                 "accelerator '" + a.name + "' has no parameter '" + pn + "'" + suggestion(pn, known) +
+                                     (known.empty() ? " (it takes none)" : " (it has: " + join(known) + ")"));
+                        names_ok = false;
+                        continue;
+                    }
+                    if (auto u = used.find(pn); u != used.end()) {
+                        c_.error(e.key_node, base + "." + pn,
+                                 "parameter '" + pn + "' is given twice (also in '" + u->second + "')");
+                        names_ok = false;
+                        continue;
+                    }
+                    used.emplace(pn, e.key);
+                    specs.push_back(spec);
+                }
+                if (!names_ok) {
+                    ok = false;
+                    continue;
+                }
+                ParamAxis axis;
+                axis.names = names;
+                if (group) ok &= read_group_values(e.value, base, e.key, a.name, specs, axis);
+                else ok &= read_values(e.value, base + "." + names[0], a.name, *specs[0], axis);
+                a.axes.push_back(std::move(axis));
+            }
+        }
+        if (ok) cfg_.accelerators.push_back(std::move(a));
+    }
+
+    static std::vector<std::string> split_group(const std::string& key) {
+        std::vector<std::string> names;
+        std::string inner = key.substr(1, key.size() - 2);
+        size_t start = 0;
+        for (;;) {
+            size_t comma = inner.find(',', start);
+            std::string part = inner.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+            size_t b = part.find_first_not_of(" \t"), e = part.find_last_not_of(" \t");
+            names.push_back(b == std::string::npos ? "" : part.substr(b, e - b + 1));
+            if (comma == std::string::npos) return names;
+            start = comma + 1;
+        }
+    }
+
+    // A parameter's values: a scalar (one value) or a list of scalars.
+    bool read_values(const YAML::Node& n, const std::string& path, const std::string& accel, const ParamSpec& spec,
+                     ParamAxis& axis) {
+        if (n.IsScalar()) {
+            auto v = read_param_value(c_, n, path, accel, spec);
+            if (v) axis.values.push_back({*v});
+            return bool(v);
+        }
+        if (n.IsMap()) return read_range(n, path, accel, spec, axis);
+        if (!n.IsSequence() || n.size() == 0) {
+            c_.error(n, path, std::string("expected a value, a non-empty list of values or a range, got ") +
+                                  (n.IsSequence() ? "an empty list" : kind_of(n)));
+            return false;
+        }
+        bool ok = true;
+        for (size_t j = 0; j < n.size(); ++j) {
+            const std::string p = path + "[" + std::to_string(j) + "]";
+            auto v = read_param_value(c_, n[j], p, accel, spec);
+            if (!v) {
+                ok = false;
+                continue;
+            }
+            if (std::find(axis.values.begin(), axis.values.end(), std::vector<std::string>{*v}) != axis.values.end()) {
+                c_.error(n[j], p, "value " + *v + " is listed twice");
+                ok = false;
+                continue;
+            }
+            axis.values.push_back({*v});
+        }
+        return ok;
+    }
+
+    // A range (for grid searches; analysis/README.md "Grid search" and grid_config.py
+    // expand it the same way): {from: a, to: b, step: s} is a, a+s, ... while <= b (with a
+    // 1e-9 x s slack); {from: a, to: b, scale: log2|log10} is a, 2a, 4a, ... (10a, ...)
+    // while <= b. Integer from, to (and step) give integers, other values are rounded to 12
+    // significant digits (0.1 steps read 0.3, not 0.30000000000000004).
+    bool read_range(const YAML::Node& n, const std::string& path, const std::string& accel, const ParamSpec& spec,
+                    ParamAxis& axis) {
+        constexpr size_t kMaxValues = 10000;  // a typo like step: 0.0001 must not hang the expansion
+        Fields f(c_, n, path, {"from", "to", "step", "scale"});
+        const auto* from = f.require("from");
+        const auto* to = f.require("to");
+        if (!from || !to) return false;
+        auto lo = read_number(c_, from->value, f.child("from"), -1e300, 1e300, false);
+        auto hi = read_number(c_, to->value, f.child("to"), -1e300, 1e300, false);
+        if (!lo || !hi) return false;
+        auto integral = [](const YAML::Node& v) {
+            int64_t x;
+            const std::string& t = v.Scalar();
+            auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), x);
+            return ec == std::errc() && p == t.data() + t.size();
+        };
+        if (*lo > *hi) {
+            c_.error(n, path, "`from` (" + from->value.Scalar() + ") is above `to` (" + to->value.Scalar() + ")");
+            return false;
+        }
+        const auto* step = f.find("step");
+        const auto* scale = f.find("scale");
+        if (bool(step) == bool(scale)) {
+            c_.error(n, path, "a range gives exactly one of `step` or `scale` (log2, log10)");
+            return false;
+        }
+        std::vector<double> values;
+        bool integers = integral(from->value) && integral(to->value);
+        if (step) {
+            auto s = read_number(c_, step->value, f.child("step"), 0, 1e300, true);
+            if (!s) return false;
+            integers &= integral(step->value);
+            const double count = std::floor((*hi - *lo) / *s + 1e-9) + 1;
+            for (double i = 0; i < count && values.size() <= kMaxValues; ++i) values.push_back(*lo + i * *s);
+        } else {
+            auto name = read_string(c_, scale->value, f.child("scale"));
+            if (!name) return false;
+            if (*name != "log2" && *name != "log10") {
+                c_.error(scale->value, f.child("scale"), "scale is log2 or log10, got '" + *name + "'");
+                return false;
+            }
+            if (*lo <= 0) {
+                c_.error(from->value, f.child("from"), "a " + *name + " range starts above 0");
+                return false;
+            }
+            const double base = *name == "log2" ? 2.0 : 10.0;
+            integers = integral(from->value);
+            const double count = std::floor(std::log(*hi / *lo) / std::log(base) + 1e-9) + 1;
+            for (double i = 0; i < count && values.size() <= kMaxValues; ++i) values.push_back(*lo * std::pow(base, i));
+        }
+        if (values.size() > kMaxValues) {
+            c_.error(n, path, "the range has more than " + std::to_string(kMaxValues) + " values");
+            return false;
+        }
+        bool ok = true;
+        for (double v : values) {
+            char text[40];
+            if (integers) std::snprintf(text, sizeof text, "%.0f", v);
+            else std::snprintf(text, sizeof text, "%.12g", v);
+            try {
+                const std::string canonical = format_param(parse_param(accel, spec, text));
+                if (std::find(axis.values.begin(), axis.values.end(), std::vector<std::string>{canonical}) ==
+                    axis.values.end())
+                    axis.values.push_back({canonical});
+            } catch (const ParamError& e) {
+                c_.error(n, path, "the range's value " + std::string(text) + ": " + strip_param_prefix(e.what()));
+                ok = false;
+            }
+        }
+        return ok;
+    }
+
+    // A zipped group's values: a list of tuples, one value per named parameter.
+    bool read_group_values(const YAML::Node& n, const std::string& base, const std::string& key,
+                           const std::string& accel, const std::vector<const ParamSpec*>& specs, ParamAxis& axis) {
+        const std::string path = base + "." + key;
+        if (!n.IsSequence() || n.size() == 0) {
+            c_.error(n, path, "expected a non-empty list of tuples, e.g. [[1, 28], [10, 20]], got " +
+                                  std::string(n.IsSequence() ? "an empty list" : kind_of(n)));
+            return false;
+        }
+        bool ok = true;
+        for (size_t j = 0; j < n.size(); ++j) {
+            const YAML::Node& t = n[j];
+            const std::string tp = path + "[" + std::to_string(j) + "]";
+            if (!t.IsSequence() || t.size() != specs.size()) {
+                c_.error(t, tp, "expected a tuple of " + std::to_string(specs.size()) + " values (" + key + "), got " +
+                                    (t.IsSequence() ? "a list of " + std::to_string(t.size()) : std::string(kind_of(t))));
+                ok = false;
+                continue;
+            }
+            std::vector<std::string> tuple;
+            for (size_t k = 0; k < specs.size(); ++k) {
+                auto v = read_param_value(c_, t[k], base + "." + specs[k]->name + "[" + std::to_string(j) + "]", accel,
+                                          *specs[k]);
+                if (v) tuple.push_back(*v);
+            }
+            if (tuple.size() != specs.size()) {
+                ok = false;
+                continue;
+            }
+            if (std::find(axis.values.begin(), axis.values.end(), tuple) != axis.values.end()) {
+                c_.error(t, tp, "this tuple is listed twice");
+                ok = false;
+                continue;
+            }
+            axis.values.push_back(std::move(tuple));
+        }
+        return ok;
+    }
+
+    void read_skip(const YAML::Node& n, const std::string& path) {
+        Fields f(c_, n, path, {"accel", "model", "triangles_above", "triangles_below", "params", "reason"});
+        if (!f.ok()) return;
+        SkipRule r;
+        r.key_path = path;
+        bool ok = true;
+        if (const auto* e = f.require("reason")) {
+            if (auto s = read_string(c_, e->value, f.child("reason"))) r.reason = *s;
+            else ok = false;
+        } else {
+            ok = false;
+        }
+        const AcceleratorInfo* info = nullptr;
+        if (const auto* e = f.find("accel")) {
+            auto s = read_string(c_, e->value, f.child("accel"));
+            if (s && !(info = find_accelerator(*s))) {
+                c_.error(e->value, f.child("accel"), "unknown accelerator '" + *s + "'");
+                s.reset();
+            }
+            if (s) r.accel = *s;
+            else ok = false;
+        }
+        if (const auto* e = f.find("model")) {
+            auto s = read_string(c_, e->value, f.child("model"));
+            bool known = false;
+            for (const auto& m : cfg_.models) known |= s && m.label == *s;
+            if (s && !known) {
+                std::vector<std::string> labels;
+                for (const auto& m : cfg_.models) labels.push_back(m.label);
+                c_.error(e->value, f.child("model"), "'" + *s + "' matches no model of this config (" + join(labels) + ")");
+                s.reset();
+            }
+            if (s) r.model = *s;
+            else ok = false;
+        }
+        for (const char* key : {"triangles_above", "triangles_below"})
+            if (const auto* e = f.find(key)) {
+                auto v = read_int(c_, e->value, f.child(key), 0, int64_t(1) << 50);
+                if (!v) ok = false;
+                else (std::string(key) == "triangles_above" ? r.triangles_above : r.triangles_below) = uint64_t(*v);
+            }
+        if (const auto* e = f.find("params")) {
+            if (!f.has("accel")) {
+                c_.error(e->key_node, f.child("params"), "matching on params needs `accel:` (parameters belong to one accelerator)");
+                ok = false;
+            } else if (info) {
+                Fields pf(c_, e->value, f.child("params"), spec_names(info->params));
+                ok &= pf.ok();
+                for (const auto& pe : pf.entries()) {
+                    auto v = read_param_value(c_, pe.value, pf.child(pe.key), info->name, *find_spec(info->params, pe.key));
+                    if (v) r.params[pe.key] = *v;
+                    else ok = false;
+                }
+            }
+        }
+        if (!f.has("accel") && !f.has("model") && !f.has("triangles_above") && !f.has("triangles_below") &&
+            !f.has("params")) {
+            c_.error(n, path, "a skip rule needs at least one condition (accel, model, triangles_above, "
+                              "triangles_below, params)");
+            ok = false;
+        }
+        if (ok) cfg_.skip.push_back(std::move(r));
+    }
+
+    Checker c_;
+    Config cfg_;
+    const ModelRegistry& registry_;
+    std::shared_ptr<const RaySet> default_rays_;
+    std::map<std::string, std::shared_ptr<const RaySet>> ray_sets_;
+};
+
+}  // namespace
+
+Config load_config(const std::string& path, const ModelRegistry& models) { return Loader(path, models).load(); }
+
+}  // namespace accelbench

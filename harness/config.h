@@ -1,0 +1,119 @@
+// A benchmark config (configs/*.yaml), read and validated in full before anything runs.
+//
+// Every problem found becomes one ConfigIssue naming the file, line and column and the key
+// path (`accelerators[2].kdtree.max_depth`); load_config reports all of them at once, so a
+// user fixes a config in one pass instead of one error per run. The keys are documented in
+// docs/configs.md.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "accelbench/camera.h"
+#include "accelbench/geometry.h"
+#include "accelbench/renderer.h"
+
+namespace accelbench {
+
+class ModelRegistry;
+
+// Where in a file something is; line and column are 1-based, 0 when unknown.
+struct SourceMark {
+    std::string file;
+    int line = 0;
+    int column = 0;
+};
+
+struct ConfigIssue {
+    SourceMark mark;
+    std::string key_path;  // e.g. "accelerators[2].kdtree.max_depth"; empty for the whole file
+    std::string message;
+};
+
+// "file:line:column: key.path: message"
+std::string format_issue(const ConfigIssue& issue);
+
+// Thrown by load_config (and expansion) with every issue found; what() lists them all,
+// one per line.
+class ConfigError : public std::runtime_error {
+public:
+    explicit ConfigError(std::vector<ConfigIssue> issues);
+    const std::vector<ConfigIssue>& issues() const { return issues_; }
+
+private:
+    std::vector<ConfigIssue> issues_;
+};
+
+// A ray file (`rays: {file: ...}`), read once while validating.
+struct RaySet {
+    std::string path;     // resolved path
+    std::string display;  // as written in the config
+    std::vector<Ray> rays;
+};
+
+struct ModelSpec {
+    enum class Kind { Registry, Path, Procedural };
+    Kind kind = Kind::Registry;
+    std::string name;           // registry name, path as written, or procedural kind
+    std::string resolved_path;  // Kind::Path: relative to the config file's directory
+    std::map<std::string, std::string> procedural_params;  // Kind::Procedural: as given
+    std::string procedural_canonical;  // Kind::Procedural: all parameters, defaults filled in
+    std::optional<Camera> camera;      // overrides the registry's / the auto-fit view
+    std::shared_ptr<const RaySet> rays;  // trace these instead of camera rays
+    std::optional<int> repetitions;      // overrides Config::repetitions for this model
+    std::string label;  // the CSV's `model` column
+    std::string key;    // config-independent identity (the combination id hashes it)
+    SourceMark mark;
+    std::string key_path;  // "models[3]"
+};
+
+// One parameter axis of an accelerator: a single parameter with its values, or a zipped
+// group (`"[max_prims, max_depth]": [[1, 28], [10, 20]]`) whose tuples go together.
+struct ParamAxis {
+    std::vector<std::string> names;
+    std::vector<std::vector<std::string>> values;  // each tuple has names.size() entries
+};
+
+struct AcceleratorSpec {
+    std::string name;
+    std::vector<ParamAxis> axes;  // in the order written
+    SourceMark mark;
+    std::string key_path;  // "accelerators[1]"
+};
+
+// A rule that turns matching combinations into `skipped` rows with the reason. Every
+// condition given must hold.
+struct SkipRule {
+    std::optional<std::string> accel;
+    std::optional<std::string> model;  // matches the model's label (the `model` column)
+    std::optional<uint64_t> triangles_above;  // skip when triangles > this
+    std::optional<uint64_t> triangles_below;  // skip when triangles < this
+    std::map<std::string, std::string> params;  // canonical text of resolved values
+    std::string reason;
+    std::string key_path;  // "skip[0]"
+};
+
+struct Config {
+    std::string path;  // the config file
+    std::string dir;   // its directory: relative paths in the config start here
+    std::string name;  // `name`, default the file's stem; the CSV's `config` column
+    int repetitions = 5;
+    int warmup = 1;
+    double timeout_s = 300;
+    RenderSettings render;  // shading defaults to off in configs (see docs/configs.md)
+    std::vector<ModelSpec> models;
+    std::vector<AcceleratorSpec> accelerators;
+    std::vector<SkipRule> skip;
+};
+
+// Reads and validates the config at `path` against the accelerator registry, the
+// procedural scene registry and the model registry. Throws ConfigError listing every
+// problem found.
+Config load_config(const std::string& path, const ModelRegistry& models);
+
+}  // namespace accelbench

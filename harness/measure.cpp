@@ -1,0 +1,571 @@
+#include "measure.h"
+#include "text.h"
+
+#include <benchmark/benchmark.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace accelbench {
+
+const std::vector<BuildStatField>& build_stat_fields() {
+    static const std::vector<BuildStatField> fields = {
+        {"nodes", &BuildStats::nodes, nullptr},
+        {"leaves", &BuildStats::leaves, nullptr},
+        {"max_depth", &BuildStats::max_depth, nullptr},
+        {"memory_bytes", &BuildStats::memory_bytes, nullptr},
+        {"sah_cost", nullptr, &BuildStats::sah_cost},
+        {"avg_leaf_size", nullptr, &BuildStats::avg_leaf_size},
+    };
+    return fields;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_between(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double>(b - a).count();
+}
+
+// A time limit as the config wrote it (0.1, not 0.10000000000000001).
+std::string limit_text(double s) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", s);
+    return buf;
+}
+
+// ---- deterministic values: every run that produces them must agree ------------------
+
+bool same_real(double a, double b) { return a == b || std::fabs(a - b) <= 1e-9 * std::max(std::fabs(a), std::fabs(b)); }
+
+template <class T>
+std::string opt_text(const std::optional<T>& v) {
+    if (!v) return "missing";
+    std::ostringstream s;
+    s.precision(17);
+    s << *v;
+    return s.str();
+}
+
+// Empty when equal; otherwise which statistic differs and how. Counts must be equal,
+// reals (SAH cost, averages) equal to a relative 1e-9.
+std::string build_stats_difference(const BuildStats& a, const BuildStats& b) {
+    auto differ = [](const std::optional<double>& x, const std::optional<double>& y) {
+        return x.has_value() != y.has_value() || (x && !same_real(*x, *y));
+    };
+    auto describe = [](const std::string& what, const std::optional<double>& x, const std::optional<double>& y) {
+        return what + " " + opt_text(x) + " vs " + opt_text(y);
+    };
+    for (const auto& f : build_stat_fields())
+        if (differ(f.get(a), f.get(b))) return describe(f.name, f.get(a), f.get(b));
+    std::set<std::string> keys;
+    for (const auto& [k, v] : a.extra) keys.insert(k);
+    for (const auto& [k, v] : b.extra) keys.insert(k);
+    auto extra = [](const BuildStats& s, const std::string& k) {
+        auto it = s.extra.find(k);
+        return it == s.extra.end() ? std::nullopt : std::optional<double>(it->second);
+    };
+    for (const auto& k : keys)
+        if (differ(extra(a, k), extra(b, k))) return describe(k, extra(a, k), extra(b, k));
+    return "";
+}
+
+std::string ray_count_difference(const TraceOutput& a, const TraceOutput& b) {
+    auto cmp = [](const char* what, uint64_t x, uint64_t y) {
+        return x == y ? std::string() : std::string(what) + " " + std::to_string(x) + " vs " + std::to_string(y);
+    };
+    for (const std::string& d : {cmp("rays", a.rays, b.rays), cmp("hits", a.hits, b.hits),
+                                 cmp("shadow_rays", a.shadow_rays, b.shadow_rays),
+                                 cmp("shadow_hits", a.shadow_hits, b.shadow_hits)})
+        if (!d.empty()) return d;
+    return "";
+}
+
+std::string counter_difference(const TraceOutput& a, const TraceOutput& b) {
+    auto cmp = [](const std::string& what, uint64_t x, uint64_t y) {
+        return x == y ? std::string() : what + " " + std::to_string(x) + " vs " + std::to_string(y);
+    };
+    for (const std::string& d :
+         {cmp("primary node_visits", a.primary_stats.node_visits, b.primary_stats.node_visits),
+          cmp("primary box_tests", a.primary_stats.box_tests, b.primary_stats.box_tests),
+          cmp("primary prim_tests", a.primary_stats.prim_tests, b.primary_stats.prim_tests),
+          cmp("shadow node_visits", a.shadow_stats.node_visits, b.shadow_stats.node_visits),
+          cmp("shadow box_tests", a.shadow_stats.box_tests, b.shadow_stats.box_tests),
+          cmp("shadow prim_tests", a.shadow_stats.prim_tests, b.shadow_stats.prim_tests)})
+        if (!d.empty()) return d;
+    return "";
+}
+
+struct Nondeterministic : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+struct StageTimeout : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// ---- the reporter: GB's console output, plus what the CSV needs ---------------------
+
+// Passes runs on to GB's console reporter (only the aggregates unless every repetition
+// is asked for) and, for --benchmark_out, to a JSON reporter writing into a string; keeps
+// each counted repetition's time for our CSV. It is the display reporter: GB 1.7.1 only
+// accepts a file reporter together with --benchmark_out, whose file the parent process
+// owns.
+class CaptureReporter : public benchmark::BenchmarkReporter {
+public:
+    explicit CaptureReporter(const MeasureSettings& s)
+        : settings_(s),
+          console_(benchmark::ConsoleReporter::OutputOptions(benchmark::ConsoleReporter::OO_Tabular |
+                                                             (isatty(STDOUT_FILENO) ? benchmark::ConsoleReporter::OO_Color
+                                                                                    : benchmark::ConsoleReporter::OO_None))) {
+        json_.SetOutputStream(&json_text_);
+        json_.SetErrorStream(&json_text_);
+        if (!s.show_context) console_.SetErrorStream(&null_);
+    }
+
+    bool ReportContext(const Context& context) override { return console_.ReportContext(context); }
+
+    void ReportRuns(const std::vector<Run>& runs) override {
+        // GB reports the repetitions and then, in a second call, their aggregates (mean,
+        // median, stddev, cv): by default the console shows the aggregates, and a single
+        // repetition or a failed one as it is.
+        std::vector<Run> shown;
+        for (const auto& r : runs)
+            if (settings_.show_repetitions || r.run_type == Run::RT_Aggregate || r.repetitions <= 1 || r.error_occurred)
+                shown.push_back(r);
+        if (!shown.empty()) console_.ReportRuns(shown);
+        if (settings_.json) json_.ReportRuns(runs);
+        for (const auto& r : runs) {
+            if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
+            const bool build = r.run_name.function_name.size() >= 6 &&
+                               r.run_name.function_name.compare(r.run_name.function_name.size() - 6, 6, "/build") == 0;
+            (build ? build_s : render_s).push_back(r.real_accumulated_time / double(r.iterations));
+        }
+    }
+
+    void Finalize() override { console_.Finalize(); }
+
+    std::string json() const { return json_text_.str(); }
+
+    std::vector<double> build_s, render_s;
+
+private:
+    MeasureSettings settings_;
+    benchmark::ConsoleReporter console_;
+    benchmark::JSONReporter json_;
+    std::ostringstream json_text_;
+    std::ostream null_{nullptr};
+};
+
+}  // namespace
+
+Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
+                    const LoadedModel& model, const RenderSettings& render_settings, const MeasureSettings& settings,
+                    const StageFn& stage) {
+    Measurement m;
+    const auto start = Clock::now();
+    std::string failure;     // first error; later repetitions are skipped with it
+    bool timed_out = false;
+    std::unique_ptr<Accelerator> accel;  // the last one built; the render benchmark traces it
+    std::optional<BuildStats> first_build;
+    std::optional<TraceOutput> first_trace, first_count;
+    int build_calls = 0, render_calls = 0;
+    const int reps = settings.repetitions;
+
+    auto begin = [&](const std::string& s) {
+        m.stage = s;
+        if (stage) stage(s);
+        if (settings.timeout_s > 0 && seconds_between(start, Clock::now()) > settings.timeout_s)
+            throw StageTimeout("exceeded the time limit (timeout_s = " + limit_text(settings.timeout_s) + " s) before " + s);
+    };
+    auto fail = [&](benchmark::State& st, const std::exception& e) {
+        if (failure.empty()) {
+            failure = e.what();
+            timed_out = dynamic_cast<const StageTimeout*>(&e) != nullptr;
+        }
+        st.SkipWithError(failure.c_str());
+    };
+    auto build_one = [&](const char* what) {
+        auto a = info.create(params);
+        a->build(model.scene);
+        BuildStats bs = a->build_stats();
+        if (!first_build) first_build = bs;
+        else if (auto d = build_stats_difference(*first_build, bs); !d.empty())
+            throw Nondeterministic("nondeterministic build: " + d + " (first build vs " + what + ")");
+        return a;
+    };
+
+    TraceRequest timed;
+    timed.settings = render_settings;
+    timed.light = model.light;
+    timed.counts = CountMode::Off;
+    timed.albedo = model.albedo;
+    TraceRequest counting = timed;
+    counting.counts = CountMode::Totals;
+    counting.settings.shading = false;  // counts do not depend on shading
+    auto trace = [&](const TraceRequest& req) {
+        return model.rays ? trace_rays(*accel, model.scene, model.rays->rays, req)
+                          : accelbench::render(*accel, model.scene, model.camera, req);
+    };
+    auto check_rays = [&](const TraceOutput& out, const std::string& what) {
+        if (!first_trace) first_trace = out;
+        else if (auto d = ray_count_difference(*first_trace, out); !d.empty())
+            throw Nondeterministic("nondeterministic render: " + d + " (first render vs " + what + ")");
+    };
+
+    auto build_bench = [&](benchmark::State& st) {
+        if (!failure.empty()) return st.SkipWithError(failure.c_str());
+        try {
+            const int rep = ++build_calls;
+            if (rep == 1)
+                for (int w = 0; w < settings.warmup; ++w) {
+                    begin("build warm-up " + std::to_string(w + 1) + " of " + std::to_string(settings.warmup));
+                    accel = build_one("a warm-up build");
+                }
+            begin("build repetition " + std::to_string(rep) + " of " + std::to_string(reps));
+            for (auto _ : st) {
+                accel.reset();  // at most one structure in memory at a time
+                auto a = info.create(params);
+                const auto t0 = Clock::now();
+                a->build(model.scene);
+                const auto t1 = Clock::now();
+                st.SetIterationTime(seconds_between(t0, t1));
+                accel = std::move(a);
+            }
+            const BuildStats bs = accel->build_stats();
+            if (!first_build) first_build = bs;
+            else if (auto d = build_stats_difference(*first_build, bs); !d.empty())
+                throw Nondeterministic("nondeterministic build: " + d + " (first build vs repetition " +
+                                       std::to_string(rep) + ")");
+            st.counters["triangles"] = double(model.scene.triangle_count());
+            for (const auto& f : build_stat_fields())
+                if (auto v = f.get(bs)) st.counters[f.name] = *v;
+        } catch (const std::exception& e) {
+            fail(st, e);
+        }
+    };
+
+    auto render_bench = [&](benchmark::State& st) {
+        if (!failure.empty()) return st.SkipWithError(failure.c_str());
+        try {
+            const int rep = ++render_calls;
+            if (!accel) {  // only if GB ran the benchmarks out of order
+                begin("build for rendering");
+                accel = build_one("the build for rendering");
+            }
+            if (rep == 1) {
+                begin("counting render 1 of 2");
+                first_count = trace(counting);
+                check_rays(*first_count, "counting render 1");
+                for (int w = 0; w < settings.warmup; ++w) {
+                    begin("render warm-up " + std::to_string(w + 1) + " of " + std::to_string(settings.warmup));
+                    check_rays(trace(timed), "a warm-up render");
+                }
+            }
+            begin("render repetition " + std::to_string(rep) + " of " + std::to_string(reps));
+            TraceOutput out;
+            for (auto _ : st) {
+                const auto t0 = Clock::now();
+                out = trace(timed);
+                const auto t1 = Clock::now();
+                st.SetIterationTime(seconds_between(t0, t1));
+            }
+            check_rays(out, "render repetition " + std::to_string(rep));
+            if (rep == reps) {
+                begin("counting render 2 of 2");
+                TraceOutput again = trace(counting);
+                check_rays(again, "counting render 2");
+                if (auto d = counter_difference(*first_count, again); !d.empty())
+                    throw Nondeterministic("nondeterministic traversal counters: " + d +
+                                           " (counting render before vs after the timed repetitions)");
+            }
+            st.counters["rays"] = double(out.rays);
+            st.counters["hits"] = double(out.hits);
+            st.counters["shadow_rays"] = double(out.shadow_rays);
+            st.counters["shadow_hits"] = double(out.shadow_hits);
+            RayStats total = first_count->primary_stats;
+            total += first_count->shadow_stats;
+            if (total.node_visits + total.box_tests + total.prim_tests > 0) {
+                st.counters["prim_tests"] = double(total.prim_tests);
+                st.counters["node_visits"] = double(total.node_visits);
+            }
+            st.counters["Mrays/s"] =
+                benchmark::Counter(double(out.rays + out.shadow_rays) * 1e-6, benchmark::Counter::kIsRate);
+        } catch (const std::exception& e) {
+            fail(st, e);
+        }
+    };
+
+    CaptureReporter reporter(settings);
+    benchmark::ClearRegisteredBenchmarks();
+    for (auto [suffix, fn] : {std::pair<const char*, std::function<void(benchmark::State&)>>{"/build", build_bench},
+                              {"/render", render_bench}})
+        benchmark::RegisterBenchmark((name + suffix).c_str(), fn)
+            ->UseManualTime()
+            ->Iterations(1)
+            ->Repetitions(reps)
+            ->Unit(benchmark::kMillisecond);
+    try {
+        benchmark::RunSpecifiedBenchmarks(&reporter, std::string("."));
+    } catch (const std::exception& e) {
+        if (failure.empty()) failure = e.what();
+    }
+    benchmark::ClearRegisteredBenchmarks();
+    std::cout.flush();
+
+    m.json = reporter.json();
+    if (!failure.empty()) {
+        m.status = timed_out ? "timeout" : "error";
+        m.message = failure;
+        if (failure.rfind("nondeterministic", 0) == 0) std::fprintf(stderr, "accelbench run: %s: %s\n", name.c_str(), failure.c_str());
+        return m;
+    }
+    if (int(reporter.build_s.size()) != reps || int(reporter.render_s.size()) != reps || !first_count || !first_build) {
+        m.status = "error";
+        m.message = "Google Benchmark reported " + std::to_string(reporter.build_s.size()) + " build and " +
+                    std::to_string(reporter.render_s.size()) + " render repetitions, expected " + std::to_string(reps) +
+                    " of each (a --benchmark_* flag may have filtered them)";
+        return m;
+    }
+    m.build_s = reporter.build_s;
+    m.render_s = reporter.render_s;
+    m.build = *first_build;
+    m.rays = first_count->rays;
+    m.hits = first_count->hits;
+    m.shadow_rays = first_count->shadow_rays;
+    m.shadow_hits = first_count->shadow_hits;
+    RayStats total = first_count->primary_stats;
+    total += first_count->shadow_stats;
+    if (total.node_visits + total.box_tests + total.prim_tests > 0) m.counts = total;
+    return m;
+}
+
+// ---- the text form --------------------------------------------------------------------
+
+namespace {
+
+std::string escape(const std::string& s) {
+    std::string out;
+    for (char ch : s) {
+        if (ch == '\\') out += "\\\\";
+        else if (ch == '\n') out += "\\n";
+        else out += ch;
+    }
+    return out;
+}
+
+std::string unescape(const std::string& s) {
+    std::string out;
+    for (size_t i = 0; i < s.size(); ++i) {
+        if (s[i] == '\\' && i + 1 < s.size()) {
+            out += s[i + 1] == 'n' ? '\n' : s[i + 1];
+            ++i;
+        } else {
+            out += s[i];
+        }
+    }
+    return out;
+}
+
+std::string real_text(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+std::string list_text(const std::vector<double>& v) {
+    std::string s;
+    for (double x : v) append_item(s, " ", real_text(x));
+    return s;
+}
+
+std::vector<double> parse_list(const std::string& s) {
+    std::vector<double> v;
+    std::istringstream in(s);
+    for (std::string tok; in >> tok;) v.push_back(std::strtod(tok.c_str(), nullptr));
+    return v;
+}
+
+}  // namespace
+
+std::string serialize(const Measurement& m) {
+    std::string s;
+    auto put = [&](const std::string& k, const std::string& v) { s += k + "=" + escape(v) + "\n"; };
+    put("status", m.status);
+    put("message", m.message);
+    put("stage", m.stage);
+    put("build_s", list_text(m.build_s));
+    put("render_s", list_text(m.render_s));
+    for (const auto& f : build_stat_fields())
+        if (auto v = f.get(m.build)) put(std::string("build.") + f.name, f.count ? std::to_string(*(m.build.*f.count)) : real_text(*v));
+    for (const auto& [k, v] : m.build.extra) put("extra." + k, real_text(v));
+    put("rays", std::to_string(m.rays));
+    put("hits", std::to_string(m.hits));
+    put("shadow_rays", std::to_string(m.shadow_rays));
+    put("shadow_hits", std::to_string(m.shadow_hits));
+    if (m.counts) {
+        put("node_visits", std::to_string(m.counts->node_visits));
+        put("box_tests", std::to_string(m.counts->box_tests));
+        put("prim_tests", std::to_string(m.counts->prim_tests));
+    }
+    put("json", m.json);
+    return s;
+}
+
+Measurement deserialize(const std::string& text) {
+    Measurement m;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);) {
+        const size_t eq = line.find('=');
+        if (eq == std::string::npos) throw std::runtime_error("malformed measurement line '" + line + "'");
+        const std::string k = line.substr(0, eq), v = unescape(line.substr(eq + 1));
+        auto u = [&] { return uint64_t(std::strtoull(v.c_str(), nullptr, 10)); };
+        auto d = [&] { return std::strtod(v.c_str(), nullptr); };
+        auto counts = [&]() -> RayStats& {
+            if (!m.counts) m.counts = RayStats{};
+            return *m.counts;
+        };
+        if (k == "status") m.status = v;
+        else if (k == "message") m.message = v;
+        else if (k == "stage") m.stage = v;
+        else if (k == "build_s") m.build_s = parse_list(v);
+        else if (k == "render_s") m.render_s = parse_list(v);
+        else if (k.rfind("build.", 0) == 0) {
+            const BuildStatField* f = nullptr;
+            for (const auto& field : build_stat_fields())
+                if (k.substr(6) == field.name) f = &field;
+            if (!f) throw std::runtime_error("unknown build statistic '" + k + "'");
+            if (f->count) m.build.*(f->count) = u();
+            else m.build.*(f->real) = d();
+        } else if (k.rfind("extra.", 0) == 0) m.build.extra[k.substr(6)] = d();
+        else if (k == "rays") m.rays = u();
+        else if (k == "hits") m.hits = u();
+        else if (k == "shadow_rays") m.shadow_rays = u();
+        else if (k == "shadow_hits") m.shadow_hits = u();
+        else if (k == "node_visits") counts().node_visits = u();
+        else if (k == "box_tests") counts().box_tests = u();
+        else if (k == "prim_tests") counts().prim_tests = u();
+        else if (k == "json") m.json = v;
+        else throw std::runtime_error("unknown measurement key '" + k + "'");
+    }
+    return m;
+}
+
+// ---- the child process ------------------------------------------------------------------
+
+namespace {
+
+void write_all(int fd, const std::string& data) {
+    size_t done = 0;
+    while (done < data.size()) {
+        ssize_t n = ::write(fd, data.data() + done, data.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) return;  // the parent is gone; nothing to report to
+        done += size_t(n);
+    }
+}
+
+// Frames on the pipe: a tag ('S' stage begun, 'R' result), the payload length, a newline,
+// the payload.
+void send_frame(int fd, char tag, const std::string& payload) {
+    write_all(fd, std::string(1, tag) + std::to_string(payload.size()) + "\n" + payload);
+}
+
+}  // namespace
+
+Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s) {
+    int fds[2];
+    if (pipe(fds) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(nullptr);
+    const pid_t pid = fork();
+    if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
+    if (pid == 0) {
+        ::close(fds[0]);
+        prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive a killed parent
+        Measurement m;
+        try {
+            m = work([&](const std::string& s) { send_frame(fds[1], 'S', s); });
+        } catch (const std::exception& e) {
+            m.status = "error";
+            m.message = e.what();
+        } catch (...) {
+            m.status = "error";
+            m.message = "unknown exception";
+        }
+        send_frame(fds[1], 'R', serialize(m));
+        std::cout.flush();
+        std::cerr.flush();
+        std::fflush(nullptr);
+        _exit(0);
+    }
+    ::close(fds[1]);
+
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
+    std::string buffer, stage = "start-up";
+    std::optional<Measurement> result;
+    bool timed_out = false;
+    for (;;) {
+        const double left = seconds_between(Clock::now(), deadline);
+        if (left <= 0) {
+            timed_out = true;
+            break;
+        }
+        pollfd p{fds[0], POLLIN, 0};
+        const int r = poll(&p, 1, int(std::min(left * 1000.0 + 1.0, 3.6e6)));
+        if (r < 0 && errno == EINTR) continue;
+        if (r == 0) continue;  // the loop head decides whether time is up
+        char chunk[65536];
+        const ssize_t n = ::read(fds[0], chunk, sizeof chunk);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) break;  // the child closed the pipe: finished or died
+        buffer.append(chunk, size_t(n));
+        for (;;) {
+            const size_t nl = buffer.find('\n');
+            if (nl == std::string::npos) break;
+            const size_t len = std::strtoull(buffer.c_str() + 1, nullptr, 10);
+            if (buffer.size() < nl + 1 + len) break;
+            const std::string payload = buffer.substr(nl + 1, len);
+            if (buffer[0] == 'S') stage = payload;
+            else if (buffer[0] == 'R') result = deserialize(payload);
+            buffer.erase(0, nl + 1 + len);
+        }
+    }
+    if (timed_out) kill(pid, SIGKILL);
+    ::close(fds[0]);
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+
+    if (result && !timed_out) return *result;
+    Measurement m;
+    m.stage = stage;
+    if (timed_out) {
+        m.status = "timeout";
+        m.message = "exceeded the time limit (timeout_s = " + limit_text(timeout_s) + " s) during " + stage;
+    } else if (WIFSIGNALED(status)) {
+        m.status = "error";
+        m.message = "the measurement process died from signal " + std::to_string(WTERMSIG(status)) + " (" +
+                    strsignal(WTERMSIG(status)) + ") during " + stage;
+    } else {
+        m.status = "error";
+        m.message = "the measurement process exited with status " + std::to_string(WEXITSTATUS(status)) +
+                    " without a result during " + stage;
+    }
+    return m;
+}
+
+}  // namespace accelbench

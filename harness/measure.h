@@ -1,0 +1,86 @@
+// Measuring one combination with Google Benchmark, optionally in a child process that a
+// time limit can stop.
+//
+// Each combination registers two benchmarks at run time, `<name>/build` and
+// `<name>/render`, with manual timing, one iteration per repetition and `repetitions`
+// repetitions. Before the first counted repetition of each come `warmup` uncounted runs
+// (GB 1.7.1's MinWarmUpTime cannot be combined with a fixed iteration count). Timed
+// renders run with CountMode::Off; the deterministic counters (primitive tests, node
+// visits) come from a counting render (CountMode::Totals) done once before the timed
+// repetitions and once after them. Everything deterministic is compared across every run
+// that produces it — build statistics across all builds, ray and hit counts across all
+// renders, traversal counters across both counting renders — and any difference fails the
+// combination with a message saying which value changed.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "accelbench/accelerator.h"
+#include "accelbench/registry.h"
+#include "accelbench/renderer.h"
+#include "loaded_model.h"
+
+namespace accelbench {
+
+struct MeasureSettings {
+    int repetitions = 5;
+    int warmup = 1;
+    bool show_repetitions = false;  // console: every repetition, not only GB's aggregates
+    bool show_context = true;       // console: GB's machine description (once per run)
+    bool json = false;              // keep GB's JSON run objects in Measurement::json
+    double timeout_s = 0;           // > 0: checked at every stage boundary in this process
+};
+
+struct Measurement {
+    std::string status = "ok";  // ok, error or timeout
+    std::string message;
+    std::vector<double> build_s, render_s;  // one per counted repetition, seconds
+    BuildStats build;
+    uint64_t rays = 0, hits = 0, shadow_rays = 0, shadow_hits = 0;
+    // Totals over primary and shadow rays; nullopt when the structure reports no counts
+    // at all (Embree), so that they are written as missing, never as zero.
+    std::optional<RayStats> counts;
+    std::string json;   // GB JSONReporter run objects, comma-separated (MeasureSettings::json)
+    std::string stage;  // the last stage begun, for timeout and crash messages
+};
+
+// The named statistics of BuildStats, in CSV column order: one table for the determinism
+// check, the GB counters, the pipe between processes and the CSV. Exactly one of the two
+// member pointers is set.
+struct BuildStatField {
+    const char* name;
+    std::optional<uint64_t> BuildStats::*count;
+    std::optional<double> BuildStats::*real;
+
+    std::optional<double> get(const BuildStats& s) const {
+        if (count) return (s.*count) ? std::optional<double>(double(*(s.*count))) : std::nullopt;
+        return s.*real;
+    }
+};
+const std::vector<BuildStatField>& build_stat_fields();
+
+using StageFn = std::function<void(const std::string&)>;
+
+// Measures in this process. Errors (exceptions from build or render, nondeterministic
+// counters, an exceeded time limit at a stage boundary) end up in the returned status and
+// message; measure() itself does not throw for them.
+Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
+                    const LoadedModel& model, const RenderSettings& render, const MeasureSettings& settings,
+                    const StageFn& stage = {});
+
+// Runs `work` in a forked child process and returns its Measurement. The child reports
+// each stage it begins; if it runs longer than timeout_s it is killed and the result is
+// status "timeout" naming the stage. A child that crashes (signal) or exits without a
+// result gives status "error" with the signal or exit code, so one broken structure does
+// not end the run. The parent must not have started threads (fork copies one thread).
+Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s);
+
+// The text form that crosses the pipe from child to parent.
+std::string serialize(const Measurement& m);
+Measurement deserialize(const std::string& text);
+
+}  // namespace accelbench

@@ -1,0 +1,226 @@
+#include "results.h"
+
+#include <algorithm>
+#include <filesystem>
+#include <stdexcept>
+
+#include "accelbench/registry.h"
+#include "csv.h"
+
+namespace fs = std::filesystem;
+
+namespace accelbench {
+
+namespace {
+const std::string kParamKey = "param:";
+}
+
+std::string param_column(const std::string& param) { return kParamKey + param; }
+
+std::string column_header(const std::string& key) {
+    return key.rfind(kParamKey, 0) == 0 ? key.substr(kParamKey.size()) : key;
+}
+
+std::vector<std::string> column_headers(const std::vector<std::string>& keys) {
+    std::vector<std::string> h;
+    for (const auto& k : keys) h.push_back(column_header(k));
+    return h;
+}
+
+std::vector<std::string> result_columns() {
+    std::vector<std::string> c = {"config", "combo_id", "model", "triangles", "vertices", "ray_source", "accel",
+                                  "params"};
+    // Every accelerator's parameters, in registry then declaration order, each once.
+    std::set<std::string> seen;
+    for (const auto& info : accelerator_registry())
+        for (const auto& p : info.params)
+            if (seen.insert(p.name).second) c.push_back(param_column(p.name));
+    for (const char* col :
+         {"status", "message", "repetitions",  //
+          "build_s_median", "build_s_mean", "build_s_stddev", "build_s_ci_lo", "build_s_ci_hi",  //
+          "render_s_median", "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi",
+          "ci_coverage",  //
+          "rays", "hits", "shadow_rays", "shadow_hits", "mrays_per_s",  //
+          "nodes", "leaves", "max_depth", "memory_bytes", "sah_cost", "avg_leaf_size", "build_extra",  //
+          "prim_tests", "node_visits", "box_tests", "prim_tests_per_ray", "node_visits_per_ray",  //
+          "width", "height", "spp", "light", "shading",  //
+          "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version", "timestamp"})
+        c.push_back(col);
+    return c;
+}
+
+std::vector<std::string> repetition_columns() {
+    return {"config", "combo_id", "model", "accel", "params", "repetition", "build_s", "render_s"};
+}
+
+const std::vector<std::string>& provenance_columns() {
+    static const std::vector<std::string> cols = {"git_sha", "git_dirty", "compiler", "build_type", "cpu",
+                                                  "embree_version"};
+    return cols;
+}
+
+std::string repetitions_path(const std::string& results_path) {
+    fs::path p(results_path);
+    if (p.extension() == ".csv") p.replace_extension();
+    return p.string() + ".reps.csv";
+}
+
+namespace {
+
+std::string header_mismatch(const std::string& path, const std::vector<std::string>& have,
+                            const std::vector<std::string>& want) {
+    for (size_t i = 0; i < std::max(have.size(), want.size()); ++i) {
+        const std::string a = i < have.size() ? have[i] : "(none)";
+        const std::string b = i < want.size() ? want[i] : "(none)";
+        if (a != b)
+            return path + ": its columns differ from this build's (column " + std::to_string(i + 1) + " is '" + a +
+                   "', expected '" + b + "'); write to a new file or merge with an older build's binary";
+    }
+    return "";
+}
+
+}  // namespace
+
+CsvAppender::CsvAppender(const std::string& path, std::vector<std::string> columns)
+    : path_(path), columns_(std::move(columns)) {
+    const bool fresh = !fs::exists(path) || fs::file_size(path) == 0;
+    if (!fresh) {
+        CsvData existing = read_csv(path);
+        if (auto m = header_mismatch(path, existing.header, column_headers(columns_)); !m.empty())
+            throw std::runtime_error(m);
+        if (existing.incomplete_tail) fs::resize_file(path, existing.complete_bytes);
+    }
+    if (!fs::path(path).parent_path().empty()) fs::create_directories(fs::path(path).parent_path());
+    out_.open(path, std::ios::app | std::ios::binary);
+    if (!out_) throw std::runtime_error("cannot open '" + path + "' for writing");
+    if (fresh) {
+        out_ << csv_line(column_headers(columns_));
+        out_.flush();
+    }
+}
+
+void CsvAppender::append(const Row& row) {
+    std::vector<std::string> fields;
+    fields.reserve(columns_.size());
+    for (const auto& c : columns_) {
+        auto it = row.find(c);
+        fields.push_back(it == row.end() ? "" : it->second);
+    }
+    for (const auto& [k, v] : row)
+        if (std::find(columns_.begin(), columns_.end(), k) == columns_.end())
+            throw std::logic_error("row has a value for '" + k + "', which is not a column of " + path_);
+    out_ << csv_line(fields);
+    out_.flush();
+    if (!out_) throw std::runtime_error("writing to '" + path_ + "' failed");
+}
+
+namespace {
+
+size_t column_index(const CsvData& d, const std::string& name, const std::string& path) {
+    for (size_t i = 0; i < d.header.size(); ++i)
+        if (d.header[i] == name) return i;
+    throw std::runtime_error(path + ": no column '" + name + "'");
+}
+
+// Rewrites `path` keeping the rows whose combo_id is in `keep`.
+void filter_rows(const std::string& path, const std::set<std::string>& keep) {
+    CsvData d = read_csv(path);
+    const size_t id = column_index(d, "combo_id", path);
+    const std::string tmp = path + ".tmp";
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out << csv_line(d.header);
+        for (const auto& r : d.rows)
+            if (keep.count(r[id])) out << csv_line(r);
+        if (!out.flush()) throw std::runtime_error("writing '" + tmp + "' failed");
+    }
+    fs::rename(tmp, path);
+}
+
+}  // namespace
+
+std::set<std::string> prepare_resume(const std::string& results_path, const std::vector<std::string>& columns,
+                                     const std::vector<std::string>& rep_columns) {
+    std::set<std::string> done;
+    if (!fs::exists(results_path) || fs::file_size(results_path) == 0) return done;
+    CsvData d = read_csv(results_path);
+    if (auto m = header_mismatch(results_path, d.header, column_headers(columns)); !m.empty())
+        throw std::runtime_error(m);
+    if (d.incomplete_tail) fs::resize_file(results_path, d.complete_bytes);
+    const size_t id = column_index(d, "combo_id", results_path);
+    for (const auto& r : d.rows) done.insert(r[id]);
+    const std::string reps = repetitions_path(results_path);
+    if (fs::exists(reps) && fs::file_size(reps) > 0) {
+        CsvData rd = read_csv(reps);
+        if (auto m = header_mismatch(reps, rd.header, column_headers(rep_columns)); !m.empty())
+            throw std::runtime_error(m);
+        filter_rows(reps, done);
+    }
+    return done;
+}
+
+size_t merge_results(const std::string& out, const std::vector<std::string>& inputs, bool allow_mixed) {
+    if (inputs.empty()) throw std::runtime_error("nothing to merge");
+    for (const auto& in : inputs)
+        if (fs::exists(out) && fs::exists(in) && fs::equivalent(out, in))
+            throw std::runtime_error("the output '" + out + "' is also an input");
+    std::vector<CsvData> data;
+    for (const auto& in : inputs) {
+        data.push_back(read_csv(in));
+        if (data.back().incomplete_tail)
+            throw std::runtime_error(in + ": the last line is incomplete (an interrupted run?); resume it first");
+        if (auto m = header_mismatch(in, data.back().header, data.front().header); !m.empty())
+            throw std::runtime_error(m + " (compared with " + inputs.front() + ")");
+    }
+    const CsvData& first = data.front();
+    const size_t id = column_index(first, "combo_id", inputs.front());
+    if (!allow_mixed)
+        for (const auto& col : provenance_columns()) {
+            const size_t c = column_index(first, col, inputs.front());
+            std::map<std::string, std::string> seen;  // value -> first file with it
+            for (size_t f = 0; f < data.size(); ++f)
+                for (const auto& r : data[f].rows) seen.emplace(r[c], inputs[f]);
+            if (seen.size() > 1) {
+                std::string values;
+                for (const auto& [v, file] : seen) values += "\n  '" + v + "' (" + file + ")";
+                throw std::runtime_error("mixed provenance: column " + col + " differs between the inputs:" + values +
+                                         "\nresults from different builds or machines are not comparable; "
+                                         "pass --allow-mixed to merge them anyway");
+            }
+        }
+    std::map<std::string, std::string> owner;  // combo_id -> file
+    for (size_t f = 0; f < data.size(); ++f)
+        for (const auto& r : data[f].rows)
+            if (auto [it, fresh] = owner.emplace(r[id], inputs[f]); !fresh)
+                throw std::runtime_error("combination " + r[id] + " is in both " + it->second + " and " + inputs[f] +
+                                         " (overlapping shards?)");
+
+    bool all_reps = true;
+    for (const auto& in : inputs) all_reps &= fs::exists(repetitions_path(in));
+    std::vector<CsvData> reps;
+    if (all_reps)
+        for (const auto& in : inputs) {
+            reps.push_back(read_csv(repetitions_path(in)));
+            if (auto m = header_mismatch(repetitions_path(in), reps.back().header, reps.front().header); !m.empty())
+                throw std::runtime_error(m);
+        }
+
+    auto write = [](const std::string& path, const std::vector<CsvData>& parts) {
+        const std::string tmp = path + ".tmp";
+        {
+            std::ofstream o(tmp, std::ios::binary | std::ios::trunc);
+            if (!o) throw std::runtime_error("cannot write '" + tmp + "'");
+            o << csv_line(parts.front().header);
+            for (const auto& p : parts)
+                for (const auto& r : p.rows) o << csv_line(r);
+            if (!o.flush()) throw std::runtime_error("writing '" + tmp + "' failed");
+        }
+        fs::rename(tmp, path);
+    };
+    if (!fs::path(out).parent_path().empty()) fs::create_directories(fs::path(out).parent_path());
+    write(out, data);
+    if (all_reps) write(repetitions_path(out), reps);
+    return owner.size();
+}
+
+}  // namespace accelbench

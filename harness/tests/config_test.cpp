@@ -1,0 +1,244 @@
+// The config loader: a valid config read completely, and every kind of error reported with
+// its file, line, column and key path — all of them at once.
+#include <gtest/gtest.h>
+
+#include "config.h"
+#include "harness_test_util.h"
+
+namespace accelbench {
+namespace {
+
+using namespace testing_util;
+
+class ConfigTest : public ::testing::Test {
+protected:
+    TempDir dir{"accelbench-config-test-"};
+    std::string write(const std::string& name, const std::string& text) { return write_file(dir.path(), name, text); }
+};
+
+TEST_F(ConfigTest, ReadsTheDocumentedShape) {
+    write_triangle_case(dir.path());
+    const std::string path = write("smoke.yaml", R"(name: smoke
+repetitions: 3
+timeout_s: 120
+render: {width: 160, height: 120, spp: 1, light: true, shading: false, threads: 2}
+models:
+  - stanford-bunny                                   # registry name
+  - {procedural: soup, triangles: 2000, seed: 1}     # generated scene
+  - {path: tri.obj, rays: {file: tri.rays.csv}}      # own mesh, own rays
+  - {path: tri.obj, label: tri-view, repetitions: 1, camera: {eye: [0, 0, 5], look_at: [0, 0, 0], up: [0, 1, 0], fov: 45}}
+accelerators:
+  - {name: embree, params: {quality: [low, high], robust: [false, true]}}
+  - {name: brute_force, params: {"[max_triangles, force]": [[1000, false], [5000, true]]}}
+  - {name: embree}
+skip:
+  - {accel: brute_force, triangles_above: 5000, reason: "O(N*P) is too slow"}
+)");
+    const Config c = load_config(path, registry());
+    EXPECT_EQ(c.name, "smoke");
+    EXPECT_EQ(c.repetitions, 3);
+    EXPECT_EQ(c.warmup, 1);
+    EXPECT_EQ(c.timeout_s, 120);
+    EXPECT_EQ(c.render.width, 160);
+    EXPECT_EQ(c.render.height, 120);
+    EXPECT_EQ(c.render.threads, 2);
+    EXPECT_TRUE(c.render.light);
+    EXPECT_FALSE(c.render.shading);
+
+    ASSERT_EQ(c.models.size(), 4u);
+    EXPECT_EQ(c.models[0].kind, ModelSpec::Kind::Registry);
+    EXPECT_EQ(c.models[0].label, "stanford-bunny");
+    EXPECT_EQ(c.models[1].kind, ModelSpec::Kind::Procedural);
+    EXPECT_EQ(c.models[1].label, "soup(triangles=2000,seed=1)");
+    EXPECT_EQ(c.models[1].procedural_params.at("triangles"), "2000");
+    EXPECT_EQ(c.models[2].kind, ModelSpec::Kind::Path);
+    EXPECT_EQ(c.models[2].label, "tri.obj");
+    ASSERT_TRUE(c.models[2].rays);
+    ASSERT_EQ(c.models[2].rays->rays.size(), 3u);
+    EXPECT_EQ(c.models[2].rays->rays[1].dir.z, -2.0f);  // not normalised
+    EXPECT_EQ(c.models[2].rays->rays[1].tmax, kInfinity);
+    EXPECT_FALSE(c.models[3].rays);
+    ASSERT_TRUE(c.models[3].camera);
+    EXPECT_EQ(c.models[3].camera->eye, Vec3(0, 0, 5));
+    EXPECT_EQ(c.models[3].label, "tri-view");
+    EXPECT_EQ(c.models[3].repetitions, 1);
+    EXPECT_FALSE(c.models[2].repetitions);
+    EXPECT_NE(c.models[2].key, c.models[3].key);
+
+    ASSERT_EQ(c.accelerators.size(), 3u);
+    ASSERT_EQ(c.accelerators[0].axes.size(), 2u);
+    EXPECT_EQ(c.accelerators[0].axes[0].names, std::vector<std::string>{"quality"});
+    EXPECT_EQ(c.accelerators[0].axes[0].values.size(), 2u);
+    ASSERT_EQ(c.accelerators[1].axes.size(), 1u);
+    EXPECT_EQ(c.accelerators[1].axes[0].names, (std::vector<std::string>{"max_triangles", "force"}));
+    EXPECT_EQ(c.accelerators[1].axes[0].values[1], (std::vector<std::string>{"5000", "true"}));
+    EXPECT_TRUE(c.accelerators[2].axes.empty());
+
+    ASSERT_EQ(c.skip.size(), 1u);
+    EXPECT_EQ(*c.skip[0].accel, "brute_force");
+    EXPECT_EQ(*c.skip[0].triangles_above, 5000u);
+    EXPECT_EQ(c.skip[0].reason, "O(N*P) is too slow");
+}
+
+TEST_F(ConfigTest, DefaultsAndTheFileStemAsName) {
+    const Config c = load_config(write("my-run.yaml", "models: [igea]\naccelerators: [{name: embree}]\n"), registry());
+    EXPECT_EQ(c.name, "my-run");
+    EXPECT_EQ(c.repetitions, 5);
+    EXPECT_EQ(c.timeout_s, 300);
+    EXPECT_EQ(c.render.width, 640);
+    EXPECT_EQ(c.render.height, 480);
+    EXPECT_EQ(c.render.threads, 1);
+    EXPECT_FALSE(c.render.shading);  // configs time tracing, not shading
+}
+
+TEST_F(ConfigTest, UnknownKeyWithSuggestion) {
+    const std::string p = write("a.yaml", "name: t\nrepetition: 3\nmodels: [stanford-bunny]\naccelerators: [{name: embree}]\n");
+    const ConfigError e = load_error(p);
+    EXPECT_TRUE(has_issue(e, 2, 1, "repetition", "did you mean 'repetitions'"));
+    EXPECT_EQ(e.issues()[0].mark.file, p);
+    EXPECT_NE(std::string(e.what()).find(p + ":2:1: repetition: unknown key"), std::string::npos) << e.what();
+}
+
+TEST_F(ConfigTest, AcceleratorErrorsAreAllReportedAtOnce) {
+    const ConfigError e = load_error(write("a.yaml", R"(models: [stanford-bunny]
+accelerators:
+  - {name: embree, params: {threads: [1, 2000]}}
+  - {name: octree}
+  - {name: brute_force, params: {max_triangle: 5}}
+  - {name: embree, params: {quality: [low, best], robust: "yes"}}
+)"));
+    EXPECT_EQ(e.issues().size(), 5u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 3, 42, "accelerators[0].embree.threads[1]", "out of range [0, 1024]"));
+    EXPECT_TRUE(has_issue(e, 4, 12, "accelerators[1].name", "unknown accelerator 'octree'"));
+    EXPECT_TRUE(has_issue(e, 5, 34, "accelerators[2].brute_force.max_triangle", "did you mean 'max_triangles'"));
+    EXPECT_TRUE(has_issue(e, 6, 44, "accelerators[3].embree.quality[1]", "'best' is not one of {low, medium, high}"));
+    EXPECT_TRUE(has_issue(e, 6, 59, "accelerators[3].embree.robust", "quoted string"));
+}
+
+TEST_F(ConfigTest, DuplicateKeysAreFoundInEveryMapping) {
+    // yaml-cpp 0.7 accepts both and lookups see the first: the loader must walk the entries.
+    const ConfigError e = load_error(write("a.yaml", R"(models: [stanford-bunny]
+accelerators: [{name: embree, name: brute_force}]
+models: [igea]
+)"));
+    EXPECT_TRUE(has_issue(e, 2, 31, "accelerators[0].name", "duplicate key 'name' (first given at line 2, column 17)"));
+    EXPECT_TRUE(has_issue(e, 3, 1, "models", "duplicate key 'models'"));
+}
+
+TEST_F(ConfigTest, MissingKeysAreReportedAtTheirMapping) {
+    // yaml-cpp has no mark for a key that is not there: the mapping's mark stands in.
+    const ConfigError e = load_error(write("a.yaml", "models: [stanford-bunny]\naccelerators:\n  - params: {threads: 1}\n"));
+    EXPECT_TRUE(has_issue(e, 3, 5, "accelerators[0].name", "missing key 'name'"));
+    const ConfigError top = load_error(write("b.yaml", "name: x\nmodels: [igea]\n"));
+    EXPECT_TRUE(has_issue(top, 1, 1, "accelerators", "missing key 'accelerators'"));
+}
+
+TEST_F(ConfigTest, MissingModels) {
+    const ConfigError e = load_error(write("a.yaml", R"(models:
+  - stanford-bunni
+  - {path: nowhere.obj}
+  - {procedural: forrest}
+  - {procedural: soup, triangles: 0, colour: red}
+accelerators: [{name: embree}]
+)"));
+    EXPECT_EQ(e.issues().size(), 5u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 2, 5, "models[0]", "unknown model 'stanford-bunni'"));
+    EXPECT_TRUE(has_issue(e, 3, 12, "models[1].path", "no such mesh file"));
+    EXPECT_TRUE(has_issue(e, 4, 18, "models[2].procedural", "unknown procedural scene 'forrest'"));
+    EXPECT_TRUE(has_issue(e, 5, 35, "models[3].triangles", "out of range"));
+    EXPECT_TRUE(has_issue(e, 5, 38, "models[3].colour", "procedural scene 'soup' has no parameter 'colour'"));
+}
+
+TEST_F(ConfigTest, ZippedGroupErrors) {
+    const ConfigError e = load_error(write("a.yaml", R"(models: [stanford-bunny]
+accelerators:
+  - name: brute_force
+    params:
+      "[max_triangles, force]": [[100, true], [200]]
+      max_triangles: 5
+)"));
+    EXPECT_TRUE(has_issue(e, 5, 47, "accelerators[0].brute_force.[max_triangles, force][1]", "expected a tuple of 2 values"));
+    EXPECT_TRUE(has_issue(e, 6, 7, "accelerators[0].brute_force.max_triangles", "given twice"));
+}
+
+TEST_F(ConfigTest, WrongTypesAndRangesInSettings) {
+    const ConfigError e = load_error(write("a.yaml", R"(render: {width: 0, height: 12.5, light: maybe, shading: [true]}
+models: [stanford-bunny]
+accelerators: [{name: embree}]
+)"));
+    EXPECT_EQ(e.issues().size(), 4u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 1, 17, "render.width", "value 0 is out of range [1, 16384]"));
+    EXPECT_TRUE(has_issue(e, 1, 28, "render.height", "expected an integer"));
+    EXPECT_TRUE(has_issue(e, 1, 41, "render.light", "expected true or false, got 'maybe'"));
+    EXPECT_TRUE(has_issue(e, 1, 57, "render.shading", "expected true or false, got a list"));
+}
+
+TEST_F(ConfigTest, CameraErrors) {
+    write_triangle_case(dir.path());
+    const ConfigError e = load_error(write("a.yaml", R"(models:
+  - {path: tri.obj, camera: {look_at: [0, 0, 0], fov: 180}}
+  - {path: tri.obj, label: b, camera: {eye: [1, 2, 3], look_at: [1, 2, 3]}}
+accelerators: [{name: embree}]
+)"));
+    EXPECT_TRUE(has_issue(e, 2, 29, "models[0].camera.eye", "missing key 'eye'"));
+    EXPECT_TRUE(has_issue(e, 2, 55, "models[0].camera.fov", "out of range (0, 179]"));
+    EXPECT_TRUE(has_issue(e, 3, 39, "models[1].camera", "eye and look_at are the same point"));
+}
+
+TEST_F(ConfigTest, SkipRuleErrors) {
+    const ConfigError e = load_error(write("a.yaml", R"(models: [stanford-bunny]
+accelerators: [{name: embree}]
+skip:
+  - {accel: brute_force, triangles_above: 10}
+  - {accel: octree, reason: x}
+  - {model: igea, reason: y}
+  - {params: {quality: low}, reason: z}
+)"));
+    EXPECT_EQ(e.issues().size(), 4u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 4, 5, "skip[0].reason", "missing key 'reason'"));
+    EXPECT_TRUE(has_issue(e, 5, 13, "skip[1].accel", "unknown accelerator 'octree'"));
+    EXPECT_TRUE(has_issue(e, 6, 13, "skip[2].model", "matches no model of this config (stanford-bunny)"));
+    EXPECT_TRUE(has_issue(e, 7, 6, "skip[3].params", "needs `accel:`"));
+}
+
+TEST_F(ConfigTest, SameModelTwiceAndSameLabelTwice) {
+    write_triangle_case(dir.path());
+    const ConfigError e = load_error(write("a.yaml", R"(models:
+  - igea
+  - igea
+  - {path: tri.obj}
+  - {path: tri.obj, rays: {file: tri.rays.csv}}
+accelerators: [{name: embree}]
+)"));
+    EXPECT_TRUE(has_issue(e, 3, 5, "models[1]", "the same model as models[0]"));
+    EXPECT_TRUE(has_issue(e, 5, 5, "models[3]", "the same label 'tri.obj' as models[2]"));
+}
+
+TEST_F(ConfigTest, YamlSyntaxErrorHasItsPosition) {
+    const ConfigError e = load_error(write("a.yaml", "models: [stanford-bunny\naccelerators: 3\n"));
+    ASSERT_EQ(e.issues().size(), 1u);
+    EXPECT_EQ(e.issues()[0].mark.line, 2);
+    EXPECT_NE(e.issues()[0].message.find("YAML syntax error"), std::string::npos);
+}
+
+TEST_F(ConfigTest, BadRayFileLinesNameTheRayFile) {
+    write_triangle_case(dir.path());
+    const std::string rays = write("bad.rays.csv", "ox,oy,oz,dx,dy,dz,tmax\n0,0,1,0,0,-1,5\n0,0,1,0,0\n0,0,1,0,x,-1,5\n");
+    const ConfigError e = load_error(write("a.yaml", "models: [{path: tri.obj, rays: {file: bad.rays.csv}}]\n"
+                                                     "accelerators: [{name: embree}]\n"));
+    ASSERT_EQ(e.issues().size(), 2u) << all_issues(e);
+    EXPECT_EQ(e.issues()[0].mark.file, rays);
+    EXPECT_TRUE(has_issue(e, 3, 1, "models[0].rays.file", "expected 7 comma-separated numbers, got 5"));
+    EXPECT_TRUE(has_issue(e, 4, 9, "models[0].rays.file", "field 5 is not a number: 'x'"));
+}
+
+TEST_F(ConfigTest, RayFileNeedsItsHeader) {
+    write_triangle_case(dir.path());
+    write("nohead.rays.csv", "0,0,1,0,0,-1\n");
+    const ConfigError e = load_error(write("a.yaml", "models: [{path: tri.obj, rays: {file: nohead.rays.csv}}]\n"
+                                                     "accelerators: [{name: embree}]\n"));
+    EXPECT_TRUE(has_issue(e, 1, 1, "models[0].rays.file", "expected the header 'ox,oy,oz,dx,dy,dz'"));
+}
+
+}  // namespace
+}  // namespace accelbench

@@ -1,0 +1,219 @@
+// Measuring one combination: what a good run reports, and how a nondeterministic, crashing
+// or slow structure is caught (in this process and in a child process).
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <thread>
+
+#include "accelbench/brute_force.h"
+#include "accelbench/embree_accel.h"
+#include "measure.h"
+
+namespace accelbench {
+namespace {
+
+// A small closed box of 12 triangles, seen by the default camera.
+LoadedModel box_model() {
+    LoadedModel m;
+    m.scene.name = "box";
+    for (int i = 0; i < 8; ++i) m.scene.vertices.push_back({float(i & 1), float((i >> 1) & 1), float((i >> 2) & 1)});
+    const uint32_t faces[6][4] = {{0, 1, 3, 2}, {4, 6, 7, 5}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 2, 6, 4}, {1, 5, 7, 3}};
+    for (const auto& f : faces) {
+        m.scene.triangles.push_back({f[0], f[1], f[2]});
+        m.scene.triangles.push_back({f[0], f[2], f[3]});
+    }
+    m.scene.finalize();
+    m.camera = Camera::fit(m.scene.bounds, 4.0f / 3.0f);
+    m.light = default_light(m.scene.bounds, m.camera);
+    return m;
+}
+
+RenderSettings tiny_render() {
+    RenderSettings r;
+    r.width = 16;
+    r.height = 12;
+    r.shading = false;
+    return r;
+}
+
+MeasureSettings quick() {
+    MeasureSettings s;
+    s.repetitions = 3;
+    s.warmup = 1;
+    s.show_context = false;
+    return s;
+}
+
+ParamSet defaults(const AcceleratorInfo& info) { return resolve_params(info.name, info.params, {}); }
+
+// Brute force whose build reports a node count that changes from build to build: the kind
+// of bug (uninitialised memory, a data race) the determinism check exists for.
+class DriftingBuild final : public Accelerator {
+public:
+    DriftingBuild() : inner_(defaults(BruteForce::info())) {}
+    void build(const Scene& s) override { inner_.build(s); }
+    void closest_hits(std::span<const Ray> r, std::span<Hit> h, std::span<RayStats> st) const override {
+        inner_.closest_hits(r, h, st);
+    }
+    void any_hits(std::span<const Ray> r, std::span<uint8_t> o, std::span<RayStats> st) const override {
+        inner_.any_hits(r, o, st);
+    }
+    BuildStats build_stats() const override {
+        BuildStats s = inner_.build_stats();
+        s.nodes = ++builds_;
+        return s;
+    }
+
+private:
+    BruteForce inner_;
+    static inline uint64_t builds_ = 0;
+};
+
+AcceleratorInfo test_accel(const char* name, std::function<std::unique_ptr<Accelerator>()> make) {
+    return {name, "test structure", {}, [make](const ParamSet&) { return make(); }};
+}
+
+TEST(MeasureTest, BruteForceReportsTimesCountsAndJson) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo info = BruteForce::info();
+    MeasureSettings s = quick();
+    s.json = true;
+    const Measurement m = measure("box/brute_force", info, defaults(info), model, tiny_render(), s);
+    ASSERT_EQ(m.status, "ok") << m.message;
+    EXPECT_EQ(m.build_s.size(), 3u);
+    EXPECT_EQ(m.render_s.size(), 3u);
+    EXPECT_EQ(m.rays, 16u * 12u);
+    EXPECT_GT(m.hits, 0u);
+    EXPECT_EQ(m.shadow_rays, m.hits);  // light on: one shadow ray per hit
+    ASSERT_TRUE(m.counts);
+    // Every primary ray tests all 12 triangles; shadow rays stop at the first occluder.
+    EXPECT_GE(m.counts->prim_tests, m.rays * 12);
+    EXPECT_LE(m.counts->prim_tests, (m.rays + m.shadow_rays) * 12);
+    EXPECT_EQ(m.build.nodes, 0u);
+    EXPECT_NE(m.json.find("\"name\": \"box/brute_force/render"), std::string::npos) << m.json;
+    EXPECT_NE(m.json.find("Mrays/s"), std::string::npos);
+}
+
+TEST(MeasureTest, EmbreeCountsAreMissingNotZero) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo info = EmbreeAccel::info();
+    const Measurement m = measure("box/embree", info, defaults(info), model, tiny_render(), quick());
+    ASSERT_EQ(m.status, "ok") << m.message;
+    EXPECT_FALSE(m.counts);
+    EXPECT_FALSE(m.build.nodes);
+    EXPECT_EQ(m.rays, 16u * 12u);
+}
+
+TEST(MeasureTest, RayFileTracesThoseRays) {
+    LoadedModel model = box_model();
+    auto rays = std::make_shared<RaySet>();
+    rays->rays = {Ray{{0.5f, 0.5f, 5}, 0, {0, 0, -1}, kInfinity}, Ray{{5, 5, 5}, 0, {0, 0, 1}, kInfinity}};
+    model.rays = rays;
+    const AcceleratorInfo info = BruteForce::info();
+    const Measurement m = measure("box-rays/brute_force", info, defaults(info), model, tiny_render(), quick());
+    ASSERT_EQ(m.status, "ok") << m.message;
+    EXPECT_EQ(m.rays, 2u);
+    EXPECT_EQ(m.hits, 1u);
+}
+
+TEST(MeasureTest, NondeterministicBuildFailsLoudly) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo info = test_accel("drifting", [] { return std::make_unique<DriftingBuild>(); });
+    const Measurement m = measure("box/drifting", info, defaults(info), model, tiny_render(), quick());
+    EXPECT_EQ(m.status, "error");
+    EXPECT_NE(m.message.find("nondeterministic build: nodes"), std::string::npos) << m.message;
+    EXPECT_TRUE(m.build_s.empty());  // nothing that could be mistaken for a result
+}
+
+TEST(MeasureTest, BuildErrorsBecomeAnErrorStatus) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo info = BruteForce::info();
+    const ParamSet p = resolve_params(info.name, info.params, {{"max_triangles", "5"}});
+    const Measurement m = measure("box/brute_force", info, p, model, tiny_render(), quick());
+    EXPECT_EQ(m.status, "error");
+    EXPECT_NE(m.message.find("refuses"), std::string::npos) << m.message;
+}
+
+TEST(MeasureTest, InProcessTimeLimitIsCheckedBetweenStages) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo info = test_accel("slow", [] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(60));
+        return std::make_unique<BruteForce>(defaults(BruteForce::info()));
+    });
+    MeasureSettings s = quick();
+    s.timeout_s = 0.1;
+    const Measurement m = measure("box/slow", info, defaults(info), model, tiny_render(), s);
+    EXPECT_EQ(m.status, "timeout");
+    EXPECT_NE(m.message.find("exceeded the time limit (timeout_s = 0.1 s) before build repetition"), std::string::npos)
+        << m.message;
+}
+
+TEST(IsolationTest, ResultCrossesTheProcessBoundary) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo info = BruteForce::info();
+    const Measurement direct = measure("box/brute_force", info, defaults(info), model, tiny_render(), quick());
+    const Measurement m = run_isolated(
+        [&](const StageFn& stage) {
+            return measure("box/brute_force", info, defaults(info), model, tiny_render(), quick(), stage);
+        },
+        60);
+    ASSERT_EQ(m.status, "ok") << m.message;
+    EXPECT_EQ(m.build_s.size(), 3u);
+    EXPECT_EQ(m.rays, direct.rays);
+    EXPECT_EQ(m.shadow_hits, direct.shadow_hits);
+    ASSERT_TRUE(m.counts);
+    EXPECT_EQ(m.counts->prim_tests, direct.counts->prim_tests);
+    EXPECT_EQ(m.counts->node_visits, direct.counts->node_visits);
+}
+
+TEST(IsolationTest, SerializationRoundTrips) {
+    Measurement m;
+    m.status = "error";
+    m.message = "line one\nline two \\ with backslash";
+    m.build_s = {0.1, 1.0 / 3.0};
+    m.build.nodes = 7;
+    m.build.sah_cost = 12.5;
+    m.build.extra["prim_refs"] = 99;
+    m.counts = RayStats{1, 2, 3};
+    m.json = "{\n  \"a\": 1\n}";
+    const Measurement r = deserialize(serialize(m));
+    EXPECT_EQ(r.message, m.message);
+    EXPECT_EQ(r.build_s, m.build_s);
+    EXPECT_EQ(r.build.nodes, 7u);
+    EXPECT_FALSE(r.build.leaves);
+    EXPECT_EQ(r.build.sah_cost, 12.5);
+    EXPECT_EQ(r.build.extra.at("prim_refs"), 99);
+    ASSERT_TRUE(r.counts);
+    EXPECT_EQ(r.counts->prim_tests, 3u);
+    EXPECT_EQ(r.json, m.json);
+}
+
+TEST(IsolationTest, ACrashIsAnErrorAndTheCallerGoesOn) {
+    const Measurement m = run_isolated(
+        [](const StageFn& stage) -> Measurement {
+            stage("build repetition 1 of 3");
+            std::raise(SIGSEGV);
+            return {};
+        },
+        60);
+    EXPECT_EQ(m.status, "error");
+    EXPECT_NE(m.message.find("signal 11"), std::string::npos) << m.message;
+    EXPECT_NE(m.message.find("during build repetition 1 of 3"), std::string::npos) << m.message;
+}
+
+TEST(IsolationTest, ATimeLimitStopsTheChild) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Measurement m = run_isolated(
+        [](const StageFn& stage) -> Measurement {
+            stage("render repetition 2 of 5");
+            std::this_thread::sleep_for(std::chrono::seconds(30));
+            return {};
+        },
+        0.3);
+    EXPECT_EQ(m.status, "timeout");
+    EXPECT_NE(m.message.find("during render repetition 2 of 5"), std::string::npos) << m.message;
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 20.0);
+}
+
+}  // namespace
+}  // namespace accelbench

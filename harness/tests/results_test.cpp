@@ -1,0 +1,145 @@
+// The results CSV: quoting, the column list, appending, what --resume keeps, and merge.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "accelbench/registry.h"
+#include "csv.h"
+#include "harness_test_util.h"
+#include "results.h"
+
+namespace accelbench {
+namespace {
+
+using namespace testing_util;
+namespace fs = std::filesystem;
+
+TEST(CsvTest, QuotesOnlyWhatNeedsIt) {
+    EXPECT_EQ(csv_field("plain"), "plain");
+    EXPECT_EQ(csv_field("a,b"), "\"a,b\"");
+    EXPECT_EQ(csv_field("say \"hi\""), "\"say \"\"hi\"\"\"");
+    EXPECT_EQ(csv_field("two\nlines"), "\"two\nlines\"");
+    EXPECT_EQ(csv_line({"a", "", "c,d"}), "a,,\"c,d\"\n");
+}
+
+TEST(CsvTest, ReadsBackWhatItWritesAndNoticesATruncatedLine) {
+    TempDir dir("accelbench-csv-test-");
+    const std::vector<std::string> row = {"x,y", "say \"hi\"", "two\nlines", ""};
+    const std::string text = csv_line({"a", "b", "c", "d"}) + csv_line(row) + "1,2,3,4\n5,6";
+    const std::string path = write_file(dir.path(), "t.csv", text);
+    const CsvData d = read_csv(path);
+    EXPECT_EQ(d.header, (std::vector<std::string>{"a", "b", "c", "d"}));
+    ASSERT_EQ(d.rows.size(), 2u);
+    EXPECT_EQ(d.rows[0], row);
+    EXPECT_TRUE(d.incomplete_tail);
+    EXPECT_EQ(d.complete_bytes, text.size() - 3);
+    write_file(dir.path(), "bad.csv", "a,b\n1,2,3\n");
+    EXPECT_THROW(read_csv((dir.path() / "bad.csv").string()), std::runtime_error);
+}
+
+TEST(ResultsTest, TheIssueColumnsAndOneColumnPerParameterOfEveryAccelerator) {
+    const auto cols = result_columns();
+    for (const char* c :
+         {"config", "model", "triangles", "vertices", "accel", "params", "status", "message", "repetitions",
+          "build_s_median", "build_s_mean", "build_s_stddev", "build_s_ci_lo", "build_s_ci_hi", "render_s_median",
+          "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi", "rays", "hits", "shadow_rays",
+          "shadow_hits", "mrays_per_s", "nodes", "leaves", "max_depth", "memory_bytes", "sah_cost", "prim_tests",
+          "node_visits", "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version",
+          "timestamp", "combo_id"})
+        EXPECT_NE(std::find(cols.begin(), cols.end(), c), cols.end()) << c;
+    // One column per parameter name of every accelerator, between `params` and `status`,
+    // headed by the bare name.
+    const auto first = std::find(cols.begin(), cols.end(), "params") + 1;
+    const auto last = std::find(cols.begin(), cols.end(), "status");
+    std::set<std::string> names;
+    for (const auto& info : accelerator_registry())
+        for (const auto& p : info.params) names.insert(p.name);
+    EXPECT_EQ(size_t(last - first), names.size());
+    for (const auto& n : names) {
+        EXPECT_EQ(std::count(first, last, param_column(n)), 1) << n;
+        EXPECT_EQ(column_header(param_column(n)), n);
+    }
+    EXPECT_EQ(std::set<std::string>(cols.begin(), cols.end()).size(), cols.size()) << "a column key appears twice";
+    EXPECT_EQ(column_header("max_depth"), "max_depth");
+    EXPECT_EQ(repetitions_path("results/runs/x-1.csv"), "results/runs/x-1.reps.csv");
+}
+
+TEST(ResultsTest, AppenderWritesTheHeaderOnceAndRejectsUnknownColumns) {
+    TempDir dir("accelbench-results-test-");
+    const std::string path = (dir.path() / "sub" / "r.csv").string();
+    {
+        CsvAppender a(path, {"combo_id", "status", "message"});
+        a.append({{"combo_id", "1"}, {"status", "ok"}});
+        EXPECT_THROW(a.append({{"combo_id", "2"}, {"stauts", "ok"}}), std::logic_error);
+    }
+    {
+        CsvAppender again(path, {"combo_id", "status", "message"});
+        again.append({{"combo_id", "3"}, {"message", "a, b"}});
+    }
+    EXPECT_EQ(read_file(path), "combo_id,status,message\n1,ok,\n3,,\"a, b\"\n");
+    EXPECT_THROW(CsvAppender(path, {"combo_id", "status"}), std::runtime_error);
+}
+
+TEST(ResultsTest, ResumeCutsATruncatedLineAndForgetsUnfinishedRepetitions) {
+    TempDir dir("accelbench-results-test-");
+    const std::vector<std::string> cols = {"combo_id", "status"}, rep_cols = {"combo_id", "repetition"};
+    const std::string path = write_file(dir.path(), "r.csv", "combo_id,status\na,ok\nb,skipped\nc,o");
+    // c's repetitions were written, its results row was cut short: c runs again.
+    write_file(dir.path(), "r.reps.csv", "combo_id,repetition\na,1\na,2\nc,1\nc,2\n");
+    const auto done = prepare_resume(path, cols, rep_cols);
+    EXPECT_EQ(done, (std::set<std::string>{"a", "b"}));
+    EXPECT_EQ(read_file(path), "combo_id,status\na,ok\nb,skipped\n");
+    EXPECT_EQ(read_file((dir.path() / "r.reps.csv").string()), "combo_id,repetition\na,1\na,2\n");
+    EXPECT_TRUE(prepare_resume((dir.path() / "none.csv").string(), cols, rep_cols).empty());
+    EXPECT_THROW(prepare_resume(path, {"combo_id", "status", "new_column"}, rep_cols), std::runtime_error);
+}
+
+class MergeTest : public ::testing::Test {
+protected:
+    TempDir dir{"accelbench-merge-test-"};
+    std::string shard(const std::string& name, const std::vector<std::pair<std::string, std::string>>& rows) {
+        std::string text = "combo_id,status,git_sha,git_dirty,compiler,build_type,cpu,embree_version\n";
+        std::string reps = "combo_id,repetition\n";
+        for (const auto& [id, sha] : rows) {
+            text += id + ",ok," + sha + ",false,gcc 12,RelWithDebInfo,\"Xeon, 2 cores\",3.13.5\n";
+            reps += id + ",1\n";
+        }
+        write_file(dir.path(), name + ".reps.csv", reps);
+        return write_file(dir.path(), name + ".csv", text);
+    }
+    std::string out() const { return (dir.path() / "merged.csv").string(); }
+};
+
+TEST_F(MergeTest, JoinsShardsAndTheirRepetitions) {
+    const auto a = shard("a", {{"1", "abc"}, {"2", "abc"}});
+    const auto b = shard("b", {{"3", "abc"}});
+    EXPECT_EQ(merge_results(out(), {a, b}, false), 3u);
+    const CsvData m = read_csv(out());
+    ASSERT_EQ(m.rows.size(), 3u);
+    EXPECT_EQ(m.rows[2][0], "3");
+    EXPECT_EQ(m.rows[2][6], "Xeon, 2 cores");
+    EXPECT_EQ(read_csv(repetitions_path(out())).rows.size(), 3u);
+}
+
+TEST_F(MergeTest, RefusesMixedProvenanceUnlessAllowed) {
+    const auto a = shard("a", {{"1", "abc"}});
+    const auto b = shard("b", {{"2", "def"}});
+    try {
+        merge_results(out(), {a, b}, false);
+        FAIL() << "mixed provenance merged";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("column git_sha differs"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("--allow-mixed"), std::string::npos);
+    }
+    EXPECT_FALSE(fs::exists(out()));
+    EXPECT_EQ(merge_results(out(), {a, b}, true), 2u);
+}
+
+TEST_F(MergeTest, RefusesACombinationInTwoInputs) {
+    const auto a = shard("a", {{"1", "abc"}});
+    const auto b = shard("b", {{"1", "abc"}});
+    EXPECT_THROW(merge_results(out(), {a, b}, false), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace accelbench

@@ -1,0 +1,225 @@
+// `accelbench run` end to end on a config that takes a second: the CSV it writes, skip
+// rules, a ray file model, errors and time limits as rows, --dry-run, and --resume after
+// an interrupted run.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include "csv.h"
+#include "harness_test_util.h"
+#include "results.h"
+#include "run_command.h"
+
+namespace accelbench {
+namespace {
+
+using namespace testing_util;
+
+int run(std::vector<std::string> args) {
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    return run_command(int(argv.size()), argv.data());
+}
+
+// A results row by column key (parameter columns share header text with other columns).
+std::map<std::string, std::string> as_map(const CsvData& d, size_t row) {
+    const auto keys = result_columns();
+    EXPECT_EQ(d.header, column_headers(keys));
+    std::map<std::string, std::string> m;
+    for (size_t i = 0; i < keys.size() && i < d.rows[row].size(); ++i) m[keys[i]] = d.rows[row][i];
+    return m;
+}
+
+class RunTest : public ::testing::Test {
+protected:
+    TempDir dir{"accelbench-run-test-"};
+    std::string config, out;
+
+    void SetUp() override {
+        write_triangle_case(dir.path());
+        config = write_file(dir.path(), "e2e.yaml", R"(name: e2e
+repetitions: 2
+timeout_s: 60
+render: {width: 24, height: 16}
+models:
+  - {procedural: soup, triangles: 1000, seed: 3}
+  - {path: tri.obj, rays: {file: tri.rays.csv}, label: tri-rays}
+accelerators:
+  - {name: brute_force}
+  - {name: embree, params: {quality: [low, high]}}
+skip:
+  - {accel: embree, params: {quality: high}, triangles_below: 10, reason: "tiny scene"}
+)");
+        out = (dir.path() / "out" / "e2e.csv").string();
+    }
+};
+
+TEST_F(RunTest, WritesOneRowPerCombination) {
+    ASSERT_EQ(run({config, "--out", out}), 0);
+    const CsvData d = read_csv(out);
+    EXPECT_EQ(d.header, column_headers(result_columns()));
+    ASSERT_EQ(d.rows.size(), 6u);
+    std::map<std::string, std::map<std::string, std::string>> by_name;
+    for (size_t i = 0; i < d.rows.size(); ++i) {
+        auto r = as_map(d, i);
+        by_name[r["model"] + "/" + r["accel"] + "/" + r[param_column("quality")]] = r;
+    }
+    const auto& bf = by_name.at("soup(triangles=1000,seed=3)/brute_force/");
+    EXPECT_EQ(bf.at("status"), "ok");
+    EXPECT_EQ(bf.at("config"), "e2e");
+    EXPECT_EQ(bf.at("triangles"), "1000");
+    EXPECT_EQ(bf.at("params"), "max_triangles=20000;force=false");
+    EXPECT_EQ(bf.at(param_column("max_triangles")), "20000");
+    EXPECT_EQ(bf.at(param_column("quality")), "");  // not a brute_force parameter
+    EXPECT_EQ(bf.at("repetitions"), "2");
+    EXPECT_EQ(bf.at("rays"), std::to_string(24 * 16));
+    EXPECT_EQ(bf.at("ray_source"), "camera");
+    EXPECT_EQ(bf.at("width"), "24");
+    EXPECT_FALSE(bf.at("build_s_median").empty());
+    EXPECT_FALSE(bf.at("render_s_ci_hi").empty());
+    EXPECT_EQ(bf.at("ci_coverage"), "0.5");  // two repetitions: [min, max] covers the median half the time
+    EXPECT_FALSE(bf.at("prim_tests").empty());
+    EXPECT_FALSE(bf.at("mrays_per_s").empty());
+    EXPECT_FALSE(bf.at("git_sha").empty());
+    EXPECT_EQ(bf.at("threads"), "1");
+
+    const auto& em = by_name.at("soup(triangles=1000,seed=3)/embree/low");
+    EXPECT_EQ(em.at("status"), "ok");
+    EXPECT_EQ(em.at(param_column("threads")), "1");  // the render threads
+    EXPECT_EQ(em.at("prim_tests"), "");      // Embree does not count: missing, not zero
+    EXPECT_EQ(em.at("nodes"), "");
+
+    const auto& rays = by_name.at("tri-rays/brute_force/");
+    EXPECT_EQ(rays.at("status"), "ok");
+    EXPECT_EQ(rays.at("ray_source"), "tri.rays.csv");
+    EXPECT_EQ(rays.at("rays"), "3");
+    EXPECT_EQ(rays.at("hits"), "2");  // the ray beside the triangle misses
+    EXPECT_EQ(rays.at("width"), "");
+
+    const auto& skipped = by_name.at("tri-rays/embree/high");
+    EXPECT_EQ(skipped.at("status"), "skipped");
+    EXPECT_EQ(skipped.at("message"), "tiny scene");
+    EXPECT_EQ(skipped.at("build_s_median"), "");
+    EXPECT_EQ(skipped.at("triangles"), "1");
+
+    // Raw samples: two per measured combination.
+    const CsvData reps = read_csv(repetitions_path(out));
+    EXPECT_EQ(reps.rows.size(), 5u * 2u);
+}
+
+TEST_F(RunTest, ResumeAfterAnInterruptedRunMeasuresEachCombinationOnce) {
+    ASSERT_EQ(run({config, "--out", out}), 0);
+    const std::string full = read_file(out);
+    const CsvData complete = read_csv(out);
+    // Keep the header, two rows and half of the third: a run killed while writing.
+    size_t cut = 0;
+    for (int lines = 0; lines < 3; ++lines) cut = full.find('\n', cut) + 1;
+    const size_t third_end = full.find('\n', cut);
+    write_file(dir.path() / "out", "e2e.csv", full.substr(0, cut + (third_end - cut) / 2));
+
+    EXPECT_NE(run({config, "--out", out}), 0);  // refuses to overwrite without --resume
+    ASSERT_EQ(run({config, "--out", out, "--resume"}), 0);
+    const CsvData d = read_csv(out);
+    EXPECT_FALSE(d.incomplete_tail);
+    std::multiset<std::string> ids;
+    const size_t id = std::find(d.header.begin(), d.header.end(), "combo_id") - d.header.begin();
+    for (const auto& r : d.rows) ids.insert(r[id]);
+    std::set<std::string> expected;
+    for (const auto& r : complete.rows) expected.insert(r[id]);
+    EXPECT_EQ(ids.size(), expected.size());
+    EXPECT_EQ(std::set<std::string>(ids.begin(), ids.end()), expected);
+    // The first two rows were kept as they were.
+    EXPECT_EQ(d.rows[0], complete.rows[0]);
+    EXPECT_EQ(d.rows[1], complete.rows[1]);
+    // Repetition rows: two per measured combination, none twice.
+    const CsvData reps = read_csv(repetitions_path(out));
+    std::map<std::string, int> per_combo;
+    for (const auto& r : reps.rows) ++per_combo[r[1]];
+    EXPECT_EQ(per_combo.size(), 5u);
+    for (const auto& [combo, n] : per_combo) EXPECT_EQ(n, 2) << combo;
+
+    // Resuming a finished run measures nothing.
+    ASSERT_EQ(run({config, "--out", out, "--resume"}), 0);
+    EXPECT_EQ(read_csv(out).rows.size(), expected.size());
+}
+
+TEST_F(RunTest, ShardsTogetherGiveTheWholeRunAndMergeBack) {
+    std::vector<std::string> parts;
+    for (int i = 0; i < 3; ++i) {
+        parts.push_back((dir.path() / ("shard" + std::to_string(i) + ".csv")).string());
+        ASSERT_EQ(run({config, "--out", parts.back(), "--shard", std::to_string(i) + "/3"}), 0);
+    }
+    const std::string merged = (dir.path() / "merged.csv").string();
+    std::vector<std::string> args = {merged};
+    args.insert(args.end(), parts.begin(), parts.end());
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    ASSERT_EQ(merge_command(int(argv.size()), argv.data()), 0);
+    const CsvData d = read_csv(merged);
+    EXPECT_EQ(d.rows.size(), 6u);
+}
+
+TEST_F(RunTest, TimeoutsAreRowsAndTheRunGoesOn) {
+    // Far too short a limit for anything: the parent stops each child (or the child sees
+    // the limit passed at a stage boundary), records a timeout and goes on to the next.
+    const std::string cfg = write_file(dir.path(), "slow.yaml", R"(name: slow
+repetitions: 2
+timeout_s: 0.001
+render: {width: 24, height: 16}
+models: [{procedural: soup, triangles: 1000}]
+accelerators:
+  - {name: brute_force, params: {max_triangles: [20000, 30000]}}
+)");
+    ASSERT_EQ(run({cfg, "--out", out}), 0);
+    const CsvData d = read_csv(out);
+    ASSERT_EQ(d.rows.size(), 2u);
+    for (size_t i = 0; i < 2; ++i) {
+        auto r = as_map(d, i);
+        EXPECT_EQ(r["status"], "timeout");
+        EXPECT_NE(r["message"].find("exceeded the time limit (timeout_s = 0.001 s)"), std::string::npos) << r["message"];
+        EXPECT_EQ(r["render_s_median"], "");
+        EXPECT_EQ(r["rays"], "");
+    }
+    EXPECT_EQ(read_csv(repetitions_path(out)).rows.size(), 0u);
+}
+
+TEST_F(RunTest, ErrorsAreRowsAndTheExitCodeSaysSo) {
+    const std::string cfg = write_file(dir.path(), "bad.yaml", R"(name: bad
+repetitions: 2
+render: {width: 24, height: 16}
+models: [{procedural: soup, triangles: 1000}]
+accelerators:
+  - {name: brute_force, params: {max_triangles: [10, 20000]}}
+)");
+    EXPECT_EQ(run({cfg, "--out", out}), 1);
+    const CsvData d = read_csv(out);
+    ASSERT_EQ(d.rows.size(), 2u);
+    EXPECT_EQ(as_map(d, 0)["status"], "error");
+    EXPECT_NE(as_map(d, 0)["message"].find("refuses"), std::string::npos);
+    EXPECT_EQ(as_map(d, 0)["build_s_median"], "");
+    EXPECT_EQ(as_map(d, 1)["status"], "ok");
+}
+
+TEST_F(RunTest, DryRunPrintsTheCombinationsAndTheirCount) {
+    ::testing::internal::CaptureStdout();
+    const int rc = run({config, "--dry-run"});
+    const std::string text = ::testing::internal::GetCapturedStdout();
+    EXPECT_EQ(rc, 0);
+    EXPECT_NE(text.find("6 combinations: 5 to measure, 1 skipped by rules"), std::string::npos) << text;
+    EXPECT_NE(text.find("tri-rays"), std::string::npos);
+    EXPECT_NE(text.find("[skip: tiny scene]"), std::string::npos);
+    EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST_F(RunTest, AMalformedConfigIsExitCode2) {
+    const std::string cfg = write_file(dir.path(), "broken.yaml", "models: [igea]\naccelerators: [{name: nope}]\n");
+    ::testing::internal::CaptureStderr();
+    EXPECT_EQ(run({cfg, "--out", out}), 2);
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find(cfg + ":2:23: accelerators[0].name: unknown accelerator 'nope'"), std::string::npos) << err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+}  // namespace
+}  // namespace accelbench

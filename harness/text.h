@@ -1,0 +1,29 @@
+// Building messages from pieces. concat() appends left to right into one string; it
+// exists because GCC 12 at -O3 reports a false -Wrestrict on `"literal" + std::string&&`
+// (GCC bug 105329), which -Werror turns into a build failure.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+namespace accelbench {
+
+template <class... Parts>
+std::string concat(const Parts&... parts) {
+    std::string s;
+    (s.append(std::string_view(parts)), ...);
+    return s;
+}
+
+}  // namespace accelbench
+
+namespace accelbench {
+
+// Appends an item to a separated list: the separator first unless the list is empty.
+template <class... Parts>
+void append_item(std::string& list, std::string_view separator, const Parts&... parts) {
+    if (!list.empty()) list.append(separator);
+    (list.append(std::string_view(parts)), ...);
+}
+
+}  // namespace accelbench
