@@ -20,7 +20,7 @@ AcceleratorInfo Bvh::info() {
                  "centroid method), centroid mean, equal triangle area (spatial median), binned SAH (Wald 2007)"},
                 {"axis", ParamType::Enum, "longest", {"longest", "round_robin"}, 0, 0,
                  "split axis: longest axis of the node's centroid box (report, Figure 6) or x, y, z by depth"},
-                {"max_prims", ParamType::Int, "1", {}, 1, double(BvhNode::kMaxLeafPrims),
+                {"max_prims", ParamType::Int, "1", {}, 1, 1e9,
                  "largest leaf; ranges above it are split (sah may also stop below it when a leaf is cheaper)"},
                 {"max_depth", ParamType::Int, "50", {}, 0, 1000,
                  "nodes at this depth become leaves whatever their size (report Table 3: 50)"},

@@ -15,13 +15,13 @@
 //    `forced_leaves`;
 //  - degenerate ranges: when the strategy cannot separate a range (the centroids do not
 //    spread along the axis, or one side would be empty) the range is split into two
-//    equal halves along the longest centroid axis instead (nth_element), counted in
-//    `degenerate_splits`. Every split therefore leaves both sides non-empty, so the build
+//    equal halves along the longest centroid axis instead (split_equal_counts), counted
+//    in `degenerate_splits`. Every split therefore leaves both sides non-empty, so the build
 //    always terminates, even on identical triangles;
 //  - output: nodes in depth-first order (first child right after its parent), leaves'
 //    primitives contiguous in leaf order, all in arrays allocated once — no per-node
 //    allocation, no recursion (an explicit stack), O(n) work per node besides the
-//    strategy's own.
+//    strategy's own (so O(n log n) for balanced trees).
 #pragma once
 
 #include <algorithm>
@@ -201,7 +201,7 @@ inline BvhSplit split_equal_counts(std::span<BvhPrimRef> refs, std::span<BvhPrim
             auto order = [&](size_t i, size_t j) {
                 if (by_centroid(refs[j], refs[i])) std::swap(refs[i], refs[j]);
             };
-            order(0, 1);
+            if (n >= 2) order(0, 1);
             if (n == 3) {
                 order(1, 2);
                 order(0, 1);

@@ -125,14 +125,17 @@ inline bool occluded_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const Wat
     return false;
 }
 
-// Ordered traversal, closest hit. `hit` must come in empty (Hit{}).
-template <class C>
-ACCELBENCH_BVH_HOT void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
-    if (bvh.empty()) return;
+// Ordered traversal. Closest hit (kAnyHit false): `hit` must come in empty (Hit{}) and
+// receives the closest hit; the search interval shrinks to it. Any hit (kAnyHit true):
+// returns at the first hit found (the near-first order costs one comparison and tends to
+// meet occluders early).
+template <bool kAnyHit, class C>
+ACCELBENCH_BVH_HOT bool traverse_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+    if (bvh.empty()) return false;
     const RayPrecomp rp(ray);
     float tmax = ray.tmax;  // the closest hit so far: nothing beyond it matters
     c.box();
-    if (!intersect_box(bvh.nodes[0].bounds, rp, ray.tmin, tmax).hit()) return;
+    if (!intersect_box(bvh.nodes[0].bounds, rp, ray.tmin, tmax).hit()) return false;
     const WatertightRay wr(ray);
     BvhTraversalStack stack(bvh.depth);
     uint32_t index = 0;
@@ -157,12 +160,14 @@ ACCELBENCH_BVH_HOT void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray
                 index = hn.hit() ? near : far;
                 continue;
             }
+        } else if constexpr (kAnyHit) {
+            if (occluded_bvh_leaf(bvh, node, wr, ray.tmin, tmax, c)) return true;
         } else {
             intersect_bvh_leaf(bvh, node, wr, ray.tmin, tmax, hit, c);
         }
         // Next: the nearest pushed node the ray can still reach before the closest hit.
         for (;;) {
-            if (stack.empty()) return;
+            if (stack.empty()) return hit.found();
             const BvhTraversalStack::Entry e = stack.pop();
             if (e.tnear <= tmax) {
                 index = e.node;
@@ -172,89 +177,60 @@ ACCELBENCH_BVH_HOT void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray
     }
 }
 
-// Ordered traversal, any hit: the order does not matter, only stopping at the first hit.
 template <class C>
-ACCELBENCH_BVH_HOT bool occluded_bvh_ordered(const FlatBvh& bvh, const Ray& ray, C& c) {
+inline void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+    traverse_bvh_ordered<false>(bvh, ray, hit, c);
+}
+
+template <class C>
+inline bool occluded_bvh_ordered(const FlatBvh& bvh, const Ray& ray, C& c) {
+    Hit unused;
+    return traverse_bvh_ordered<true>(bvh, ray, unused, c);
+}
+
+// The report's Algorithm 1: visits every node whose box the ray hits over its whole
+// interval, left child before right child, and calls leaf(node) for each leaf reached;
+// stops as soon as leaf() returns true. Returns whether it stopped.
+template <class C, class Leaf>
+ACCELBENCH_BVH_HOT bool visit_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c, Leaf&& leaf) {
     if (bvh.empty()) return false;
     const RayPrecomp rp(ray);
-    c.box();
-    if (!intersect_box(bvh.nodes[0].bounds, rp, ray.tmin, ray.tmax).hit()) return false;
-    const WatertightRay wr(ray);
     BvhTraversalStack stack(bvh.depth);
     uint32_t index = 0;
     for (;;) {
         c.node();
+        c.box();
         const BvhNode& node = bvh.nodes[index];
-        if (!node.is_leaf()) {
-            const uint32_t first = index + 1, second = node.second_child();
-            c.box(2);
-            const bool h1 = intersect_box(bvh.nodes[first].bounds, rp, ray.tmin, ray.tmax).hit();
-            const bool h2 = intersect_box(bvh.nodes[second].bounds, rp, ray.tmin, ray.tmax).hit();
-            if (h1 || h2) {
-                if (h1 && h2) stack.push(second);
-                index = h1 ? first : second;
+        if (intersect_box(node.bounds, rp, ray.tmin, ray.tmax).hit()) {
+            if (!node.is_leaf()) {
+                stack.push(node.second_child());
+                index = index + 1;
                 continue;
             }
-        } else if (occluded_bvh_leaf(bvh, node, wr, ray.tmin, ray.tmax, c)) {
-            return true;
+            if (leaf(node)) return true;
         }
         if (stack.empty()) return false;
         index = stack.pop().node;
     }
 }
 
-// The report's Algorithm 1, closest hit: every node whose box the ray hits over its whole
-// interval is visited, left child before right child.
+// Algorithm 1, closest hit: the nearest of the primitives of every leaf reached.
 template <class C>
 ACCELBENCH_BVH_HOT void intersect_bvh_report(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
-    if (bvh.empty()) return;
-    const RayPrecomp rp(ray);
     const WatertightRay wr(ray);
     float nearest = ray.tmax;  // nearest hit among the primitives collected so far
-    BvhTraversalStack stack(bvh.depth);
-    uint32_t index = 0;
-    for (;;) {
-        c.node();
-        c.box();
-        const BvhNode& node = bvh.nodes[index];
-        if (intersect_box(node.bounds, rp, ray.tmin, ray.tmax).hit()) {
-            if (node.is_leaf()) {
-                intersect_bvh_leaf(bvh, node, wr, ray.tmin, nearest, hit, c);
-            } else {
-                stack.push(node.second_child());
-                index = index + 1;
-                continue;
-            }
-        }
-        if (stack.empty()) return;
-        index = stack.pop().node;
-    }
+    visit_bvh_report(bvh, ray, c, [&](const BvhNode& leaf) {
+        intersect_bvh_leaf(bvh, leaf, wr, ray.tmin, nearest, hit, c);
+        return false;
+    });
 }
 
-// The report's Algorithm 1, any hit: the same visiting order, stopping at the first hit.
+// Algorithm 1, any hit: the same visiting order, stopping at the first hit.
 template <class C>
 ACCELBENCH_BVH_HOT bool occluded_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c) {
-    if (bvh.empty()) return false;
-    const RayPrecomp rp(ray);
     const WatertightRay wr(ray);
-    BvhTraversalStack stack(bvh.depth);
-    uint32_t index = 0;
-    for (;;) {
-        c.node();
-        c.box();
-        const BvhNode& node = bvh.nodes[index];
-        if (intersect_box(node.bounds, rp, ray.tmin, ray.tmax).hit()) {
-            if (node.is_leaf()) {
-                if (occluded_bvh_leaf(bvh, node, wr, ray.tmin, ray.tmax, c)) return true;
-            } else {
-                stack.push(node.second_child());
-                index = index + 1;
-                continue;
-            }
-        }
-        if (stack.empty()) return false;
-        index = stack.pop().node;
-    }
+    return visit_bvh_report(bvh, ray, c,
+                            [&](const BvhNode& leaf) { return occluded_bvh_leaf(bvh, leaf, wr, ray.tmin, ray.tmax, c); });
 }
 
 // Dispatch by the structure's `traversal` parameter (one predictable branch per ray).
