@@ -98,6 +98,15 @@ std::vector<Combination> expand(const Config& config) {
     return out;
 }
 
+int repetitions_of(const Config& config, const Combination& c) {
+    return config.accelerators[c.accelerator].repetitions.value_or(
+        config.models[c.model].repetitions.value_or(config.repetitions));
+}
+
+int warmup_of(const Config& config, const Combination& c) {
+    return config.accelerators[c.accelerator].warmup.value_or(config.models[c.model].warmup.value_or(config.warmup));
+}
+
 std::optional<std::string> skip_reason(const Config& config, const Combination& c, uint64_t triangles) {
     for (const SkipRule& r : config.skip) {
         if (r.accel && *r.accel != c.accel) continue;

@@ -522,7 +522,7 @@ private:
             return;
         }
         const char* form = has_name ? "name" : has_path ? "path" : "procedural";
-        std::vector<std::string> allowed = {form, "camera", "rays", "label", "repetitions"};
+        std::vector<std::string> allowed = {form, "camera", "rays", "label", "repetitions", "warmup"};
         const auto* given = f.find(form);
         auto value = read_string(c_, given->value, f.child(form));
         if (!value) return;
@@ -600,11 +600,22 @@ private:
         }
         if (auto* e = f.find("label"))
             if (auto s = read_string(c_, e->value, f.child("label"))) m.label = *s;
+        ok &= read_effort(f, m.repetitions, m.warmup);
+        if (ok) finish_model(std::move(m));
+    }
+
+    // `repetitions` and `warmup` of a model or an accelerator entry (for the slow ones).
+    bool read_effort(const Fields& f, std::optional<int>& repetitions, std::optional<int>& warmup) {
+        bool ok = true;
         if (auto* e = f.find("repetitions")) {
-            if (auto v = read_int(c_, e->value, f.child("repetitions"), 1, 1000)) m.repetitions = int(*v);
+            if (auto v = read_int(c_, e->value, f.child("repetitions"), 1, 1000)) repetitions = int(*v);
             else ok = false;
         }
-        if (ok) finish_model(std::move(m));
+        if (auto* e = f.find("warmup")) {
+            if (auto v = read_int(c_, e->value, f.child("warmup"), 0, 100)) warmup = int(*v);
+            else ok = false;
+        }
+        return ok;
     }
 
     void finish_model(ModelSpec m) {
@@ -632,7 +643,7 @@ private:
         AcceleratorSpec a;
         a.mark = {c_.file, n.Mark().line + 1, n.Mark().column + 1};
         a.key_path = path;
-        Fields f(c_, n, path, {"name", "params"});
+        Fields f(c_, n, path, {"name", "params", "repetitions", "warmup"});
         const auto* ne = f.require("name");
         if (!ne) return;
         auto name = read_string(c_, ne->value, f.child("name"));
@@ -646,7 +657,7 @@ private:
                      "unknown accelerator '" + a.name + "'" + suggestion(a.name, names) + " (known: " + join(names) + ")");
             return;
         }
-        bool ok = true;
+        bool ok = read_effort(f, a.repetitions, a.warmup);
         // Parameter errors name the accelerator, as in `accelerators[2].kdtree.max_depth`.
         const std::string base = path + "." + a.name;
         if (auto* pe = f.find("params")) {

@@ -65,7 +65,7 @@ struct ModelSpec {
     std::string procedural_canonical;  // Kind::Procedural: all parameters, defaults filled in
     std::optional<Camera> camera;      // overrides the registry's / the auto-fit view
     std::shared_ptr<const RaySet> rays;  // trace these instead of camera rays
-    std::optional<int> repetitions;      // overrides Config::repetitions for this model
+    std::optional<int> repetitions, warmup;  // override the config's for this model
     std::string label;  // the CSV's `model` column
     std::string key;    // config-independent identity (the combination id hashes it)
     SourceMark mark;
@@ -82,6 +82,7 @@ struct ParamAxis {
 struct AcceleratorSpec {
     std::string name;
     std::vector<ParamAxis> axes;  // in the order written
+    std::optional<int> repetitions, warmup;  // override the model's and the config's
     SourceMark mark;
     std::string key_path;  // "accelerators[1]"
 };

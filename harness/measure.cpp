@@ -266,10 +266,12 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
                 accel = build_one("the build for rendering");
             }
             if (rep == 1) {
+                // The counting render touches the same nodes and triangles as a timed one: it
+                // is the first warm-up; further ones (warmup > 1) run the timed code path.
                 begin("counting render 1 of 2");
                 first_count = trace(counting);
                 check_rays(*first_count, "counting render 1");
-                for (int w = 0; w < settings.warmup; ++w) {
+                for (int w = 1; w < settings.warmup; ++w) {
                     begin("render warm-up " + std::to_string(w + 1) + " of " + std::to_string(settings.warmup));
                     check_rays(trace(timed), "a warm-up render");
                 }

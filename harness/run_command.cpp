@@ -237,16 +237,18 @@ void print_dry_run(const Config& config, const std::vector<Combination>& all, co
         } else if (!config.skip.empty()) {
             status = "  [triangle count unknown until loaded]";
         }
-        if (const auto& reps = config.models[c.model].repetitions; reps && status.find("skip") == std::string::npos)
-            status += "  [" + std::to_string(*reps) + " repetitions]";
+        if (status.find("skip") == std::string::npos &&
+            (repetitions_of(config, c) != config.repetitions || warmup_of(config, c) != config.warmup))
+            status += "  [" + std::to_string(repetitions_of(config, c)) + " repetitions, warm-up " +
+                      std::to_string(warmup_of(config, c)) + "]";
         std::printf("%-4zu %-16s %-28s %-10s %s%s\n", i + 1, c.id.c_str(), config.models[c.model].label.c_str(),
                     c.accel.c_str(), given.c_str(), status.c_str());
     }
     std::printf("%zu combinations", selected.size());
     if (shard && shard->count > 1) std::printf(" in shard %llu/%llu (of %zu in the config)", (unsigned long long)shard->index,
                                                (unsigned long long)shard->count, all.size());
-    std::printf(": %zu to measure, %zu skipped by rules; %d repetitions (unless shown), timeout %s s each\n",
-                selected.size() - skipped, skipped, config.repetitions, num(config.timeout_s, 6).c_str());
+    std::printf(": %zu to measure, %zu skipped by rules; %d repetitions and warm-up %d unless shown, timeout %s s each\n",
+                selected.size() - skipped, skipped, config.repetitions, config.warmup, num(config.timeout_s, 6).c_str());
 }
 
 int run(const RunOptions& opt) {
@@ -389,8 +391,8 @@ int run(const RunOptions& opt) {
                 } else {
                     const AcceleratorInfo* info = find_accelerator(c->accel);
                     MeasureSettings ms;
-                    ms.repetitions = spec.repetitions.value_or(config.repetitions);
-                    ms.warmup = config.warmup;
+                    ms.repetitions = repetitions_of(config, *c);
+                    ms.warmup = warmup_of(config, *c);
                     ms.show_repetitions = opt.show_repetitions;
                     ms.show_context = first_measurement;
                     ms.json = json.has_value();

@@ -54,7 +54,7 @@ Lbvh::Lbvh(const ParamSet& params) : traversal_(bvh_traversal_from(params)) {
 
 Lbvh::Counts& Lbvh::Counts::operator+=(const Counts& o) {
     equal_code_splits += o.equal_code_splits;
-    depth_limited_leaves += o.depth_limited_leaves;
+    forced_leaves += o.forced_leaves;
     tasks += o.tasks;
     sort_passes += o.sort_passes;
     sort_skipped_passes += o.sort_skipped_passes;
@@ -91,7 +91,7 @@ private:
                 throw std::runtime_error("lbvh: a leaf of " + std::to_string(count) + " primitives at max_depth " +
                                          std::to_string(config_.max_depth) + " exceeds the node format's " +
                                          std::to_string(BvhNode::kMaxLeafPrims));
-            ++counts.depth_limited_leaves;
+            ++counts.forced_leaves;
         }
         Bounds3 b = sorted_bounds_[begin];
         for (uint32_t i = begin + 1; i < end; ++i) b.extend(sorted_bounds_[i]);
@@ -259,7 +259,7 @@ BuildStats Lbvh::build_stats() const {
     BuildStats s = bvh_build_stats(bvh_);
     s.extra["morton_bits"] = config_.bits;
     s.extra["equal_code_splits"] = double(counts_.equal_code_splits);
-    s.extra["depth_limited_leaves"] = double(counts_.depth_limited_leaves);
+    s.extra["forced_leaves"] = double(counts_.forced_leaves);
     s.extra["build_tasks"] = double(counts_.tasks);
     s.extra["sort_passes"] = double(counts_.sort_passes);
     s.extra["sort_skipped_passes"] = double(counts_.sort_skipped_passes);

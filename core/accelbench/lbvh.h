@@ -24,6 +24,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "accelbench/accelerator.h"
 #include "accelbench/bvh_node.h"
@@ -49,11 +50,11 @@ public:
 
     // What the build did beyond the tree itself (reported as BuildStats extras).
     struct Counts {
-        uint64_t equal_code_splits = 0;     // ranges of one Morton code, split in the middle
-        uint64_t depth_limited_leaves = 0;  // leaves made at max_depth above max_prims
-        uint64_t tasks = 0;                 // subtrees handed to another thread
-        uint64_t sort_passes = 0;           // radix passes the code width needs
-        uint64_t sort_skipped_passes = 0;   // of those, skipped (digit constant)
+        uint64_t equal_code_splits = 0;    // ranges of one Morton code, split in the middle
+        uint64_t forced_leaves = 0;        // leaves made at max_depth above max_prims
+        uint64_t tasks = 0;                // subtrees handed to another thread
+        uint64_t sort_passes = 0;          // radix passes the code width needs
+        uint64_t sort_skipped_passes = 0;  // of those, skipped (digit constant)
 
         Counts& operator+=(const Counts& o);
     };

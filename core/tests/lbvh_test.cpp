@@ -321,7 +321,7 @@ TEST(Lbvh, MaxDepthMakesLeaves) {
     auto one = build_lbvh(scene, {{"max_depth", "1"}});
     ASSERT_EQ(one->tree().nodes.size(), 3u);
     EXPECT_EQ(one->tree().depth, 1u);
-    EXPECT_EQ(one->build_stats().extra.at("depth_limited_leaves"), 2.0);
+    EXPECT_EQ(one->build_stats().extra.at("forced_leaves"), 2.0);
     EXPECT_EQ(one->tree().nodes[1].prim_count() + one->tree().nodes[2].prim_count(), 1000u);
     for (const char* traversal : {"ordered", "report"})
         test::expect_agrees_with_embree(scene, *build_lbvh(scene, {{"max_depth", "1"}, {"traversal", traversal}}), rays,
@@ -329,7 +329,7 @@ TEST(Lbvh, MaxDepthMakesLeaves) {
     // Depth 200 never binds: the tree ends where the codes and max_prims end it.
     auto deep = build_lbvh(scene, {{"max_depth", "200"}});
     EXPECT_EQ(deep->tree().nodes.size(), 1999u);
-    EXPECT_EQ(deep->build_stats().extra.at("depth_limited_leaves"), 0.0);
+    EXPECT_EQ(deep->build_stats().extra.at("forced_leaves"), 0.0);
     expect_same_tree(deep->tree(), build_lbvh(scene, {{"max_depth", "1000"}})->tree(), "max_depth 200 vs 1000");
     test::expect_agrees_with_embree(scene, *deep, rays, "max_depth=200");
 }

@@ -137,6 +137,28 @@ accelerators:
     }
 }
 
+TEST_F(CombinationsTest, RepetitionsAndWarmupOverridesForTheSlowOnes) {
+    const Config c = load("a.yaml", R"yaml(repetitions: 5
+warmup: 2
+models: [igea, {name: stanford-bunny, repetitions: 3}]
+accelerators:
+  - {name: embree}
+  - {name: brute_force, repetitions: 1, warmup: 0}
+)yaml");
+    const auto all = expand(c);
+    ASSERT_EQ(all.size(), 4u);
+    EXPECT_EQ(repetitions_of(c, all[0]), 5);  // igea / embree: the config's
+    EXPECT_EQ(warmup_of(c, all[0]), 2);
+    EXPECT_EQ(repetitions_of(c, all[1]), 1);  // the accelerator entry's wins
+    EXPECT_EQ(warmup_of(c, all[1]), 0);
+    EXPECT_EQ(repetitions_of(c, all[2]), 3);  // bunny / embree: the model's
+    EXPECT_EQ(warmup_of(c, all[2]), 2);
+    EXPECT_EQ(repetitions_of(c, all[3]), 1);
+    // How much is measured is not what is measured: ids do not change.
+    const auto plain = expand(load("b.yaml", "models: [igea]\naccelerators: [{name: brute_force}]\n"));
+    EXPECT_EQ(plain[0].id, all[1].id);
+}
+
 TEST_F(CombinationsTest, SkipRules) {
     const Config c = load("a.yaml", kConfig);
     const auto all = expand(c);
