@@ -73,5 +73,35 @@ test-sanitize: deps
 	ninja -C $(SAN_DIR) -j $(JOBS)
 	ctest --test-dir $(SAN_DIR) --output-on-failure -j $(JOBS)
 
+# ---- the main job ----------------------------------------------------------------------
+# Runs the report's tables through the harness and the analysis over their CSVs.
+# Finished CSVs are reused (the harness resumes: combinations already measured are
+# skipped) unless FRESH=1. QUICK=1 runs reduced configs into results/quick/ and leaves
+# the committed reference run in results/ alone.
+ifeq ($(QUICK),)
+RUN_CONFIGS := table2 table4 table5
+RUN_DIR     := results/csv
+ANALYSIS_OUT := results
+else
+RUN_CONFIGS := quick-table2 quick-tables
+RUN_DIR     := results/quick/csv
+ANALYSIS_OUT := results/quick
+endif
+
+reproduce-tables: build models venv
+	@mkdir -p $(RUN_DIR)
+	@set -e; start=$$(date +%s); \
+	for c in $(RUN_CONFIGS); do \
+	  csv=$(RUN_DIR)/$$c.csv; \
+	  if [ -n "$(FRESH)" ]; then rm -f "$$csv" "$${csv%.csv}.reps.csv"; fi; \
+	  if [ -f "$$csv" ]; then resume=--resume; else resume=; fi; \
+	  echo "== $$c -> $$csv $$resume"; \
+	  $(ACCELBENCH) run configs/$$c.yaml --out "$$csv" $$resume; \
+	done; \
+	echo "== analysis -> $(ANALYSIS_OUT)"; \
+	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis all $(addprefix $(RUN_DIR)/,$(addsuffix .csv,$(RUN_CONFIGS))) \
+	  --out $(ANALYSIS_OUT) --reference results/report/report-tables.csv; \
+	echo "reproduce-tables: done in $$(( $$(date +%s) - start )) s; see $(ANALYSIS_OUT)/REPORT.md"
+
 clean:
 	rm -rf $(BUILD_DIR) $(SAN_DIR)
