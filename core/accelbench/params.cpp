@@ -36,15 +36,11 @@ std::string range_text(const ParamSpec& s) {
 std::string format_param(const ParamValue& v) {
     if (auto* i = std::get_if<int64_t>(&v)) return std::to_string(*i);
     if (auto* d = std::get_if<double>(&v)) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%.17g", *d);
-        // Prefer the shortest text that reads back to the same double.
-        for (int prec = 1; prec <= 17; ++prec) {
-            char shortb[32];
-            std::snprintf(shortb, sizeof shortb, "%.*g", prec, *d);
-            if (std::strtod(shortb, nullptr) == *d) return shortb;
-        }
-        return buf;
+        // The shortest text that reads back to the same double, without an exponent
+        // where plain notation is as short ("80", "0.5", "1e-05" stays as is).
+        char buf[64];
+        auto [end, ec] = std::to_chars(buf, buf + sizeof buf, *d);
+        return ec == std::errc() ? std::string(buf, end) : std::to_string(*d);
     }
     if (auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
     return std::get<std::string>(v);
