@@ -79,6 +79,20 @@ struct Bounds3 {
 
 constexpr Bounds3 merge(Bounds3 a, const Bounds3& b) { a.extend(b); return a; }
 
+// The largest coordinate magnitude a scene or a ray may hold (exclusive): Embree's
+// FLT_LARGE, 1.844e18 ~ sqrt(FLT_MAX) / 10. Products of two coordinate differences (the
+// edge functions of the triangle test) stay finite below it. Embree silently ignores
+// primitives with larger values (rtcCommitScene's documentation: "as no reasonable
+// calculations can be performed with such values without causing overflows") and treats
+// rays with larger components as invalid; Scene::finalize() rejects such faces and
+// is_valid_ray() such rays, so every accelerator sees the same input.
+constexpr float kMaxCoordinate = 1.844e18f;
+
+// False for NaN, infinite and too large components.
+inline bool within_coordinate_limit(Vec3 v) {
+    return std::fabs(v.x) < kMaxCoordinate && std::fabs(v.y) < kMaxCoordinate && std::fabs(v.z) < kMaxCoordinate;
+}
+
 // A ray: origin, direction (not necessarily normalised) and the parametric interval
 // [tmin, tmax] in which hits count.
 struct Ray {
@@ -87,6 +101,14 @@ struct Ray {
     Vec3 dir;
     float tmax = kInfinity;
 };
+
+// Whether a ray defines a line and an interval: origin and direction components finite
+// and below kMaxCoordinate in magnitude, a non-zero direction, tmin and tmax not NaN
+// (infinite bounds are fine). Every accelerator answers "miss" for any other ray.
+inline bool is_valid_ray(const Ray& r) {
+    return within_coordinate_limit(r.org) && within_coordinate_limit(r.dir) &&
+           (r.dir.x != 0.0f || r.dir.y != 0.0f || r.dir.z != 0.0f) && !std::isnan(r.tmin) && !std::isnan(r.tmax);
+}
 
 constexpr uint32_t kInvalidId = 0xffffffffu;
 

@@ -104,3 +104,28 @@ TEST(SlabTest, ZeroAndNegativeZeroDirectionsAreNaNFree) {
         EXPECT_FALSE(intersect_box(box, RayPrecomp(r3), 0, kInfinity).hit()) << "dir.x=" << zero;
     }
 }
+
+// Scaled toward the denormal range, the float edge functions (products of two
+// coordinates) and t_scaled (of three) underflow: 1 / det overflowed to inf and t came
+// out NaN (2^-64) or every ray missed (2^-90). The double finish must give the right t.
+TEST(Triangle, TinyScalesGiveTheRightTNotNaN) {
+    for (int exponent : {-40, -64, -90, -100}) {
+        const float s = std::ldexp(1.0f, exponent);
+        Ray r{{0.25f * s, 0.25f * s, -1.0f * s}, 0, {0, 0, 1}, kInfinity};
+        float t, u, v;
+        ASSERT_TRUE(intersect_triangle(WatertightRay(r), Vec3{0, 0, 0} * s, Vec3{1, 0, 0} * s, Vec3{0, 1, 0} * s, 0,
+                                       kInfinity, t, u, v))
+            << "scale 2^" << exponent;
+        EXPECT_FLOAT_EQ(t, s) << "scale 2^" << exponent;
+        EXPECT_FLOAT_EQ(u, 0.25f);
+        EXPECT_FLOAT_EQ(v, 0.25f);
+    }
+}
+
+TEST(Triangle, RaysWithoutAnIntervalOrBeyondTheCoordinateLimitMiss) {
+    Vec3 a{0, 0, 1}, b{1, 0, 1}, c{0, 1, 1};
+    EXPECT_FALSE(hits({{0.2f, 0.2f, 0}, NAN, {0, 0, 1}, kInfinity}, a, b, c));
+    EXPECT_FALSE(hits({{0.2f, 0.2f, 0}, 0, {0, 0, 1}, NAN}, a, b, c));
+    EXPECT_FALSE(hits({{0.2f, 0.2f, 0}, 0, {0, 0, 2e18f}, kInfinity}, a, b, c));
+    EXPECT_TRUE(hits({{0.2f, 0.2f, 0}, 0, {0, 0, 1e18f}, kInfinity}, a, b, c));
+}
