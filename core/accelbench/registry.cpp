@@ -2,6 +2,7 @@
 
 #include "accelbench/brute_force.h"
 #include "accelbench/embree_accel.h"
+#include "accelbench/reference.h"
 
 namespace accelbench {
 
@@ -9,6 +10,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
     static const std::vector<AcceleratorInfo> registry = {
         BruteForce::info(),
         EmbreeAccel::info(),
+        ReferenceAccel::info(),
     };
     return registry;
 }

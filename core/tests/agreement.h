@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "accelbench/error_metrics.h"
 #include "accelbench/registry.h"
 #include "accelbench/scene.h"
 
@@ -47,6 +48,25 @@ inline std::vector<Ray> probe_rays(const Scene& scene, int count, uint64_t seed 
     return rays;
 }
 
+// Random triangles in a unit box (edges up to 0.2 long): many overlaps, many near-grazing
+// hits. Finalized.
+inline Scene random_soup(int n, uint64_t seed) {
+    Scene s;
+    s.name = "test-soup";
+    uint64_t x = seed;
+    auto next = [&x] {
+        x ^= x << 13; x ^= x >> 7; x ^= x << 17;
+        return float(x >> 40) / float(1 << 24);
+    };
+    for (int i = 0; i < n; ++i) {
+        Vec3 c{next(), next(), next()};
+        for (int k = 0; k < 3; ++k) s.vertices.push_back(c + Vec3{next() - 0.5f, next() - 0.5f, next() - 0.5f} * 0.2f);
+        s.triangles.push_back({uint32_t(3 * i), uint32_t(3 * i + 1), uint32_t(3 * i + 2)});
+    }
+    s.finalize();
+    return s;
+}
+
 // Shadow rays from each hit point toward a point light above the scene.
 inline std::vector<Ray> shadow_rays(const Scene& scene, const std::vector<Ray>& rays, const std::vector<Hit>& hits) {
     const Vec3 light = scene.bounds.center() + Vec3{0.3f, 1.0f, 0.6f} * length(scene.bounds.diagonal());
@@ -68,21 +88,11 @@ struct Agreement {
     size_t mismatched_occlusion = 0;
 };
 
-// ULP distance between two finite floats of the same sign.
-inline int64_t ulp_distance(float a, float b) {
-    auto key = [](float f) {
-        int32_t i;
-        std::memcpy(&i, &f, sizeof i);
-        return i < 0 ? int64_t(INT32_MIN) - i : int64_t(i);
-    };
-    return std::llabs(key(a) - key(b));
-}
-
 // Compares closest hits (and any-hit answers for shadow rays) of `accel` against Embree
 // on `scene`. A different primitive counts as a tie when the distances agree within
 // `ulps` (two triangles meeting where the ray hits them).
 inline Agreement compare_with_embree(const Scene& scene, const Accelerator& accel, const std::vector<Ray>& rays,
-                                     int ulps = 64) {
+                                     int64_t ulps = kTieUlps) {
     auto oracle = make_accelerator("embree", {{"robust", "true"}});
     oracle->build(scene);
     Agreement a;
