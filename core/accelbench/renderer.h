@@ -46,7 +46,10 @@ struct TraceOutput {
     RayStats primary_stats;     // CountMode != Off
     RayStats shadow_stats;
     std::vector<RayStats> per_pixel;  // CountMode::PerPixel, width*height, row-major
-    std::vector<Hit> primary_hits;    // only when keep_hits: one per primary ray, in order
+    // Only when keep_hits: one per primary ray, in ray order. For render() that is
+    // row-major over pixels (top row first) and, within a pixel, sample after sample:
+    // index (y * width + x) * spp + s. For trace_rays() it is the order of the input.
+    std::vector<Hit> primary_hits;
     std::optional<Image> image;       // only when shading
 };
 
@@ -55,18 +58,26 @@ struct TraceRequest {
     std::optional<Light> light;  // used only when settings.light
     CountMode counts = CountMode::Off;
     bool keep_hits = false;      // keep every primary hit (error measurement)
+    // Base colour per triangle (linear RGB) for shading, e.g. a procedural scene's
+    // materials; empty: one light grey for everything. Must outlive the call.
+    std::span<const Vec3> albedo;
 };
 
 // The default light: above and behind the camera's right shoulder, at a distance
 // proportional to the scene, so the default view shows lit faces and cast shadows.
 Light default_light(const Bounds3& scene_bounds, const Camera& camera);
 
-// Renders (or only traces) a width x height image through the camera.
+// Renders (or only traces) a width x height image through the camera. The light is
+// request.light, or default_light(scene.bounds, camera) when absent. With settings.light
+// off and shading on, the image is lit by a headlight at the eye (which casts no visible
+// shadows, so none are traced). Results do not depend on settings.threads.
 TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera,
                    const TraceRequest& request);
 
 // Traces a given ray set (a ray file) instead of camera rays: the same primary / shadow /
-// counting logic; no image (settings.shading is ignored, per_pixel is per ray).
+// counting logic; no image (settings.shading is ignored, per_pixel is per ray). Without
+// request.light the light is the default one of the default view,
+// default_light(bounds, Camera::fit(bounds, 4/3)). Shadow rays start at each hit point.
 TraceOutput trace_rays(const Accelerator& accel, const Scene& scene, std::span<const Ray> rays,
                        const TraceRequest& request);
 
