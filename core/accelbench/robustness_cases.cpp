@@ -11,6 +11,7 @@
 #include <tuple>
 #include <utility>
 
+#include "accelbench/random.h"
 #include "accelbench/reference.h"
 #include "accelbench/registry.h"
 
@@ -19,26 +20,6 @@ namespace accelbench {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-// SplitMix64 draws (same stream on every platform).
-class Draws {
-public:
-    explicit Draws(uint64_t seed) : s_(seed) {}
-    float uniform() {  // [0, 1), 24 bits, exactly representable
-        uint64_t z = (s_ += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return float((z ^ (z >> 31)) >> 40) * (1.0f / float(1u << 24));
-    }
-    Vec3 unit_vector() {
-        const float z = 2 * uniform() - 1, phi = 2 * std::numbers::pi_v<float> * uniform();
-        const float r = std::sqrt(std::max(0.0f, 1 - z * z));
-        return {r * std::cos(phi), r * std::sin(phi), z};
-    }
-
-private:
-    uint64_t s_;
-};
 
 // Builds a triangle mesh whose vertices are shared by exact position, so neighbouring
 // triangles reference the same vertex indices (what makes a mesh closed).
@@ -429,7 +410,7 @@ RobustnessCase copies_and_equal_centroids() {
                 if (bb == Bounds3({-1, -1, -1}, {1, 1, 1})) m.triangle(corners[i], corners[j], corners[k]);
             }
     c.scene = std::move(m.scene());
-    Draws draw(9);
+    SplitMix64 draw(9);
     for (int i = 0; i < 64; ++i) {
         const float u = 0.05f + 0.4f * draw.uniform(), v = 0.05f + 0.4f * draw.uniform();
         add_ray(c, {{5 + u, v, 1}, 0.0f, {0, 0, -1}, kInfinity}, prim_range(0, copies_last));
@@ -629,7 +610,7 @@ RobustnessCase nested_shells() {
             m.unshared_triangle(sphere.vertices[t[0]] * r, sphere.vertices[t[1]] * r, sphere.vertices[t[2]] * r);
     }
     c.scene = std::move(m.scene());
-    Draws draw(16);
+    SplitMix64 draw(16);
     for (int i = 0; i < 400; ++i) add_ray(c, {{0, 0, 0}, 0.0f, draw.unit_vector(), kInfinity}, prim_range(0, per_shell - 1));
     for (int i = 0; i < 400; ++i) {
         const Vec3 from = draw.unit_vector() * 3.0f, to = draw.unit_vector() * 0.3f;

@@ -3,6 +3,8 @@
 // Embree (robust) for whole scenes.
 #include "accelbench/reference.h"
 
+#include "accelbench/random.h"
+
 #include <gmpxx.h>
 #include <gtest/gtest.h>
 
@@ -51,21 +53,17 @@ ExactAnswer exact_intersect(const Ray& r, Vec3 p0, Vec3 p1, Vec3 p2) {
     return ans;
 }
 
+// Draws for the random pairs, on SplitMix64 (random.h) like every generator of ours.
 class Draws {
 public:
-    explicit Draws(uint64_t seed) : s_(seed) {}
-    float uniform(float lo, float hi) {
-        uint64_t z = (s_ += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return lo + (hi - lo) * (float((z ^ (z >> 31)) >> 40) / float(1u << 24));
-    }
-    int integer(int lo, int hi) { return lo + int(uniform(0, float(hi - lo + 1)) * 0.999999f); }
+    explicit Draws(uint64_t seed) : rng_(seed) {}
+    float uniform(float lo, float hi) { return rng_.uniform(lo, hi); }
+    int integer(int lo, int hi) { return lo + int(rng_.below(uint32_t(hi - lo + 1))); }
     Vec3 point(float lo, float hi) { return {uniform(lo, hi), uniform(lo, hi), uniform(lo, hi)}; }
     Vec3 lattice(int lo, int hi) { return {float(integer(lo, hi)), float(integer(lo, hi)), float(integer(lo, hi))}; }
 
 private:
-    uint64_t s_;
+    SplitMix64 rng_;
 };
 
 struct Tally {

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,9 @@ struct Config {
     std::map<std::string, std::string> params;
     std::string label;
 };
+
+// gtest prints parameters; a label reads better than the struct's bytes.
+void PrintTo(const Config& c, std::ostream* os) { *os << c.label; }
 
 std::vector<Config> configs() {
     std::vector<Config> out;
