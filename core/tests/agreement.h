@@ -48,25 +48,6 @@ inline std::vector<Ray> probe_rays(const Scene& scene, int count, uint64_t seed 
     return rays;
 }
 
-// Random triangles in a unit box (edges up to 0.2 long): many overlaps, many near-grazing
-// hits. Finalized.
-inline Scene random_soup(int n, uint64_t seed) {
-    Scene s;
-    s.name = "test-soup";
-    uint64_t x = seed;
-    auto next = [&x] {
-        x ^= x << 13; x ^= x >> 7; x ^= x << 17;
-        return float(x >> 40) / float(1 << 24);
-    };
-    for (int i = 0; i < n; ++i) {
-        Vec3 c{next(), next(), next()};
-        for (int k = 0; k < 3; ++k) s.vertices.push_back(c + Vec3{next() - 0.5f, next() - 0.5f, next() - 0.5f} * 0.2f);
-        s.triangles.push_back({uint32_t(3 * i), uint32_t(3 * i + 1), uint32_t(3 * i + 2)});
-    }
-    s.finalize();
-    return s;
-}
-
 // Shadow rays from each hit point toward a point light above the scene.
 inline std::vector<Ray> shadow_rays(const Scene& scene, const std::vector<Ray>& rays, const std::vector<Hit>& hits) {
     const Vec3 light = scene.bounds.center() + Vec3{0.3f, 1.0f, 0.6f} * length(scene.bounds.diagonal());

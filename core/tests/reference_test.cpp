@@ -3,6 +3,7 @@
 // Embree (robust) for whole scenes.
 #include "accelbench/reference.h"
 
+#include "accelbench/procedural.h"
 #include "accelbench/random.h"
 
 #include <gmpxx.h>
@@ -238,8 +239,9 @@ TEST(Reference, TiesGoToTheSmallestIdWhateverTheTree) {
 }
 
 TEST(Reference, AgreesWithEmbreeRobustOnSoups) {
-    for (auto [n, seed] : {std::pair{500, 42}, std::pair{5000, 7}}) {
-        Scene scene = test::random_soup(n, uint64_t(seed));
+    for (auto [n, seed] : {std::pair{1000, 42}, std::pair{20000, 7}}) {
+        const Scene scene =
+            make_procedural("soup", {{"triangles", std::to_string(n)}, {"seed", std::to_string(seed)}});
         auto ref = make_accelerator("reference", {});
         ref->build(scene);
         test::expect_agrees_with_embree(scene, *ref, test::probe_rays(scene, 4000, uint64_t(seed)),
@@ -248,7 +250,7 @@ TEST(Reference, AgreesWithEmbreeRobustOnSoups) {
 }
 
 TEST(Reference, DepthIsLogarithmicAndStatsAreConsistent) {
-    Scene scene = test::random_soup(10000, 5);
+    const Scene scene = make_procedural("soup", {{"triangles", "10000"}, {"seed", "5"}});
     auto ref = make_accelerator("reference", {{"leaf_size", "4"}});
     ref->build(scene);
     const BuildStats s = ref->build_stats();
