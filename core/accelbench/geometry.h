@@ -143,12 +143,24 @@ struct BoxHit {
     constexpr bool hit() const { return tnear <= tfar; }
 };
 
+// Each slab distance (plane - origin) * (1 / dir) carries three float roundings, so the
+// near and far distances are each within gamma(3) = 3u / (1 - 3u) (u = 2^-24) of their
+// true values (Ize 2013, "Robust BVH Ray Traversal -- revised", JCGT 2(2); pbrt-v3's
+// Bounds3::IntersectP).
+constexpr float kBoxSlack = 2.0f * (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f));
+
 // Slab test (Williams et al. 2005, "An efficient and robust ray-box intersection"):
 // the near and far planes per axis are picked by the direction's sign, so no min/max swap
 // is needed. The only NaN possible is 0 * inf, when the origin lies exactly on a plane of
 // an axis the ray does not move along; the comparisons are written "new value wins only if
 // the test is true", so a NaN never replaces the interval and the ray counts as inside
 // that slab — correct, since it runs along the box's face.
+//
+// Conservative: the far distance is enlarged by 2 gamma(3) of its magnitude (Ize 2013), so
+// rounding never culls a box the ray enters, e.g. at the vertex or edge where a closed
+// mesh's triangles meet on a box face — without it the BVHs leaked rays aimed exactly at
+// vertices of a closed sphere (robustness case 1) that the watertight triangle test alone
+// would have caught. The enlarged interval is returned (it only ever admits more boxes).
 inline BoxHit intersect_box(const Bounds3& b, const RayPrecomp& r, float tmin, float tmax) {
     for (int a = 0; a < 3; ++a) {
         const Vec3& near_plane = r.near_is_upper[a] ? b.upper : b.lower;
@@ -158,7 +170,7 @@ inline BoxHit intersect_box(const Bounds3& b, const RayPrecomp& r, float tmin, f
         tmin = tn > tmin ? tn : tmin;
         tmax = tf < tmax ? tf : tmax;
     }
-    return {tmin, tmax};
+    return {tmin, tmax + kBoxSlack * std::fabs(tmax)};
 }
 
 }  // namespace accelbench

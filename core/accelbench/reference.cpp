@@ -29,8 +29,8 @@ constexpr double gamma(int n) { return n * kUnitRoundoff / (1 - n * kUnitRoundof
 // Ize 2013: each slab distance (plane - origin) * (1 / dir) carries three roundings, so
 // near and far distances are each within gamma(3) of the true values; enlarging the far
 // one by 2 gamma(3) of its magnitude makes "near <= far" hold whenever it holds exactly.
-constexpr double kBoxSlack = 2 * gamma(3);
-inline double enlarge(double t) { return std::isinf(t) ? t : t + kBoxSlack * std::fabs(t); }
+constexpr double kBoxSlackDouble = 2 * gamma(3);
+inline double enlarge(double t) { return std::isinf(t) ? t : t + kBoxSlackDouble * std::fabs(t); }
 
 // Forward error bound of an edge function evaluated in double from float inputs, relative
 // to its permanent (the same sum with every term's absolute value): 7 roundings in all
