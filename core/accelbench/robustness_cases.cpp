@@ -665,50 +665,79 @@ RobustnessCase deep_tree() {
 
 }  // namespace
 
+namespace {
+
+// Finalizes a valid case's scene and records the reference's answers.
+RobustnessCase with_reference(RobustnessCase c) {
+    if (c.expects_rejection()) return c;
+    if (c.scene.prim_bounds.size() != c.scene.triangle_count()) c.scene.finalize();
+    ReferenceAccel reference(resolve_params("reference", ReferenceAccel::info().params, {}));
+    reference.build(c.scene);
+    c.reference_hits.resize(c.rays.size());
+    reference.closest_hits(c.rays, c.reference_hits);
+    return c;
+}
+
+const std::string kRejected = "rejected by Scene::finalize() with a message naming face 5, whatever the accelerator";
+
+}  // namespace
+
+const std::vector<RobustnessCaseEntry>& robustness_case_list() {
+    static const std::vector<RobustnessCaseEntry> list = {
+        {"1", [] { return closed_meshes("1", "closed-meshes", 1.0f, 0.0f); }},
+        {"2a", [] { return closed_meshes("2a", "closed-meshes-at-1.5e5", 1.0f, 1.5e5f); }},
+        {"2b", [] { return closed_meshes("2b", "closed-meshes-at-1e6", 1.0f, 1e6f); }},
+        {"2c", [] { return closed_meshes("2c", "closed-meshes-at-1e7", 1.0f, 1e7f); }},
+        {"3a", [] { return closed_meshes("3a", "closed-meshes-scaled-1e-6", 1e-6f, 0.0f); }},
+        // 2^-64: coordinates ~1e-19, so the edge functions (products of two coordinates)
+        // are float denormals; 2^-90: they underflow to zero.
+        {"3b", [] { return closed_meshes("3b", "closed-meshes-scaled-2^-64", std::ldexp(1.0f, -64), 0.0f); }},
+        {"3c", [] { return closed_meshes("3c", "closed-meshes-scaled-2^-90", std::ldexp(1.0f, -90), 0.0f); }},
+        {"4", origins_on_box_faces},
+        {"5", signed_zero_directions},
+        {"6", tiny_direction_components},
+        {"7", grazing_rays},
+        {"8", degenerate_triangles},
+        {"9", copies_and_equal_centroids},
+        {"10", flat_scene},
+        {"11", cluster_and_outlier},
+        {"12", coplanar_split_planes},
+        {"13", overlapping_coplanar},
+        {"14a", [] { return bad_input("14a", "nan-vertex", "a face using a NaN vertex is " + kRejected, 0); }},
+        {"14b", [] { return bad_input("14b", "inf-vertex", "a face using an infinite vertex is " + kRejected, 1); }},
+        {"14c",
+         [] {
+             return bad_input("14c", "huge-vertex",
+                              "a face using a vertex with a coordinate of 2e19 (>= kMaxCoordinate = 1.844e18, "
+                              "Embree's limit) is " + kRejected, 2);
+         }},
+        {"14d",
+         [] { return bad_input("14d", "index-out-of-range", "a face with an index past the vertex array is " + kRejected, 3); }},
+        {"14e",
+         [] {
+             return bad_input("14e", "unused-nan-vertex",
+                              "a NaN vertex that no face uses is accepted and harmless: every floor triangle is hit "
+                              "at its centroid", 4);
+         }},
+        {"15", invalid_rays},
+        {"16", nested_shells},
+        {"17", distant_camera},
+        {"18", deep_tree},
+    };
+    return list;
+}
+
+RobustnessCase make_robustness_case(const std::string& id) {
+    for (const auto& entry : robustness_case_list())
+        if (entry.id == id) return with_reference(entry.make());
+    std::string known;
+    for (const auto& entry : robustness_case_list()) known += (known.empty() ? "" : ", ") + entry.id;
+    throw std::invalid_argument("unknown robustness case '" + id + "' (known: " + known + ")");
+}
+
 std::vector<RobustnessCase> robustness_catalogue() {
     std::vector<RobustnessCase> cases;
-    cases.push_back(closed_meshes("1", "closed-meshes", 1.0f, 0.0f));
-    cases.push_back(closed_meshes("2a", "closed-meshes-at-1.5e5", 1.0f, 1.5e5f));
-    cases.push_back(closed_meshes("2b", "closed-meshes-at-1e6", 1.0f, 1e6f));
-    cases.push_back(closed_meshes("2c", "closed-meshes-at-1e7", 1.0f, 1e7f));
-    cases.push_back(closed_meshes("3a", "closed-meshes-scaled-1e-6", 1e-6f, 0.0f));
-    // 2^-64: coordinates ~1e-19, so the edge functions (products of two coordinates) are
-    // float denormals.
-    cases.push_back(closed_meshes("3b", "closed-meshes-scaled-2^-64", std::ldexp(1.0f, -64), 0.0f));
-    cases.push_back(closed_meshes("3c", "closed-meshes-scaled-2^-90", std::ldexp(1.0f, -90), 0.0f));
-    cases.push_back(origins_on_box_faces());
-    cases.push_back(signed_zero_directions());
-    cases.push_back(tiny_direction_components());
-    cases.push_back(grazing_rays());
-    cases.push_back(degenerate_triangles());
-    cases.push_back(copies_and_equal_centroids());
-    cases.push_back(flat_scene());
-    cases.push_back(cluster_and_outlier());
-    cases.push_back(coplanar_split_planes());
-    cases.push_back(overlapping_coplanar());
-    const std::string rejected = "rejected by Scene::finalize() with a message naming face 5, whatever the accelerator";
-    cases.push_back(bad_input("14a", "nan-vertex", "a face using a NaN vertex is " + rejected, 0));
-    cases.push_back(bad_input("14b", "inf-vertex", "a face using an infinite vertex is " + rejected, 1));
-    cases.push_back(bad_input("14c", "huge-vertex",
-                              "a face using a vertex with a coordinate of 2e19 (>= kMaxCoordinate = 1.844e18, "
-                              "Embree's limit) is " + rejected, 2));
-    cases.push_back(bad_input("14d", "index-out-of-range", "a face with an index past the vertex array is " + rejected, 3));
-    cases.push_back(bad_input("14e", "unused-nan-vertex",
-                              "a NaN vertex that no face uses is accepted and harmless: every floor triangle is hit "
-                              "at its centroid", 4));
-    cases.push_back(invalid_rays());
-    cases.push_back(nested_shells());
-    cases.push_back(distant_camera());
-    cases.push_back(deep_tree());
-
-    for (RobustnessCase& c : cases) {
-        if (c.expects_rejection()) continue;
-        if (c.scene.prim_bounds.size() != c.scene.triangle_count()) c.scene.finalize();
-        ReferenceAccel reference(resolve_params("reference", ReferenceAccel::info().params, {}));
-        reference.build(c.scene);
-        c.reference_hits.resize(c.rays.size());
-        reference.closest_hits(c.rays, c.reference_hits);
-    }
+    for (const auto& entry : robustness_case_list()) cases.push_back(with_reference(entry.make()));
     return cases;
 }
 

@@ -77,7 +77,18 @@ struct RobustnessCase {
     bool expects_rejection() const { return !rejection_mentions.empty(); }
 };
 
-// Generates the whole catalogue (deterministic; about a second).
+// The catalogue's entries in order, each generating its case on demand (cheap to list).
+struct RobustnessCaseEntry {
+    std::string id;
+    std::function<RobustnessCase()> make;  // without reference_hits; see make_robustness_case
+};
+const std::vector<RobustnessCaseEntry>& robustness_case_list();
+
+// One case, complete with the reference's answers. Throws std::invalid_argument naming the
+// known ids for an unknown one.
+RobustnessCase make_robustness_case(const std::string& id);
+
+// Every case, complete (deterministic; about a second in an optimised build).
 std::vector<RobustnessCase> robustness_catalogue();
 
 struct JudgeOptions {

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <map>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -21,9 +22,13 @@ using namespace accelbench;
 
 namespace {
 
-const std::vector<RobustnessCase>& catalogue() {
-    static const std::vector<RobustnessCase> cases = robustness_catalogue();
-    return cases;
+// Cases are generated on first use, not when gtest lists the tests (a sanitizer build
+// takes long to trace the reference).
+const RobustnessCase& robustness_case(size_t index) {
+    static std::map<size_t, RobustnessCase> cache;
+    auto it = cache.find(index);
+    if (it == cache.end()) it = cache.emplace(index, make_robustness_case(robustness_case_list()[index].id)).first;
+    return it->second;
 }
 
 struct Config {
@@ -51,7 +56,7 @@ std::vector<Config> configs() {
 }
 
 std::vector<size_t> case_indices() {
-    std::vector<size_t> idx(catalogue().size());
+    std::vector<size_t> idx(robustness_case_list().size());
     for (size_t i = 0; i < idx.size(); ++i) idx[i] = i;
     return idx;
 }
@@ -59,7 +64,7 @@ std::vector<size_t> case_indices() {
 class Catalogue : public ::testing::TestWithParam<std::tuple<size_t, Config>> {};
 
 TEST_P(Catalogue, Verdict) {
-    const RobustnessCase& c = catalogue()[std::get<0>(GetParam())];
+    const RobustnessCase& c = robustness_case(std::get<0>(GetParam()));
     const Config& cfg = std::get<1>(GetParam());
     const CaseVerdict v = judge_case(c, cfg.accelerator, cfg.params);
     std::printf("[verdict] case %-4s %-26s %-14s %s  %s%s%s\n", c.id.c_str(), c.name.c_str(), cfg.label.c_str(),
@@ -77,7 +82,7 @@ TEST_P(Catalogue, Verdict) {
 INSTANTIATE_TEST_SUITE_P(AllAccelerators, Catalogue, ::testing::Combine(::testing::ValuesIn(case_indices()),
                                                                         ::testing::ValuesIn(configs())),
                          [](const auto& info) {
-                             std::string id = catalogue()[std::get<0>(info.param)].id;
+                             std::string id = robustness_case_list()[std::get<0>(info.param)].id;
                              return "case" + id + "_" + std::get<1>(info.param).label;
                          });
 
