@@ -14,14 +14,31 @@
 #pragma once
 
 #include <cmath>
-#include <vector>
+#include <stdexcept>
 
 namespace accelbench::exact {
 
 // An exact real number: the sum of its components, which are non-overlapping and in
 // increasing magnitude (zeros removed), so the sign of the number is the sign of the last
 // component and the sum of all components rounds to the number within one ulp.
-using Expansion = std::vector<double>;
+// Fixed capacity, no allocation: the largest expansion built here (edge_volume: six
+// products of three terms of two-component differences) has at most 96 components.
+struct Expansion {
+    static constexpr int kCapacity = 128;
+    double c[kCapacity];
+    int n = 0;
+
+    Expansion() = default;
+    Expansion(double x) { push(x); }  // NOLINT: a double is an expansion of one component
+    void push(double x) {
+        if (n == kCapacity) throw std::length_error("exact::Expansion: capacity exceeded");
+        c[n++] = x;
+    }
+    bool empty() const { return n == 0; }
+    double back() const { return c[n - 1]; }
+    const double* begin() const { return c; }
+    const double* end() const { return c + n; }
+};
 
 // a + b = s + e exactly (Knuth's TwoSum).
 inline void two_sum(double a, double b, double& s, double& e) {
@@ -40,15 +57,14 @@ inline void two_product(double a, double b, double& p, double& e) {
 // e + b (Shewchuk's Grow-Expansion with zero elimination).
 inline Expansion grow(const Expansion& e, double b) {
     Expansion h;
-    h.reserve(e.size() + 1);
     double q = b;
     for (double c : e) {
         double s, err;
         two_sum(q, c, s, err);
         q = s;
-        if (err != 0.0) h.push_back(err);
+        if (err != 0.0) h.push(err);
     }
-    if (q != 0.0 || h.empty()) h.push_back(q);
+    if (q != 0.0 || h.empty()) h.push(q);
     return h;
 }
 
@@ -59,35 +75,34 @@ inline Expansion add(Expansion e, const Expansion& f) {
 }
 
 inline Expansion negate(Expansion e) {
-    for (double& c : e) c = -c;
+    for (int i = 0; i < e.n; ++i) e.c[i] = -e.c[i];
     return e;
 }
 
 // e * b (Shewchuk's Scale-Expansion with zero elimination).
 inline Expansion scale(const Expansion& e, double b) {
     Expansion h;
-    h.reserve(2 * e.size());
     if (e.empty()) return {0.0};
     double q, err;
-    two_product(e[0], b, q, err);
-    if (err != 0.0) h.push_back(err);
-    for (size_t i = 1; i < e.size(); ++i) {
+    two_product(e.c[0], b, q, err);
+    if (err != 0.0) h.push(err);
+    for (int i = 1; i < e.n; ++i) {
         double p, pe;
-        two_product(e[i], b, p, pe);
+        two_product(e.c[i], b, p, pe);
         double s, se;
         two_sum(q, pe, s, se);
-        if (se != 0.0) h.push_back(se);
+        if (se != 0.0) h.push(se);
         two_sum(p, s, q, err);  // p is the larger part: the fast variant would also do
-        if (err != 0.0) h.push_back(err);
+        if (err != 0.0) h.push(err);
     }
-    if (q != 0.0 || h.empty()) h.push_back(q);
+    if (q != 0.0 || h.empty()) h.push(q);
     return h;
 }
 
 // e * f.
 inline Expansion multiply(const Expansion& e, const Expansion& f) {
     Expansion sum{0.0};
-    for (double c : f) sum = add(std::move(sum), scale(e, c));
+    for (double c : f) sum = add(sum, scale(e, c));
     return sum;
 }
 
@@ -96,8 +111,8 @@ inline Expansion difference(double a, double b) {
     double s, e;
     two_sum(a, -b, s, e);
     Expansion h;
-    if (e != 0.0) h.push_back(e);
-    if (s != 0.0 || h.empty()) h.push_back(s);
+    if (e != 0.0) h.push(e);
+    if (s != 0.0 || h.empty()) h.push(s);
     return h;
 }
 
@@ -127,7 +142,7 @@ inline Expansion edge_volume(const double d[3], const double o[3], const double 
         const int i = (k + 1) % 3, j = (k + 2) % 3;
         // (q1 x q2)[k] = q1[i] q2[j] - q1[j] q2[i]
         Expansion cross_k = add(multiply(q1[i], q2[j]), negate(multiply(q1[j], q2[i])));
-        sum = add(std::move(sum), scale(cross_k, d[k]));
+        sum = add(sum, scale(cross_k, d[k]));
     }
     return sum;
 }
