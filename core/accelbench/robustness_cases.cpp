@@ -262,6 +262,19 @@ FloorRoof floor_and_roof(std::string id, std::string name, std::string requireme
     return f;
 }
 
+// From height 1, between floor and roof, through every cell's centroid: for each (down,
+// up) direction pair one ray that must hit the floor triangle there and one the roof's.
+void add_centroid_rays(FloorRoof& f, const std::vector<std::pair<Vec3, Vec3>>& down_up) {
+    const uint32_t cells = 2 * uint32_t(f.n * f.n);
+    for (uint32_t p = 0; p < cells; ++p) {
+        const Vec3 c = centroid(f.c.scene, p);
+        for (auto [down, up] : down_up) {
+            add_ray(f.c, {{c.x, c.y, 1.0f}, 0.0f, down, kInfinity}, prim_is(f.floor_first + p));
+            add_ray(f.c, {{c.x, c.y, 1.0f}, 0.0f, up, kInfinity}, prim_is(f.roof_first + p));
+        }
+    }
+}
+
 RobustnessCase origins_on_box_faces() {
     FloorRoof f = floor_and_roof(
         "4", "origins-on-box-faces",
@@ -289,15 +302,10 @@ RobustnessCase signed_zero_directions() {
         "5", "signed-zero-directions",
         "rays whose zero direction components are +0.0 or -0.0 give the same answers: the triangle under/over a "
         "centroid (all structures), a hit through shared edges (watertight structures)");
-    const uint32_t cells = 2 * uint32_t(f.n * f.n);
-    for (uint32_t p = 0; p < cells; ++p) {
-        const Vec3 c = centroid(f.c.scene, p);
-        for (float zx : {0.0f, -0.0f})
-            for (float zy : {0.0f, -0.0f}) {
-                add_ray(f.c, {{c.x, c.y, 1.0f}, 0.0f, {zx, zy, -1}, kInfinity}, prim_is(f.floor_first + p));
-                add_ray(f.c, {{c.x, c.y, 1.0f}, 0.0f, {zx, zy, 1}, kInfinity}, prim_is(f.roof_first + p));
-            }
-    }
+    std::vector<std::pair<Vec3, Vec3>> down_up;
+    for (float zx : {0.0f, -0.0f})
+        for (float zy : {0.0f, -0.0f}) down_up.push_back({{zx, zy, -1}, {zx, zy, 1}});
+    add_centroid_rays(f, down_up);
     for (int line = 1; line < f.n; ++line)
         for (float zx : {0.0f, -0.0f})
             for (float zy : {0.0f, -0.0f}) {
@@ -312,14 +320,9 @@ RobustnessCase tiny_direction_components() {
         "6", "tiny-direction-components",
         "rays with tiny non-zero direction components (1e-40 denormal, 1e-20, 1e-15, 1e-11) aimed at a triangle's "
         "centroid hit that triangle: huge reciprocals must not become NaN or cull boxes");
-    const uint32_t cells = 2 * uint32_t(f.n * f.n);
-    for (uint32_t p = 0; p < cells; ++p) {
-        const Vec3 c = centroid(f.c.scene, p);
-        for (float eps : {1e-40f, 1e-20f, 1e-15f, 1e-11f}) {
-            add_ray(f.c, {{c.x, c.y, 1.0f}, 0.0f, {eps, -eps, -1}, kInfinity}, prim_is(f.floor_first + p));
-            add_ray(f.c, {{c.x, c.y, 1.0f}, 0.0f, {-eps, 0.0f, 1}, kInfinity}, prim_is(f.roof_first + p));
-        }
-    }
+    std::vector<std::pair<Vec3, Vec3>> down_up;
+    for (float eps : {1e-40f, 1e-20f, 1e-15f, 1e-11f}) down_up.push_back({{eps, -eps, -1}, {-eps, 0.0f, 1}});
+    add_centroid_rays(f, down_up);
     return f.c;
 }
 
