@@ -8,19 +8,31 @@
 
 namespace accelbench {
 
-uint64_t peak_rss_bytes() {
+namespace {
+
+// A "Key:   1234 kB" line of /proc/self/status, in bytes; 0 if absent.
+uint64_t status_kib_field(const std::string& key) {
     std::ifstream status("/proc/self/status");
     std::string line;
     while (std::getline(status, line)) {
-        if (line.rfind("VmHWM:", 0) != 0) continue;
-        std::istringstream fields(line.substr(6));
+        if (line.rfind(key, 0) != 0) continue;
+        std::istringstream fields(line.substr(key.size()));
         uint64_t kib = 0;
-        if (fields >> kib) return kib * 1024;  // the kernel reports "VmHWM:   1234 kB"
+        if (fields >> kib) return kib * 1024;
     }
+    return 0;
+}
+
+}  // namespace
+
+uint64_t peak_rss_bytes() {
+    if (uint64_t hwm = status_kib_field("VmHWM:")) return hwm;
     rusage usage{};
     if (getrusage(RUSAGE_SELF, &usage) == 0) return uint64_t(usage.ru_maxrss) * 1024;  // kilobytes on Linux
     return 0;
 }
+
+uint64_t current_rss_bytes() { return status_kib_field("VmRSS:"); }
 
 bool reset_peak_rss() {
     std::ofstream clear_refs("/proc/self/clear_refs");

@@ -10,6 +10,9 @@ namespace accelbench {
 // (Linux), else getrusage's ru_maxrss. 0 if neither is available.
 uint64_t peak_rss_bytes();
 
+// Current resident set size in bytes (VmRSS), 0 where unavailable.
+uint64_t current_rss_bytes();
+
 // Resets the high-water mark to the current resident size (Linux >= 4.0: writes "5" to
 // /proc/self/clear_refs), so that the next peak_rss_bytes() measures one phase (one
 // build, one row) rather than the whole process. Returns false where that is not

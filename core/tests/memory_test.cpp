@@ -6,7 +6,7 @@
 
 using namespace accelbench;
 
-TEST(Memory, PeakRssSeesAnAllocationAndResets) {
+TEST(Memory, PeakRssSeesAnAllocationAndResetsToTheCurrentSize) {
     const uint64_t before = peak_rss_bytes();
     ASSERT_GT(before, 0u);
     {
@@ -14,7 +14,11 @@ TEST(Memory, PeakRssSeesAnAllocationAndResets) {
         EXPECT_GE(peak_rss_bytes(), before + (60u << 20));
         EXPECT_EQ(block[12345], 1);
     }
+    // After a reset the peak is the resident size of the moment (under ASan the freed
+    // block stays resident in its quarantine, so it need not drop below the old peak).
     if (reset_peak_rss()) {
-        EXPECT_LT(peak_rss_bytes(), before + (60u << 20));
+        const uint64_t now = current_rss_bytes();
+        EXPECT_LE(peak_rss_bytes(), now + (1u << 20));
+        EXPECT_GE(peak_rss_bytes() + (1u << 20), now);
     }
 }

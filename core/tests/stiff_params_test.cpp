@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <map>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,8 @@ struct Stiff {
     std::map<std::string, std::string> params;
 };
 
+void PrintTo(const Stiff& s, std::ostream* os);
+
 std::vector<Stiff> stiff_settings() {
     return {
         {"kdtree", {{"max_depth", "100"}, {"max_prims", "1"}}},
@@ -63,6 +66,8 @@ std::string label(const Stiff& s) {
     for (const auto& [k, v] : s.params) out += " " + k + "=" + v;
     return out;
 }
+
+void PrintTo(const Stiff& s, std::ostream* os) { *os << label(s); }
 
 class StiffParams : public ::testing::TestWithParam<Stiff> {};
 
