@@ -91,6 +91,13 @@ void EmbreeAccel::closest_hits(std::span<const Ray> rays, std::span<Hit> hits, s
     rtcInitIntersectContext(&ctx);
     for (size_t i = 0; i < rays.size(); ++i) {
         const Ray& r = rays[i];
+        // Embree asserts (or, built without assertions, answers arbitrarily) on rays
+        // outside its valid range: they miss, as in every other accelerator. So do rays
+        // with an empty interval.
+        if (!is_valid_ray(r) || !(r.tmin < r.tmax)) {
+            hits[i] = Hit{};
+            continue;
+        }
         RTCRayHit rh;
         rh.ray.org_x = r.org.x; rh.ray.org_y = r.org.y; rh.ray.org_z = r.org.z;
         rh.ray.dir_x = r.dir.x; rh.ray.dir_y = r.dir.y; rh.ray.dir_z = r.dir.z;
@@ -116,6 +123,11 @@ void EmbreeAccel::any_hits(std::span<const Ray> rays, std::span<uint8_t> occlude
     rtcInitIntersectContext(&ctx);
     for (size_t i = 0; i < rays.size(); ++i) {
         const Ray& r = rays[i];
+        // As above; and an input tfar of -inf would read as "occluded" below.
+        if (!is_valid_ray(r) || !(r.tmin < r.tmax)) {
+            occluded[i] = 0;
+            continue;
+        }
         RTCRay ray;
         ray.org_x = r.org.x; ray.org_y = r.org.y; ray.org_z = r.org.z;
         ray.dir_x = r.dir.x; ray.dir_y = r.dir.y; ray.dir_z = r.dir.z;

@@ -79,6 +79,20 @@ struct Bounds3 {
 
 constexpr Bounds3 merge(Bounds3 a, const Bounds3& b) { a.extend(b); return a; }
 
+// The largest coordinate magnitude a scene or a ray may hold (exclusive): Embree's
+// FLT_LARGE, 1.844e18 ~ sqrt(FLT_MAX) / 10. Products of two coordinate differences (the
+// edge functions of the triangle test) stay finite below it. Embree silently ignores
+// primitives with larger values (rtcCommitScene's documentation: "as no reasonable
+// calculations can be performed with such values without causing overflows") and treats
+// rays with larger components as invalid; Scene::finalize() rejects such faces and
+// is_valid_ray() such rays, so every accelerator sees the same input.
+constexpr float kMaxCoordinate = 1.844e18f;
+
+// False for NaN, infinite and too large components.
+inline bool within_coordinate_limit(Vec3 v) {
+    return std::fabs(v.x) < kMaxCoordinate && std::fabs(v.y) < kMaxCoordinate && std::fabs(v.z) < kMaxCoordinate;
+}
+
 // A ray: origin, direction (not necessarily normalised) and the parametric interval
 // [tmin, tmax] in which hits count.
 struct Ray {
@@ -87,6 +101,14 @@ struct Ray {
     Vec3 dir;
     float tmax = kInfinity;
 };
+
+// Whether a ray defines a line and an interval: origin and direction components finite
+// and below kMaxCoordinate in magnitude, a non-zero direction, tmin and tmax not NaN
+// (infinite bounds are fine). Every accelerator answers "miss" for any other ray.
+inline bool is_valid_ray(const Ray& r) {
+    return within_coordinate_limit(r.org) && within_coordinate_limit(r.dir) &&
+           (r.dir.x != 0.0f || r.dir.y != 0.0f || r.dir.z != 0.0f) && !std::isnan(r.tmin) && !std::isnan(r.tmax);
+}
 
 constexpr uint32_t kInvalidId = 0xffffffffu;
 
@@ -121,12 +143,24 @@ struct BoxHit {
     constexpr bool hit() const { return tnear <= tfar; }
 };
 
+// Each slab distance (plane - origin) * (1 / dir) carries three float roundings, so the
+// near and far distances are each within gamma(3) = 3u / (1 - 3u) (u = 2^-24) of their
+// true values (Ize 2013, "Robust BVH Ray Traversal -- revised", JCGT 2(2); pbrt-v3's
+// Bounds3::IntersectP).
+constexpr float kBoxSlack = 2.0f * (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f));
+
 // Slab test (Williams et al. 2005, "An efficient and robust ray-box intersection"):
 // the near and far planes per axis are picked by the direction's sign, so no min/max swap
 // is needed. The only NaN possible is 0 * inf, when the origin lies exactly on a plane of
 // an axis the ray does not move along; the comparisons are written "new value wins only if
 // the test is true", so a NaN never replaces the interval and the ray counts as inside
 // that slab — correct, since it runs along the box's face.
+//
+// Conservative: the far distance is enlarged by 2 gamma(3) of its magnitude (Ize 2013), so
+// rounding never culls a box the ray enters, e.g. at the vertex or edge where a closed
+// mesh's triangles meet on a box face — without it the BVHs leaked rays aimed exactly at
+// vertices of a closed sphere (robustness case 1) that the watertight triangle test alone
+// would have caught. The enlarged interval is returned (it only ever admits more boxes).
 inline BoxHit intersect_box(const Bounds3& b, const RayPrecomp& r, float tmin, float tmax) {
     for (int a = 0; a < 3; ++a) {
         const Vec3& near_plane = r.near_is_upper[a] ? b.upper : b.lower;
@@ -136,7 +170,7 @@ inline BoxHit intersect_box(const Bounds3& b, const RayPrecomp& r, float tmin, f
         tmin = tn > tmin ? tn : tmin;
         tmax = tf < tmax ? tf : tmax;
     }
-    return {tmin, tmax};
+    return {tmin, tmax + kBoxSlack * std::fabs(tmax)};
 }
 
 }  // namespace accelbench

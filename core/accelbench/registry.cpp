@@ -5,6 +5,7 @@
 #include "accelbench/embree_accel.h"
 #include "accelbench/kdtree.h"
 #include "accelbench/lbvh.h"
+#include "accelbench/reference.h"
 
 namespace accelbench {
 
@@ -15,6 +16,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
         EmbreeAccel::info(),
         Lbvh::info(),
         KdTree::info(),
+        ReferenceAccel::info(),
     };
     return registry;
 }

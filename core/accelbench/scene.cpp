@@ -21,7 +21,12 @@ void Scene::finalize() {
             if (!is_finite(vertices[vi]))
                 throw std::runtime_error("scene '" + name + "': face " + std::to_string(i) +
                                          " uses vertex " + std::to_string(vi) + " whose coordinates are not finite");
-            b.extend(vertices[vi]);
+            const Vec3 p = vertices[vi];
+            if (!within_coordinate_limit(p))
+                throw std::runtime_error("scene '" + name + "': face " + std::to_string(i) + " uses vertex " +
+                                         std::to_string(vi) + " with a coordinate of magnitude 1.844e18 or more "
+                                         "(the limit kMaxCoordinate, Embree's FLT_LARGE)");
+            b.extend(p);
         }
         prim_bounds[i] = b;
         centroids[i] = b.center();

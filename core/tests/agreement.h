@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "accelbench/error_metrics.h"
 #include "accelbench/registry.h"
 #include "accelbench/scene.h"
 
@@ -68,21 +69,11 @@ struct Agreement {
     size_t mismatched_occlusion = 0;
 };
 
-// ULP distance between two finite floats of the same sign.
-inline int64_t ulp_distance(float a, float b) {
-    auto key = [](float f) {
-        int32_t i;
-        std::memcpy(&i, &f, sizeof i);
-        return i < 0 ? int64_t(INT32_MIN) - i : int64_t(i);
-    };
-    return std::llabs(key(a) - key(b));
-}
-
 // Compares closest hits (and any-hit answers for shadow rays) of `accel` against Embree
 // on `scene`. A different primitive counts as a tie when the distances agree within
 // `ulps` (two triangles meeting where the ray hits them).
 inline Agreement compare_with_embree(const Scene& scene, const Accelerator& accel, const std::vector<Ray>& rays,
-                                     int ulps = 64) {
+                                     int64_t ulps = kTieUlps) {
     auto oracle = make_accelerator("embree", {{"robust", "true"}});
     oracle->build(scene);
     Agreement a;

@@ -335,7 +335,7 @@ TEST(Renderer, BruteForceAndEmbreeAgreeOnEveryPrimaryRay) {
             if (!x.found()) continue;
             ++hits;
             if (x.prim == y.prim) continue;
-            if (test::ulp_distance(x.t, y.t) <= 64)
+            if (ulp_distance(x.t, y.t) <= kTieUlps)
                 ++ties;
             else
                 ++mismatches;
