@@ -23,7 +23,8 @@
 //    (default 5; --benchmark_repetitions overrides), each repetition's value being the
 //    mean over its iterations: one slow repetition does not move it.
 // The benchmark's own time is the structure's CPU time (manual timing); its counters give
-// both sides' speed (Mtris/s for builds, Mrays/s for renders) and the ratio.
+// both sides' speed (Mtris/s for builds, Mrays/s for renders) and the ratio. (Google
+// Benchmark's own "CPU" column is the thread's time for the whole iteration, both sides.)
 #include <benchmark/benchmark.h>
 
 #include <time.h>
