@@ -109,5 +109,79 @@ reproduce-tables: build models venv
 	  --out $(ANALYSIS_OUT) --reference results/report/report-tables.csv; \
 	echo "reproduce-tables: done in $$(( $$(date +%s) - start )) s; see $(ANALYSIS_OUT)/REPORT.md"
 
+# ---- regression check (issue 7) -----------------------------------------------------
+# `make regress`: configs/ci.yaml measured twice — a timed run (counts and times) and a
+# run under callgrind (the `instructions` of one render per combination) — joined by
+# combo_id and compared with the committed baseline by the analysis (three tiers, exit
+# 0 pass, 1 regression, 2 bad input, 3 "a time ratio exceeded once"). On 3 the timed run
+# is measured again and compared with the first as --history: time fails only on two
+# consecutive measurements. Outputs, reports included, go to results/runs/regress/.
+CI_CONFIG   ?= configs/ci.yaml
+BASELINE    ?= results/baseline/ci.csv
+REGRESS_DIR ?= results/runs/regress
+TIME_FACTOR ?= 1.5
+CALLGRIND   ?= valgrind --tool=callgrind --instr-atstart=no
+ANALYSIS    := PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis
+REGRESS     := $(ANALYSIS) regress --baseline $(BASELINE) --time-factor $(TIME_FACTOR)
+
+# $(call ci_timed,OUT.csv): the timed run (Google Benchmark's tables go to OUT minus .csv plus .log).
+ci_timed = $(ACCELBENCH) run --out $(1) $(CI_CONFIG) > $(basename $(1)).log
+# $(call ci_callgrind,OUT.csv): the instructions run, its callgrind dumps in OUT minus .csv plus .callgrind/.
+ci_callgrind = rm -rf $(basename $(1)).callgrind && mkdir -p $(basename $(1)).callgrind && \
+  $(CALLGRIND) --log-file=$(basename $(1)).callgrind/valgrind.log \
+    --callgrind-out-file=$(basename $(1)).callgrind/callgrind.out \
+    $(ACCELBENCH) run --in-process --instructions $(basename $(1)).callgrind/callgrind.out \
+    --out $(1) $(CI_CONFIG) > $(basename $(1)).log
+# $(call ci_join,OUT.csv,TIMED.csv,CALLGRIND.csv): the timed rows with the instructions column.
+ci_join = $(ACCELBENCH) merge --take-column instructions $(1) $(2) $(3)
+
+regress: build venv
+	rm -rf $(REGRESS_DIR) && mkdir -p $(REGRESS_DIR)
+	$(call ci_timed,$(REGRESS_DIR)/timed-1.csv)
+	$(call ci_callgrind,$(REGRESS_DIR)/callgrind.csv)
+	$(call ci_join,$(REGRESS_DIR)/run-1.csv,$(REGRESS_DIR)/timed-1.csv,$(REGRESS_DIR)/callgrind.csv)
+	@rc=0; $(REGRESS) --current $(REGRESS_DIR)/run-1.csv --report $(REGRESS_DIR)/report-1.md || rc=$$?; \
+	if [ $$rc = 3 ]; then \
+	  echo "regress: a time ratio exceeded its limit once; measuring again to confirm or clear it"; \
+	  $(call ci_timed,$(REGRESS_DIR)/timed-2.csv) && \
+	  $(call ci_join,$(REGRESS_DIR)/run-2.csv,$(REGRESS_DIR)/timed-2.csv,$(REGRESS_DIR)/callgrind.csv) && \
+	  { rc=0; $(REGRESS) --current $(REGRESS_DIR)/run-2.csv --history $(REGRESS_DIR)/run-1.csv \
+	      --report $(REGRESS_DIR)/report-2.md || rc=$$?; }; \
+	fi; \
+	echo "regress: exit $$rc (reports in $(REGRESS_DIR)/)"; exit $$rc
+
+# Rewrites the baseline from a fresh run on this machine. Commit it with a message that
+# says why the baseline changed (results/baseline/README.md).
+update-baseline: build
+	rm -rf $(REGRESS_DIR)/baseline && mkdir -p $(REGRESS_DIR)/baseline $(dir $(BASELINE))
+	$(call ci_timed,$(REGRESS_DIR)/baseline/timed.csv)
+	$(call ci_callgrind,$(REGRESS_DIR)/baseline/callgrind.csv)
+	$(call ci_join,$(BASELINE),$(REGRESS_DIR)/baseline/timed.csv,$(REGRESS_DIR)/baseline/callgrind.csv)
+	@echo "update-baseline: wrote $(BASELINE); commit it saying why the baseline changed"
+
+# ---- parameter grid search (issue 7) ------------------------------------------------
+# `make grid-search [GRID_CONFIG=configs/grid-NAME.yaml]`: runs the grid through the
+# harness (resumable: rerunning continues an interrupted run) and ranks it into
+# results/grid/NAME/. A config with `grid.mode: successive_halving` runs the cheap pass,
+# `grid-halve` picks the best candidates and the harness re-measures them at full
+# repetitions; `full` runs the config as written.
+GRID_CONFIG ?= configs/grid-kdtree-bunny.yaml
+GRID_NAME    = $(basename $(notdir $(GRID_CONFIG)))
+GRID_RUNS    = results/runs/grid-$(GRID_NAME)
+GRID_OUT     = results/grid/$(GRID_NAME)
+
+grid-search: build venv
+	mkdir -p $(GRID_RUNS)
+	$(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-1.csv $(GRID_CONFIG) > $(GRID_RUNS)/pass-1.log
+	@mode=$$(PYTHONPATH=analysis $(PYTHON) -c 'import sys; from accelbench_analysis.grid_config import load_grid_config; print(load_grid_config(sys.argv[1]).mode)' $(GRID_CONFIG)) || exit 2; \
+	set -ex; \
+	if [ "$$mode" = successive_halving ]; then \
+	  $(ANALYSIS) grid-halve $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_RUNS)/pass-2.yaml; \
+	  $(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-2.csv $(GRID_RUNS)/pass-2.yaml > $(GRID_RUNS)/pass-2.log; \
+	  $(ANALYSIS) grid $(GRID_RUNS)/pass-2.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
+	else \
+	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
+	fi
+
 clean:
 	rm -rf $(BUILD_DIR) $(SAN_DIR)

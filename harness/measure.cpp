@@ -1,4 +1,5 @@
 #include "measure.h"
+#include "instructions.h"
 #include "text.h"
 
 #include <benchmark/benchmark.h>
@@ -182,6 +183,7 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
     std::optional<BuildStats> first_build;
     std::optional<TraceOutput> first_trace, first_count;
     int build_calls = 0, render_calls = 0;
+    std::optional<uint64_t> instructions;
     const int reps = settings.repetitions;
 
     auto begin = [&](const std::string& s) {
@@ -278,10 +280,16 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
             }
             begin("render repetition " + std::to_string(rep) + " of " + std::to_string(reps));
             TraceOutput out;
+            // Under callgrind, the first counted repetition is also the one whose
+            // instructions are counted: exactly one timed-mode render, nothing around it.
+            std::optional<CallgrindRegion> callgrind;
+            if (rep == 1 && !settings.callgrind_out.empty()) callgrind.emplace(settings.callgrind_out, settings.callgrind_tag);
             for (auto _ : st) {
+                if (callgrind) callgrind->start();
                 const auto t0 = Clock::now();
                 out = trace(timed);
                 const auto t1 = Clock::now();
+                if (callgrind) instructions = callgrind->stop();
                 st.SetIterationTime(seconds_between(t0, t1));
             }
             check_rays(out, "render repetition " + std::to_string(rep));
@@ -351,6 +359,7 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
     RayStats total = first_count->primary_stats;
     total += first_count->shadow_stats;
     if (total.node_visits + total.box_tests + total.prim_tests > 0) m.counts = total;
+    m.instructions = instructions;
     return m;
 }
 
@@ -422,6 +431,7 @@ std::string serialize(const Measurement& m) {
         put("box_tests", std::to_string(m.counts->box_tests));
         put("prim_tests", std::to_string(m.counts->prim_tests));
     }
+    if (m.instructions) put("instructions", std::to_string(*m.instructions));
     put("json", m.json);
     return s;
 }
@@ -459,6 +469,7 @@ Measurement deserialize(const std::string& text) {
         else if (k == "node_visits") counts().node_visits = u();
         else if (k == "box_tests") counts().box_tests = u();
         else if (k == "prim_tests") counts().prim_tests = u();
+        else if (k == "instructions") m.instructions = u();
         else if (k == "json") m.json = v;
         else throw std::runtime_error("unknown measurement key '" + k + "'");
     }

@@ -33,6 +33,9 @@ struct MeasureSettings {
     bool show_context = true;       // console: GB's machine description (once per run)
     bool json = false;              // keep GB's JSON run objects in Measurement::json
     double timeout_s = 0;           // > 0: checked at every stage boundary in this process
+    // Non-empty: callgrind's --callgrind-out-file; the first counted render repetition is
+    // counted with callgrind (instructions.h), its dump described by `callgrind_tag`.
+    std::string callgrind_out, callgrind_tag;
 };
 
 struct Measurement {
@@ -44,6 +47,7 @@ struct Measurement {
     // Totals over primary and shadow rays; nullopt when the structure reports no counts
     // at all (Embree), so that they are written as missing, never as zero.
     std::optional<RayStats> counts;
+    std::optional<uint64_t> instructions;  // callgrind's Ir of one render (MeasureSettings::callgrind_out)
     std::string json;   // GB JSONReporter run objects, comma-separated (MeasureSettings::json)
     std::string stage;  // the last stage begun, for timeout and crash messages
 };

@@ -43,6 +43,7 @@ std::vector<std::string> result_columns() {
           "rays", "hits", "shadow_rays", "shadow_hits", "mrays_per_s",  //
           "nodes", "leaves", "max_depth", "memory_bytes", "sah_cost", "avg_leaf_size", "build_extra",  //
           "prim_tests", "node_visits", "box_tests", "prim_tests_per_ray", "node_visits_per_ray",  //
+          "instructions",  //
           "width", "height", "spp", "light", "shading",  //
           "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version", "timestamp"})
         c.push_back(col);
@@ -137,6 +138,38 @@ void filter_rows(const std::string& path, const std::set<std::string>& keep) {
     fs::rename(tmp, path);
 }
 
+// Refuses files from different builds or machines: their rows are not comparable.
+void check_same_provenance(const std::vector<CsvData>& data, const std::vector<std::string>& paths) {
+    for (const auto& col : provenance_columns()) {
+        const size_t c = column_index(data.front(), col, paths.front());
+        std::map<std::string, std::string> seen;  // value -> first file with it
+        for (size_t f = 0; f < data.size(); ++f)
+            for (const auto& r : data[f].rows) seen.emplace(r[c], paths[f]);
+        if (seen.size() > 1) {
+            std::string values;
+            for (const auto& [v, file] : seen) values += "\n  '" + v + "' (" + file + ")";
+            throw std::runtime_error("mixed provenance: column " + col + " differs between the inputs:" + values +
+                                     "\nresults from different builds or machines are not comparable; "
+                                     "pass --allow-mixed to merge them anyway");
+        }
+    }
+}
+
+// Writes the parts' rows under the first part's header, through a temporary file.
+void write_parts(const std::string& path, const std::vector<CsvData>& parts) {
+    if (!fs::path(path).parent_path().empty()) fs::create_directories(fs::path(path).parent_path());
+    const std::string tmp = path + ".tmp";
+    {
+        std::ofstream o(tmp, std::ios::binary | std::ios::trunc);
+        if (!o) throw std::runtime_error("cannot write '" + tmp + "'");
+        o << csv_line(parts.front().header);
+        for (const auto& p : parts)
+            for (const auto& r : p.rows) o << csv_line(r);
+        if (!o.flush()) throw std::runtime_error("writing '" + tmp + "' failed");
+    }
+    fs::rename(tmp, path);
+}
+
 }  // namespace
 
 std::set<std::string> prepare_resume(const std::string& results_path, const std::vector<std::string>& columns,
@@ -174,20 +207,7 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
     }
     const CsvData& first = data.front();
     const size_t id = column_index(first, "combo_id", inputs.front());
-    if (!allow_mixed)
-        for (const auto& col : provenance_columns()) {
-            const size_t c = column_index(first, col, inputs.front());
-            std::map<std::string, std::string> seen;  // value -> first file with it
-            for (size_t f = 0; f < data.size(); ++f)
-                for (const auto& r : data[f].rows) seen.emplace(r[c], inputs[f]);
-            if (seen.size() > 1) {
-                std::string values;
-                for (const auto& [v, file] : seen) values += "\n  '" + v + "' (" + file + ")";
-                throw std::runtime_error("mixed provenance: column " + col + " differs between the inputs:" + values +
-                                         "\nresults from different builds or machines are not comparable; "
-                                         "pass --allow-mixed to merge them anyway");
-            }
-        }
+    if (!allow_mixed) check_same_provenance(data, inputs);
     std::map<std::string, std::string> owner;  // combo_id -> file
     for (size_t f = 0; f < data.size(); ++f)
         for (const auto& r : data[f].rows)
@@ -205,22 +225,33 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
                 throw std::runtime_error(m);
         }
 
-    auto write = [](const std::string& path, const std::vector<CsvData>& parts) {
-        const std::string tmp = path + ".tmp";
-        {
-            std::ofstream o(tmp, std::ios::binary | std::ios::trunc);
-            if (!o) throw std::runtime_error("cannot write '" + tmp + "'");
-            o << csv_line(parts.front().header);
-            for (const auto& p : parts)
-                for (const auto& r : p.rows) o << csv_line(r);
-            if (!o.flush()) throw std::runtime_error("writing '" + tmp + "' failed");
-        }
-        fs::rename(tmp, path);
-    };
-    if (!fs::path(out).parent_path().empty()) fs::create_directories(fs::path(out).parent_path());
-    write(out, data);
-    if (all_reps) write(repetitions_path(out), reps);
+    write_parts(out, data);
+    if (all_reps) write_parts(repetitions_path(out), reps);
     return owner.size();
+}
+
+size_t take_column(const std::string& out, const std::string& in, const std::string& from, const std::string& column,
+                   bool allow_mixed) {
+    if (fs::exists(out) && fs::exists(in) && fs::equivalent(out, in))
+        throw std::runtime_error("the output '" + out + "' is also an input");
+    std::vector<CsvData> data = {read_csv(in), read_csv(from)};
+    if (auto m = header_mismatch(from, data[1].header, data[0].header); !m.empty())
+        throw std::runtime_error(m + " (compared with " + in + ")");
+    if (!allow_mixed) check_same_provenance(data, {in, from});
+    const size_t id = column_index(data[0], "combo_id", in), col = column_index(data[0], column, in);
+    std::map<std::string, std::string> value;  // combo_id -> the column's value in `from`
+    for (const auto& r : data[1].rows)
+        if (!value.emplace(r[id], r[col]).second)
+            throw std::runtime_error("combination " + r[id] + " is in " + from + " twice");
+    size_t taken = 0;
+    for (auto& r : data[0].rows)
+        if (auto it = value.find(r[id]); it != value.end() && !it->second.empty()) {
+            r[col] = it->second;
+            ++taken;
+        }
+    write_parts(out, {data[0]});
+    if (fs::exists(repetitions_path(in))) write_parts(repetitions_path(out), {read_csv(repetitions_path(in))});
+    return taken;
 }
 
 }  // namespace accelbench

@@ -66,4 +66,13 @@ std::set<std::string> prepare_resume(const std::string& results_path, const std:
 // same combo_id twice, and mixed provenance unless allow_mixed. Returns the row count.
 size_t merge_results(const std::string& out, const std::vector<std::string>& inputs, bool allow_mixed);
 
+// Writes `in` to `out` (and its .reps.csv beside, when there is one) with `column` taken
+// from `from`, matched by combo_id: e.g. the instructions of a callgrind run added to a
+// timed run of the same config. Rows of `in` without a match in `from` keep their value.
+// Refuses, with std::runtime_error: different headers, a column that is not in them,
+// mixed provenance (unless allow_mixed) and a combo_id twice in `from`. Returns the
+// number of rows that took a value.
+size_t take_column(const std::string& out, const std::string& in, const std::string& from, const std::string& column,
+                   bool allow_mixed);
+
 }  // namespace accelbench

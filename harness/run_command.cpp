@@ -2,6 +2,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -18,6 +19,7 @@
 #include "accelbench/registry.h"
 #include "combinations.h"
 #include "config.h"
+#include "instructions.h"
 #include "loaded_model.h"
 #include "measure.h"
 #include "model_registry.h"
@@ -46,6 +48,8 @@ const char* kRunUsage =
     "  --in-process          measure in this process (no fork: for debuggers and profilers; a time\n"
     "                        limit is then checked only between repetitions, and a crash ends the run)\n"
     "  --show-repetitions    print every repetition, not only Google Benchmark's aggregates\n"
+    "  --instructions OUT    under valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file=OUT:\n"
+    "                        count the instructions of one render per combination (column instructions)\n"
     "  --benchmark_out=FILE  also write Google Benchmark's JSON (for compare.py); other --benchmark_*\n"
     "                        flags go to Google Benchmark\n";
 
@@ -195,12 +199,13 @@ void add_measurement(Row& r, const Measurement& m) {
             r["node_visits_per_ray"] = num(double(m.counts->node_visits) / double(all_rays), 6);
         }
     }
+    if (m.instructions) r["instructions"] = std::to_string(*m.instructions);
 }
 
 struct RunOptions {
     std::string config_path;
     bool dry_run = false, resume = false, in_process = false, show_repetitions = false;
-    std::string out, json_out;
+    std::string out, json_out, callgrind_out;
     std::optional<Shard> shard;
     std::vector<std::string> benchmark_args;
 };
@@ -397,6 +402,14 @@ int run(const RunOptions& opt) {
                     ms.show_context = first_measurement;
                     ms.json = json.has_value();
                     ms.timeout_s = config.timeout_s;
+                    ms.callgrind_out = opt.callgrind_out;
+                    ms.callgrind_tag = c->id;
+                    if (!opt.callgrind_out.empty()) {
+                        // Under valgrind times are not measurements and every render is slow:
+                        // one counted repetition (the counted one), the counting render as warm-up.
+                        ms.repetitions = 1;
+                        ms.warmup = std::min(ms.warmup, 1);
+                    }
                     first_measurement = false;
                     auto work = [&](const StageFn& stage) {
                         return measure(c->name, *info, c->params, *loaded, config.render, ms, stage);
@@ -457,6 +470,7 @@ int run_command(int argc, char** argv) {
             else if (a == "--in-process") opt.in_process = true;
             else if (a == "--show-repetitions") opt.show_repetitions = true;
             else if (a == "--out") opt.out = value();
+            else if (a == "--instructions") opt.callgrind_out = value();
             else if (a == "--shard") opt.shard = parse_shard(value());
             else if (a.rfind("--benchmark_out=", 0) == 0) opt.json_out = a.substr(16);
             else if (a.rfind("--benchmark_out_format=", 0) == 0) {
@@ -473,21 +487,29 @@ int run_command(int argc, char** argv) {
         }
     }
     if (opt.config_path.empty()) return usage_error("no config given");
+    if (!opt.callgrind_out.empty() && !opt.dry_run && !running_on_valgrind())
+        return usage_error("--instructions counts with callgrind: run under valgrind --tool=callgrind "
+                           "--instr-atstart=no --callgrind-out-file=" + opt.callgrind_out);
     if (opt.resume && opt.out.empty() && opt.dry_run) return usage_error("--resume and --dry-run do not go together");
     return run(opt);
 }
 
 int merge_command(int argc, char** argv) {
     bool allow_mixed = false;
+    std::string take;
     std::vector<std::string> files;
     for (int i = 0; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--allow-mixed") allow_mixed = true;
+        else if (a == "--take-column" && i + 1 < argc) take = argv[++i];
         else if (a == "-h" || a == "--help") {
             std::printf("usage: accelbench merge [--allow-mixed] OUT.csv IN.csv...\n"
+                        "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
                         "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
                         "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version) differs\n"
-                        "  unless --allow-mixed, and a combination present in two inputs\n");
+                        "  unless --allow-mixed, and a combination present in two inputs.\n"
+                        "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
+                        "  instructions of a callgrind run added to a timed run of the same config)\n");
             return 0;
         } else if (a.rfind("-", 0) == 0) {
             std::fprintf(stderr, "accelbench merge: unknown option '%s'\n", a.c_str());
@@ -497,6 +519,21 @@ int merge_command(int argc, char** argv) {
     if (files.size() < 2) {
         std::fprintf(stderr, "accelbench merge: usage: accelbench merge [--allow-mixed] OUT.csv IN.csv...\n");
         return 2;
+    }
+    if (!take.empty()) {
+        if (files.size() != 3) {
+            std::fprintf(stderr, "accelbench merge: --take-column needs OUT.csv IN.csv FROM.csv\n");
+            return 2;
+        }
+        try {
+            const size_t n = take_column(files[0], files[1], files[2], take, allow_mixed);
+            std::fprintf(stderr, "accelbench merge: %s written with %s of %zu rows taken from %s\n", files[0].c_str(),
+                         take.c_str(), n, files[2].c_str());
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "accelbench merge: %s\n", e.what());
+            return 2;
+        }
+        return 0;
     }
     try {
         const size_t rows = merge_results(files[0], {files.begin() + 1, files.end()}, allow_mixed);
