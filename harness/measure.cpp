@@ -110,6 +110,15 @@ std::string counter_difference(const TraceOutput& a, const TraceOutput& b) {
     return "";
 }
 
+// Primary plus shadow totals; nullopt when the structure counted nothing at all (Embree
+// cannot count), so that no zero is ever written for a count that was not made.
+std::optional<RayStats> reported_counts(const TraceOutput& out) {
+    RayStats total = out.primary_stats;
+    total += out.shadow_stats;
+    if (total.node_visits + total.box_tests + total.prim_tests == 0) return std::nullopt;
+    return total;
+}
+
 struct Nondeterministic : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
@@ -199,13 +208,15 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
         }
         st.SkipWithError(failure.c_str());
     };
-    auto build_one = [&](const char* what) {
-        auto a = info.create(params);
-        a->build(model.scene);
-        BuildStats bs = a->build_stats();
+    auto check_build = [&](const BuildStats& bs, const std::string& what) {
         if (!first_build) first_build = bs;
         else if (auto d = build_stats_difference(*first_build, bs); !d.empty())
             throw Nondeterministic("nondeterministic build: " + d + " (first build vs " + what + ")");
+    };
+    auto build_one = [&](const std::string& what) {
+        auto a = info.create(params);
+        a->build(model.scene);
+        check_build(a->build_stats(), what);
         return a;
     };
 
@@ -247,10 +258,7 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
                 accel = std::move(a);
             }
             const BuildStats bs = accel->build_stats();
-            if (!first_build) first_build = bs;
-            else if (auto d = build_stats_difference(*first_build, bs); !d.empty())
-                throw Nondeterministic("nondeterministic build: " + d + " (first build vs repetition " +
-                                       std::to_string(rep) + ")");
+            check_build(bs, "repetition " + std::to_string(rep));
             st.counters["triangles"] = double(model.scene.triangle_count());
             for (const auto& f : build_stat_fields())
                 if (auto v = f.get(bs)) st.counters[f.name] = *v;
@@ -305,11 +313,9 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
             st.counters["hits"] = double(out.hits);
             st.counters["shadow_rays"] = double(out.shadow_rays);
             st.counters["shadow_hits"] = double(out.shadow_hits);
-            RayStats total = first_count->primary_stats;
-            total += first_count->shadow_stats;
-            if (total.node_visits + total.box_tests + total.prim_tests > 0) {
-                st.counters["prim_tests"] = double(total.prim_tests);
-                st.counters["node_visits"] = double(total.node_visits);
+            if (auto total = reported_counts(*first_count)) {
+                st.counters["prim_tests"] = double(total->prim_tests);
+                st.counters["node_visits"] = double(total->node_visits);
             }
             st.counters["Mrays/s"] =
                 benchmark::Counter(double(out.rays + out.shadow_rays) * 1e-6, benchmark::Counter::kIsRate);
@@ -356,9 +362,7 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
     m.hits = first_count->hits;
     m.shadow_rays = first_count->shadow_rays;
     m.shadow_hits = first_count->shadow_hits;
-    RayStats total = first_count->primary_stats;
-    total += first_count->shadow_stats;
-    if (total.node_visits + total.box_tests + total.prim_tests > 0) m.counts = total;
+    m.counts = reported_counts(*first_count);
     m.instructions = instructions;
     return m;
 }

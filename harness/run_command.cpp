@@ -216,7 +216,7 @@ void print_dry_run(const Config& config, const std::vector<Combination>& all, co
     // generated or loaded here (procedural scenes take moments; mesh files are the user's).
     std::map<size_t, std::optional<uint64_t>> triangles;
     size_t skipped = 0;
-    std::printf("%-4s %-16s %-28s %-10s %s\n", "#", "combo_id", "model", "accel", "params (given)  [status]");
+    std::printf("%-4s %-16s %s\n", "#", "combo_id", "model/accel:given parameters  [status]");
     for (size_t i = 0; i < selected.size(); ++i) {
         const Combination& c = *selected[i];
         if (!triangles.count(c.model)) {
@@ -231,8 +231,6 @@ void print_dry_run(const Config& config, const std::vector<Combination>& all, co
             }
             triangles[c.model] = t;
         }
-        std::string given;
-        for (const auto& [k, v] : c.given) append_item(given, ",", k, "=", v);
         std::string status;
         if (auto t = triangles[c.model]) {
             if (auto reason = skip_reason(config, c, *t)) {
@@ -246,8 +244,7 @@ void print_dry_run(const Config& config, const std::vector<Combination>& all, co
             (repetitions_of(config, c) != config.repetitions || warmup_of(config, c) != config.warmup))
             status += "  [" + std::to_string(repetitions_of(config, c)) + " repetitions, warm-up " +
                       std::to_string(warmup_of(config, c)) + "]";
-        std::printf("%-4zu %-16s %-28s %-10s %s%s\n", i + 1, c.id.c_str(), config.models[c.model].label.c_str(),
-                    c.accel.c_str(), given.c_str(), status.c_str());
+        std::printf("%-4zu %-16s %s%s\n", i + 1, c.id.c_str(), c.name.c_str(), status.c_str());
     }
     std::printf("%zu combinations", selected.size());
     if (shard && shard->count > 1) std::printf(" in shard %llu/%llu (of %zu in the config)", (unsigned long long)shard->index,

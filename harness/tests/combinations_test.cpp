@@ -119,6 +119,32 @@ accelerators:
     EXPECT_TRUE(has_issue(e, 7, 38, "accelerators[4].embree.threads.to", "missing key 'to'"));
 }
 
+TEST_F(CombinationsTest, ASceneDependentDefaultCanBeNamedInAZippedGroup) {
+    // The kd-tree's max_depth defaults to "auto" (computed from the scene): `auto` in a
+    // config means "not given", so it pairs with explicit depths in one zipped group.
+    const Config c = load("t2.yaml", R"yaml(models: [stanford-bunny]
+accelerators:
+  - {name: kdtree, params: {"[max_prims, max_depth]": [[10, auto], [1, 5]]}}
+  - {name: kdtree, params: {max_prims: 1}}
+)yaml");
+    const auto all = expand(c);
+    ASSERT_EQ(all.size(), 3u);
+    EXPECT_EQ(all[0].name, "stanford-bunny/kdtree:max_prims=10,max_depth=auto");
+    EXPECT_EQ(all[0].given.count("max_depth"), 0u);
+    EXPECT_FALSE(all[0].params.given("max_depth"));
+    EXPECT_NE(all[0].params.canonical().find("max_depth=auto"), std::string::npos);
+    EXPECT_EQ(all[1].given.at("max_depth"), "5");
+    // Naming the default or leaving it out is the same combination.
+    const auto same = expand(load("same.yaml", R"yaml(models: [stanford-bunny]
+accelerators: [{name: kdtree, params: {max_prims: 10, max_depth: auto}}]
+)yaml"));
+    const auto omitted = expand(load("omitted.yaml", R"yaml(models: [stanford-bunny]
+accelerators: [{name: kdtree, params: {max_prims: 10}}]
+)yaml"));
+    EXPECT_EQ(same[0].id, all[0].id);
+    EXPECT_EQ(omitted[0].id, all[0].id);
+}
+
 TEST_F(CombinationsTest, TheSameCombinationTwiceIsAnError) {
     const Config c = load("a.yaml", R"yaml(models: [igea]
 accelerators:

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "combinations.h"
 #include "csv.h"
 #include "harness_test_util.h"
 #include "results.h"
@@ -210,6 +211,32 @@ TEST_F(RunTest, DryRunPrintsTheCombinationsAndTheirCount) {
     EXPECT_NE(text.find("tri-rays"), std::string::npos);
     EXPECT_NE(text.find("[skip: tiny scene]"), std::string::npos);
     EXPECT_FALSE(std::filesystem::exists(out));
+}
+
+TEST(ShippedConfigsTest, AreValidAndExpandToTheDocumentedCounts) {
+    const std::string dir = registry().project_dir() + "/configs/";
+    const std::map<std::string, size_t> expected = {
+        {"smoke.yaml", 18}, {"table2.yaml", 7}, {"table4.yaml", 32}, {"table5.yaml", 32}};
+    for (const auto& [file, count] : expected) {
+        const Config c = load_config(dir + file, registry());
+        EXPECT_EQ(expand(c).size(), count) << file;
+        EXPECT_EQ(c.render.width, file == "smoke.yaml" ? 64 : 640) << file;
+    }
+}
+
+TEST(ShippedConfigsTest, SmokeRunsCleanInSeconds) {
+    TempDir dir("accelbench-smoke-test-");
+    const std::string out = (dir.path() / "smoke.csv").string();
+    ASSERT_EQ(run({registry().project_dir() + "/configs/smoke.yaml", "--out", out}), 0);
+    const CsvData d = read_csv(out);
+    ASSERT_EQ(d.rows.size(), 18u);
+    size_t skipped = 0;
+    for (size_t i = 0; i < d.rows.size(); ++i) {
+        auto r = as_map(d, i);
+        EXPECT_TRUE(r["status"] == "ok" || r["status"] == "skipped") << r["model"] << " " << r["accel"] << ": " << r["message"];
+        skipped += r["status"] == "skipped";
+    }
+    EXPECT_EQ(skipped, 2u);  // brute force on the bunny and the forest
 }
 
 TEST_F(RunTest, AMalformedConfigIsExitCode2) {
