@@ -10,6 +10,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker as mticker  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
@@ -67,6 +68,13 @@ def _structure_order(labels) -> list[str]:
     return known + sorted(set(labels) - set(known))
 
 
+def _triangles_tick(v: float, _pos) -> str:
+    """10000 -> 10k, 1000000 -> 1M."""
+    if v >= 1e6:
+        return f"{v / 1e6:g}M"
+    return f"{v / 1e3:g}k" if v >= 1e3 else f"{v:g}"
+
+
 def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Path:
     """Build (left) and render (right) time against triangles, log-log: one colour per
     structure, one marker per source model, each series with its fitted line and slope."""
@@ -98,6 +106,7 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
         ax.set_title(f"{what} time vs triangles (log-log; slope 1 = linear)")
         ax.grid(True, which="both", alpha=0.3)
         plain_log_ticks(ax, "y")
+        ax.xaxis.set_major_formatter(mticker.FuncFormatter(_triangles_tick))
         ax.legend(fontsize=7, loc="upper left", frameon=True)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI, metadata={"Software": None})
