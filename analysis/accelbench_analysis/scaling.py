@@ -80,7 +80,7 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
     structure, one marker per source model, each series with its fitted line and slope."""
     structures = _structure_order(frame["structure"])
     families = sorted(frame["family"].unique())
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5.2), constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 6.6), constrained_layout=True)
     for ax, (col, what) in zip(axes, TIMES.items()):
         for s in structures:
             colour = STRUCTURE_COLOURS.get(s, "#000000")
@@ -107,7 +107,9 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
         ax.grid(True, which="both", alpha=0.3)
         plain_log_ticks(ax, "y")
         ax.xaxis.set_major_formatter(mticker.FuncFormatter(_triangles_tick))
-        ax.legend(fontsize=7, loc="upper left", frameon=True)
+        # Below the axes: inside, the legend would hide the smallest sizes' points.
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
+                  frameon=False)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI, metadata={"Software": None})
     plt.close(fig)
@@ -121,8 +123,9 @@ def slopes_markdown(slopes: pd.DataFrame, files: list[str]) -> str:
     lines = ["# Scaling: time ~ triangles^slope", "",
              "Least-squares fit of log10(median time) against log10(triangles) over the sizes "
              "of each source model (dragon: OpenMesh quadric decimation; bunny: Loop "
-             "subdivision). A slope of 1 is linear growth, n log n over these sizes fits "
-             "about 1.1; render time at a fixed image grows far slower than build time.", "",
+             "subdivision). A slope of 1 is linear growth; n log n over 10k..1M triangles fits "
+             "about 1.1. Render times are for a fixed image (the config's size), so they "
+             "grow with the depth of the structure, not with the triangle count itself.", "",
              "Sizes per fit: " + "; ".join(
                  f"{fam} {int(g['n'].max())} sizes, {int(g['min_triangles'].min()):,}–"
                  f"{int(g['max_triangles'].max()):,} triangles"
