@@ -2,6 +2,9 @@
 // counters given, so the analysis can redraw the heatmaps on a shared scale.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
+#include "cli.h"
 #include "cost_image.h"
 #include "harness_test_util.h"
 
@@ -45,6 +48,24 @@ TEST(CostImage, WritesHeatmapsAndPerPixelValues) {
     EXPECT_EQ(img.rgb[0], inferno(0)[0]);
     EXPECT_EQ(img.rgb[6], inferno(1)[0]);
     EXPECT_EQ(img.rgb[7], inferno(1)[1]);
+}
+
+// `accelbench render --cost-out`: one CSV row per pixel, and Embree (no counters) refused.
+TEST(CostImage, RenderCommandWritesThem) {
+    TempDir dir("accelbench-cost-render-");
+    const std::string prefix = (dir.path() / "soup-lbvh").string();
+    std::vector<std::string> args = {"--model", "procedural:soup,triangles=300", "--accel", "lbvh",
+                                     "--width", "16", "--height", "12", "--cost-out", prefix};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    ASSERT_EQ(render_command(int(argv.size()), argv.data()), 0);
+    const std::string csv = read_file(prefix + "-cost.csv");
+    EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 16 * 12);
+    EXPECT_TRUE(std::filesystem::exists(prefix + "-node_visits.png"));
+    args[3] = "embree";
+    argv.clear();
+    for (auto& a : args) argv.push_back(a.data());
+    EXPECT_EQ(render_command(int(argv.size()), argv.data()), 2);
 }
 
 }  // namespace
