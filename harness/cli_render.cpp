@@ -16,6 +16,7 @@
 #include "accelbench/procedural.h"
 #include "accelbench/registry.h"
 #include "accelbench/renderer.h"
+#include "cost_image.h"
 #include "model_registry.h"
 
 namespace accelbench {
@@ -33,7 +34,9 @@ int usage_error(const std::string& msg) {
     std::fprintf(stderr,
                  "usage: accelbench render --model NAME|PATH|procedural:KIND[,k=v...] --accel NAME\n"
                  "         [--param k=v ...] [--out img.png] [--width W] [--height H] [--spp N]\n"
-                 "         [--no-light] [--threads N]\n");
+                 "         [--no-light] [--threads N] [--cost-out PREFIX]\n"
+                 "--cost-out PREFIX writes PREFIX-node_visits.png, PREFIX-prim_tests.png (heatmaps, inferno,\n"
+                 "each scaled to its own maximum) and PREFIX-cost.csv (per-pixel values)\n");
     return 2;
 }
 
@@ -92,7 +95,7 @@ ResolvedModel resolve_model(const std::string& spec, const ModelRegistry& regist
 }
 
 int render_command(int argc, char** argv) {
-    std::string model, accel_name, out;
+    std::string model, accel_name, out, cost_out;
     std::map<std::string, std::string> params;
     TraceRequest req;
     req.counts = CountMode::Totals;
@@ -109,6 +112,7 @@ int render_command(int argc, char** argv) {
                 auto [k, v] = split_kv(value());
                 if (!params.emplace(k, v).second) throw ParamError("--param " + k + " given twice");
             } else if (a == "--out") out = value();
+            else if (a == "--cost-out") cost_out = value();
             else if (a == "--width") req.settings.width = parse_int(a, value(), 1, 16384);
             else if (a == "--height") req.settings.height = parse_int(a, value(), 1, 16384);
             else if (a == "--spp") req.settings.spp = parse_int(a, value(), 1, 4096);
@@ -120,6 +124,8 @@ int render_command(int argc, char** argv) {
         return usage_error(e.what());
     }
     if (model.empty() || accel_name.empty()) return usage_error("--model and --accel are required");
+    if (!cost_out.empty() && accel_name == "embree")
+        return usage_error("--cost-out needs traversal counters, which Embree does not expose");
     req.settings.shading = !out.empty();  // no image asked for: no shading work
 
     std::unique_ptr<Accelerator> accel;
@@ -153,6 +159,7 @@ int render_command(int argc, char** argv) {
         const double render_s = seconds_since(t_render);
         TraceRequest counting = req;
         counting.settings.shading = false;
+        if (!cost_out.empty()) counting.counts = CountMode::PerPixel;
         TraceOutput c = render(*accel, m.scene, m.camera, counting);
 
         BuildStats bs = accel->build_stats();
@@ -180,6 +187,11 @@ int render_command(int argc, char** argv) {
             std::printf("           shadow:  %llu prim tests, %llu node visits, %llu box tests\n",
                         (unsigned long long)s.prim_tests, (unsigned long long)s.node_visits,
                         (unsigned long long)s.box_tests);
+        }
+        if (!cost_out.empty()) {
+            std::printf("cost       %s\n", cost_out.c_str());
+            for (const auto& f : write_cost_images(c.per_pixel, req.settings.width, req.settings.height, cost_out))
+                std::printf("           %s\n", f.c_str());
         }
         if (!out.empty()) {
             r.image->write_png(out);

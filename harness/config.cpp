@@ -21,6 +21,10 @@ namespace fs = std::filesystem;
 
 namespace accelbench {
 
+std::string ModelTransformSpec::text() const {
+    return std::string(kind == Kind::Decimate ? "decimate=" : "subdivide=") + std::to_string(amount);
+}
+
 std::string format_issue(const ConfigIssue& issue) {
     std::string s = issue.mark.file;
     for (int n : {issue.mark.line, issue.mark.column})
@@ -534,6 +538,8 @@ private:
             ok = known_registry_model(given->value, f.child(form), m.name);
             m.label = m.name;
             m.key = "registry:" + m.name;
+            allowed.insert(allowed.end(), {"decimate", "subdivide"});
+            if (ok) ok = read_transform(f, m);
         } else if (has_path) {
             m.kind = ModelSpec::Kind::Path;
             m.resolved_path = resolve(m.name);
@@ -602,6 +608,39 @@ private:
             if (auto s = read_string(c_, e->value, f.child("label"))) m.label = *s;
         ok &= read_effort(f, m.repetitions, m.warmup);
         if (ok) finish_model(std::move(m));
+    }
+
+    // `decimate: N` or `subdivide: LEVELS` of a registry model: at most one, N below the
+    // model's triangle count. The label and the key gain "@decimate=N", so every size is a
+    // model of its own in the CSV and in combination ids.
+    bool read_transform(const Fields& f, ModelSpec& m) {
+        const auto* dec = f.find("decimate");
+        const auto* sub = f.find("subdivide");
+        if (!dec && !sub) return true;
+        if (dec && sub) {
+            c_.error(sub->key_node, f.child("subdivide"), "give one of 'decimate' and 'subdivide', not both");
+            return false;
+        }
+        const ModelEntry* entry = registry_.find(m.name);
+        ModelTransformSpec t;
+        if (dec) {
+            const int64_t below = int64_t(entry->triangles) - 1;
+            if (below < 1) {
+                c_.error(dec->value, f.child("decimate"), "model '" + m.name + "' is too small to decimate");
+                return false;
+            }
+            auto v = read_int(c_, dec->value, f.child("decimate"), 1, below);
+            if (!v) return false;
+            t = {ModelTransformSpec::Kind::Decimate, uint64_t(*v)};
+        } else {
+            auto v = read_int(c_, sub->value, f.child("subdivide"), 1, 4);
+            if (!v) return false;
+            t = {ModelTransformSpec::Kind::Subdivide, uint64_t(*v)};
+        }
+        m.label += "@" + t.text();
+        m.key += ";" + t.text();
+        m.transform = t;
+        return true;
     }
 
     // `repetitions` and `warmup` of a model or an accelerator entry (for the slow ones).

@@ -56,6 +56,16 @@ struct RaySet {
     std::vector<Ray> rays;
 };
 
+// A size change of a registry model for scaling experiments (`decimate: N`,
+// `subdivide: LEVELS`); see harness/derived_model.h.
+struct ModelTransformSpec {
+    enum class Kind { Decimate, Subdivide };
+    Kind kind = Kind::Decimate;
+    uint64_t amount = 0;  // target triangles, or subdivision levels
+    // "decimate=100000" / "subdivide=2": the label suffix after '@' and part of the key.
+    std::string text() const;
+};
+
 struct ModelSpec {
     enum class Kind { Registry, Path, Procedural };
     Kind kind = Kind::Registry;
@@ -65,6 +75,7 @@ struct ModelSpec {
     std::string procedural_canonical;  // Kind::Procedural: all parameters, defaults filled in
     std::optional<Camera> camera;      // overrides the registry's / the auto-fit view
     std::shared_ptr<const RaySet> rays;  // trace these instead of camera rays
+    std::optional<ModelTransformSpec> transform;  // Kind::Registry only
     std::optional<int> repetitions, warmup;  // override the config's for this model
     std::string label;  // the CSV's `model` column
     std::string key;    // config-independent identity (the combination id hashes it)

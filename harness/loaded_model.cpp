@@ -4,6 +4,7 @@
 
 #include "accelbench/mesh_io.h"
 #include "accelbench/procedural.h"
+#include "derived_model.h"
 #include "model_registry.h"
 
 namespace accelbench {
@@ -16,7 +17,7 @@ LoadedModel load_model(const ModelSpec& spec, const ModelRegistry& registry, con
         case ModelSpec::Kind::Registry: {
             const ModelEntry* entry = registry.find(spec.name);
             if (!entry) throw std::runtime_error("model '" + spec.name + "' is not in the model registry");
-            m.scene = registry.load_scene(*entry);
+            m.scene = spec.transform ? load_derived_scene(registry, *entry, *spec.transform) : registry.load_scene(*entry);
             if (!camera) camera = entry->camera;
             light = entry->light;
             break;
@@ -40,7 +41,9 @@ LoadedModel load_model(const ModelSpec& spec, const ModelRegistry& registry, con
 }
 
 std::optional<uint64_t> known_triangles(const ModelSpec& spec, const ModelRegistry& registry) {
-    if (spec.kind != ModelSpec::Kind::Registry) return std::nullopt;
+    // A transformed model's count is known once it is made (decimation stops near, not at,
+    // its target; subdivision drops faces the half-edge mesh refuses).
+    if (spec.kind != ModelSpec::Kind::Registry || spec.transform) return std::nullopt;
     const ModelEntry* entry = registry.find(spec.name);
     return entry ? std::optional<uint64_t>(entry->triangles) : std::nullopt;
 }

@@ -29,7 +29,8 @@ struct LoadedModel {
 // mismatch, bad mesh) naming the model.
 LoadedModel load_model(const ModelSpec& spec, const ModelRegistry& registry, const RenderSettings& render);
 
-// The triangle count when it is known without loading (registry models); nullopt otherwise.
+// The triangle count when it is known without loading (untransformed registry models);
+// nullopt otherwise.
 std::optional<uint64_t> known_triangles(const ModelSpec& spec, const ModelRegistry& registry);
 
 }  // namespace accelbench

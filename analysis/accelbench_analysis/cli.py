@@ -40,6 +40,7 @@ def parser() -> argparse.ArgumentParser:
                        help="the report's numbers (default: results/report/report-tables.csv)")
     add_regress(sub)
     add_grid(sub)
+    add_scaling(sub)
     return p
 
 
@@ -87,6 +88,49 @@ def add_grid(sub) -> None:
     h.add_argument("--keep", type=int,
                    help="candidates per model to keep (default: grid.successive_halving.keep)")
     h.add_argument("--out", type=Path, required=True, help="the second pass's config (YAML)")
+
+
+def add_scaling(sub) -> None:
+    s = sub.add_parser("scaling", help="time vs triangles: OUT/figures/scaling.png and "
+                                       "OUT/tables/scaling.md (fitted log-log slopes)",
+                       description="Reads a configs/scaling.yaml run and fits log(time) = a + "
+                                   "slope * log(triangles) per structure and source model.")
+    s.add_argument("csv", nargs="+", type=Path, help="the scaling run's CSV(s)")
+    s.add_argument("--out", type=Path, default=Path("results"), help="default: results/")
+    c = sub.add_parser("cost-images", help="one figure per model: shaded image + per-pixel "
+                                           "cost heatmaps per structure",
+                       description="From `accelbench render --cost-out PREFIX` files: the "
+                                   "shaded image and each structure's node visits and triangle "
+                                   "tests per pixel on a shared scale, to "
+                                   "OUT/figures/cost-MODEL.png.")
+    c.add_argument("--model", required=True, help="the model's name (title and file name)")
+    c.add_argument("--shaded", type=Path, help="the shaded image (accelbench render --out)")
+    c.add_argument("--cost", action="append", required=True, metavar="LABEL=CSV",
+                   help="a structure's PREFIX-cost.csv; repeat, in display order")
+    c.add_argument("--out", type=Path, default=Path("results"), help="default: results/")
+
+
+def run_scaling(args: argparse.Namespace) -> int:
+    from .scaling import write_scaling
+    results = load_results(args.csv)
+    for w in results.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    for path in write_scaling(results, args.out):
+        print(path)
+    return 0
+
+
+def run_cost_images(args: argparse.Namespace) -> int:
+    from .scaling import cost_figure
+    costs = {}
+    for item in args.cost:
+        label, sep, path = item.partition("=")
+        if not sep or not label or not path:
+            raise ContractError(f"--cost expects LABEL=CSV, got '{item}'")
+        costs[label] = Path(path)
+    safe = "".join(ch if ch.isalnum() or ch in "-_." else "-" for ch in args.model)
+    print(cost_figure(args.model, args.shaded, costs, args.out / "figures" / f"cost-{safe}.png"))
+    return 0
 
 
 def copy_reference(reference: Path, out: Path) -> None:
@@ -193,13 +237,14 @@ def run_grid_halve(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     from .grid_config import GridConfigError
     args = parser().parse_args(argv)
-    handlers = {"regress": run_regress, "grid": run_grid, "grid-halve": run_grid_halve}
+    handlers = {"regress": run_regress, "grid": run_grid, "grid-halve": run_grid_halve,
+                "scaling": run_scaling, "cost-images": run_cost_images}
     try:
         if args.command in handlers:
             return handlers[args.command](args)
         for path in run(args):
             print(path)
-    except (ContractError, GridConfigError) as e:
+    except (ContractError, GridConfigError, ValueError, FileNotFoundError) as e:
         print(f"error: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT
     return 0

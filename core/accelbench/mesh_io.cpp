@@ -10,7 +10,9 @@
 #include <OpenMesh/Core/IO/reader/PLYReader.hh>
 
 #include <algorithm>
+#include <bit>
 #include <cctype>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -438,6 +440,44 @@ Scene load_mesh(const std::string& path, MeshLoadInfo* info_out) {
                   << "' (first: " << messages.front() << ")\n";
     if (info_out) *info_out = info;
     return scene;
+}
+
+void write_ply(const Scene& scene, const std::string& path, const std::vector<std::string>& comments) {
+    static_assert(std::endian::native == std::endian::little, "write_ply writes the host's bytes as little-endian");
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error("cannot write " + path);
+    out << "ply\nformat binary_little_endian 1.0\n";
+    for (const auto& c : comments) {
+        if (c.find('\n') != std::string::npos) throw std::invalid_argument("write_ply: a comment with a newline");
+        out << "comment " << c << "\n";
+    }
+    out << "element vertex " << scene.vertex_count() << "\nproperty float x\nproperty float y\nproperty float z\n"
+        << "element face " << scene.triangle_count() << "\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const Vec3& v : scene.vertices) {
+        const float xyz[3] = {v.x, v.y, v.z};
+        out.write(reinterpret_cast<const char*>(xyz), sizeof xyz);
+    }
+    for (const auto& t : scene.triangles) {
+        char face[1 + 3 * sizeof(int32_t)];
+        face[0] = 3;
+        for (int k = 0; k < 3; ++k) {
+            const int32_t i = int32_t(t[size_t(k)]);
+            std::memcpy(face + 1 + k * sizeof(int32_t), &i, sizeof i);
+        }
+        out.write(face, sizeof face);
+    }
+    out.close();
+    if (!out) throw std::runtime_error("writing " + path + " failed");
+}
+
+std::vector<std::string> read_ply_comments(const std::string& path) {
+    std::vector<std::string> comments;
+    std::ifstream in(path, std::ios::binary);
+    std::string line;
+    if (!std::getline(in, line) || line != "ply") return comments;
+    while (std::getline(in, line) && line != "end_header")
+        if (line.rfind("comment ", 0) == 0) comments.push_back(line.substr(8));
+    return comments;
 }
 
 }  // namespace accelbench

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "accelbench/scene.h"
 
@@ -38,5 +39,15 @@ struct MeshLoadInfo {
 // lines and prints at most one summary line to stderr. It serialises concurrent calls
 // (those streams are process-wide), so loads do not run in parallel.
 Scene load_mesh(const std::string& path, MeshLoadInfo* info = nullptr);
+
+// Writes the scene as a binary little-endian PLY (float x, y, z; uchar-counted int
+// indices), with one `comment` header line per entry of `comments` (no newlines in them),
+// so load_mesh reads back exactly these vertices and triangles. Throws
+// std::runtime_error naming the path when writing fails.
+void write_ply(const Scene& scene, const std::string& path, const std::vector<std::string>& comments = {});
+
+// The `comment` lines of a PLY file's header, without the keyword; empty when the file is
+// missing or not a PLY.
+std::vector<std::string> read_ply_comments(const std::string& path);
 
 }  // namespace accelbench

@@ -149,6 +149,49 @@ accelerators: [{name: embree}]
     EXPECT_TRUE(has_issue(e, 5, 38, "models[3].colour", "procedural scene 'soup' has no parameter 'colour'"));
 }
 
+TEST_F(ConfigTest, ModelTransformsMakeDistinctModels) {
+    const Config c = load_config(write("scaling.yaml", R"(models:
+  - stanford-dragon
+  - {name: stanford-dragon, decimate: 100000}
+  - {name: stanford-dragon, decimate: 10000, repetitions: 1}
+  - {name: stanford-bunny, subdivide: 2}
+accelerators: [{name: embree}]
+)"),
+                                 registry());
+    ASSERT_EQ(c.models.size(), 4u);
+    EXPECT_FALSE(c.models[0].transform);
+    EXPECT_EQ(c.models[1].label, "stanford-dragon@decimate=100000");
+    ASSERT_TRUE(c.models[1].transform);
+    EXPECT_EQ(c.models[1].transform->kind, ModelTransformSpec::Kind::Decimate);
+    EXPECT_EQ(c.models[1].transform->amount, 100000u);
+    EXPECT_EQ(c.models[2].label, "stanford-dragon@decimate=10000");
+    EXPECT_EQ(c.models[2].repetitions, 1);
+    EXPECT_EQ(c.models[3].label, "stanford-bunny@subdivide=2");
+    EXPECT_EQ(c.models[3].transform->kind, ModelTransformSpec::Kind::Subdivide);
+    EXPECT_EQ(c.models[3].transform->amount, 2u);
+    // Every size is its own model: distinct keys, so distinct combination ids.
+    EXPECT_NE(c.models[0].key, c.models[1].key);
+    EXPECT_NE(c.models[1].key, c.models[2].key);
+}
+
+TEST_F(ConfigTest, ModelTransformErrors) {
+    write_triangle_case(dir.path());
+    const ConfigError e = load_error(write("a.yaml", R"(models:
+  - {name: stanford-bunny, decimate: 69451}
+  - {name: stanford-bunny, subdivide: 5}
+  - {name: igea, decimate: 1000, subdivide: 1}
+  - {path: tri.obj, decimate: 1}
+  - {name: stanford-dragon, decimate: "1000"}
+accelerators: [{name: embree}]
+)"));
+    EXPECT_EQ(e.issues().size(), 5u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 2, 38, "models[0].decimate", "out of range [1, 69450]"));
+    EXPECT_TRUE(has_issue(e, 3, 39, "models[1].subdivide", "out of range [1, 4]"));
+    EXPECT_TRUE(has_issue(e, 4, 34, "models[2].subdivide", "not both"));
+    EXPECT_TRUE(has_issue(e, 5, 21, "models[3].decimate", "unknown key 'decimate'"));
+    EXPECT_TRUE(has_issue(e, 6, 39, "models[4].decimate", "expected an integer"));
+}
+
 TEST_F(ConfigTest, ZippedGroupErrors) {
     const ConfigError e = load_error(write("a.yaml", R"(models: [stanford-bunny]
 accelerators:

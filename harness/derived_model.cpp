@@ -1,0 +1,63 @@
+#include "derived_model.h"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <unistd.h>
+
+#include "accelbench/mesh_io.h"
+#include "accelbench/mesh_transform.h"
+
+namespace accelbench {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Bump when decimate() or loop_subdivide() changes what they produce: old cache files
+// then no longer match and are rebuilt.
+constexpr int transform_version = 1;
+
+std::vector<std::string> cache_comments(const ModelEntry& entry, const ModelTransformSpec& t) {
+    return {"accelbench derived model " + entry.name + "@" + t.text(), "source_sha256 " + entry.sha256,
+            "transform_version " + std::to_string(transform_version)};
+}
+
+}  // namespace
+
+std::string derived_model_path(const ModelRegistry& registry, const ModelEntry& entry, const ModelTransformSpec& t) {
+    const std::string kind = t.kind == ModelTransformSpec::Kind::Decimate ? "decimate" : "subdivide";
+    return (fs::path(registry.project_dir()) / "models" / "derived" /
+            (entry.name + "-" + kind + "-" + std::to_string(t.amount) + ".ply"))
+        .string();
+}
+
+Scene load_derived_scene(const ModelRegistry& registry, const ModelEntry& entry, const ModelTransformSpec& t) {
+    const std::string path = derived_model_path(registry, entry, t);
+    const std::vector<std::string> comments = cache_comments(entry, t);
+    const std::string name = entry.name + "@" + t.text();
+    if (fs::exists(path) && read_ply_comments(path) == comments) {
+        Scene scene = load_mesh(path);
+        scene.name = name;
+        return scene;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const Scene source = registry.load_scene(entry);
+    MeshTransformInfo info;
+    Scene scene = t.kind == ModelTransformSpec::Kind::Decimate ? decimate(source, size_t(t.amount), &info)
+                                                               : loop_subdivide(source, int(t.amount), &info);
+    scene.name = name;
+    fs::create_directories(fs::path(path).parent_path());
+    const std::string partial = path + ".part" + std::to_string(::getpid());
+    write_ply(scene, partial, comments);
+    fs::rename(partial, path);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::fprintf(stderr,
+                 "accelbench: made %s: %llu -> %llu triangles, %llu vertices (%llu non-manifold faces of the source "
+                 "refused by the half-edge mesh and dropped) in %.1f s; cached as %s\n",
+                 name.c_str(), (unsigned long long)info.source_triangles, (unsigned long long)info.triangles,
+                 (unsigned long long)info.vertices, (unsigned long long)info.refused_faces, s, path.c_str());
+    return scene;
+}
+
+}  // namespace accelbench
