@@ -85,19 +85,21 @@ test-sanitize: deps
 # skipped) unless FRESH=1. QUICK=1 runs reduced configs into results/quick/ and leaves
 # the committed reference run in results/ alone.
 ifeq ($(QUICK),)
-RUN_CONFIGS := table2 table4 table5
-RUN_DIR     := results/csv
-ANALYSIS_OUT := results
+RUN_CONFIGS    := table2 table4 table5
+SCALING_CONFIG := scaling
+RUN_DIR        := results/csv
+ANALYSIS_OUT   := results
 else
-RUN_CONFIGS := quick-table2 quick-tables
-RUN_DIR     := results/quick/csv
-ANALYSIS_OUT := results/quick
+RUN_CONFIGS    := quick-table2 quick-tables
+SCALING_CONFIG := scaling-quick
+RUN_DIR        := results/quick/csv
+ANALYSIS_OUT   := results/quick
 endif
 
 reproduce-tables: build models venv
 	@mkdir -p $(RUN_DIR)
 	@set -e; start=$$(date +%s); \
-	for c in $(RUN_CONFIGS); do \
+	for c in $(RUN_CONFIGS) $(SCALING_CONFIG); do \
 	  csv=$(RUN_DIR)/$$c.csv; \
 	  if [ -n "$(FRESH)" ]; then rm -f "$$csv" "$${csv%.csv}.reps.csv"; fi; \
 	  if [ -f "$$csv" ]; then resume=--resume; else resume=; fi; \
@@ -107,6 +109,8 @@ reproduce-tables: build models venv
 	echo "== analysis -> $(ANALYSIS_OUT)"; \
 	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis all $(addprefix $(RUN_DIR)/,$(addsuffix .csv,$(RUN_CONFIGS))) \
 	  --out $(ANALYSIS_OUT) --reference results/report/report-tables.csv; \
+	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis scaling $(RUN_DIR)/$(SCALING_CONFIG).csv --out $(ANALYSIS_OUT); \
+	if [ -z "$(QUICK)" ]; then echo "== cost images"; harness/cost_images.sh $(BUILD_DIR) $(PYTHON) $(ANALYSIS_OUT); fi; \
 	echo "reproduce-tables: done in $$(( $$(date +%s) - start )) s; see $(ANALYSIS_OUT)/REPORT.md"
 
 # ---- regression check (issue 7) -----------------------------------------------------
