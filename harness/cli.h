@@ -7,6 +7,7 @@
 #include "accelbench/camera.h"
 #include "accelbench/renderer.h"
 #include "accelbench/scene.h"
+#include "loaded_model.h"
 
 namespace accelbench {
 
@@ -16,16 +17,9 @@ int render_command(int argc, char** argv);
 int list_command(int argc, char** argv);
 int models_command(int argc, char** argv);
 
-// A model ready to trace: its scene and the view to trace it with.
-struct ResolvedModel {
-    Scene scene;
-    Camera camera;
-    Light light;
-    std::vector<Vec3> albedo;  // per-triangle colour (procedural scenes); empty: grey
-};
-
-// NAME (registry), PATH (a mesh file) or procedural:KIND[,k=v...]; the registry's or the
-// procedural scene's own camera and light when it has one, else the auto-fit defaults.
-ResolvedModel resolve_model(const std::string& spec, const ModelRegistry& registry, float aspect);
+// NAME (registry), PATH (a mesh file) or procedural:KIND[,k=v...], loaded the way the
+// harness loads a config's model (load_model: the registry's or procedural scene's own
+// camera and light when it has one, else the auto-fit defaults for the image's aspect).
+LoadedModel resolve_model(const std::string& spec, const ModelRegistry& registry, const RenderSettings& render);
 
 }  // namespace accelbench

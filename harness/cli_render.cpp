@@ -58,40 +58,32 @@ int parse_int(const std::string& flag, const std::string& v, int lo, int hi) {
 
 }  // namespace
 
-ResolvedModel resolve_model(const std::string& spec, const ModelRegistry& registry, float aspect) {
-    ResolvedModel m;
-    std::optional<Camera> camera;
-    std::optional<Light> light;
-    if (spec.rfind("procedural:", 0) == 0) {
+LoadedModel resolve_model(const std::string& text, const ModelRegistry& registry, const RenderSettings& render) {
+    ModelSpec spec;
+    if (text.rfind("procedural:", 0) == 0) {
         // procedural:KIND[,k=v,k=v]
-        std::string rest = spec.substr(11);
-        std::string kind = rest.substr(0, rest.find(','));
-        std::map<std::string, std::string> params;
+        std::string rest = text.substr(11);
+        spec.kind = ModelSpec::Kind::Procedural;
+        spec.name = rest.substr(0, rest.find(','));
         for (size_t pos = rest.find(','); pos != std::string::npos;) {
             size_t next = rest.find(',', pos + 1);
-            params.insert(split_kv(rest.substr(pos + 1, next == std::string::npos ? std::string::npos : next - pos - 1)));
+            spec.procedural_params.insert(
+                split_kv(rest.substr(pos + 1, next == std::string::npos ? std::string::npos : next - pos - 1)));
             pos = next;
         }
-        ProceduralScene p = generate_procedural(kind, params);
-        m.scene = std::move(p.scene);
-        m.albedo = std::move(p.albedo);
-        camera = p.camera;
-        light = p.light;
-    } else if (const ModelEntry* entry = registry.find(spec)) {
-        m.scene = registry.load_scene(*entry);
-        camera = entry->camera;
-        light = entry->light;
-    } else if (std::filesystem::exists(spec)) {
-        m.scene = load_mesh(spec);
+    } else if (registry.find(text)) {
+        spec.kind = ModelSpec::Kind::Registry;
+        spec.name = text;
+    } else if (std::filesystem::exists(text)) {
+        spec.kind = ModelSpec::Kind::Path;
+        spec.name = spec.resolved_path = text;
     } else {
         std::string names;
         for (const auto& e : registry.entries()) names += (names.empty() ? "" : ", ") + e.name;
-        throw std::runtime_error("model '" + spec + "' is not a registry name (" + names +
+        throw std::runtime_error("model '" + text + "' is not a registry name (" + names +
                                  "), not procedural:KIND, and no such file exists");
     }
-    m.camera = camera ? *camera : Camera::fit(m.scene.bounds, aspect);
-    m.light = light ? *light : default_light(m.scene.bounds, m.camera);
-    return m;
+    return load_model(spec, registry, render);
 }
 
 int render_command(int argc, char** argv) {
@@ -139,7 +131,7 @@ int render_command(int argc, char** argv) {
     try {
         const auto t_load = Clock::now();
         ModelRegistry registry = ModelRegistry::load_default();
-        ResolvedModel m = resolve_model(model, registry, float(req.settings.width) / float(req.settings.height));
+        LoadedModel m = resolve_model(model, registry, req.settings);
         req.light = m.light;
         req.albedo = m.albedo;
         std::printf("model      %s: %zu triangles, %zu vertices (loaded in %.3f s)\n", m.scene.name.c_str(),

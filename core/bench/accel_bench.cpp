@@ -53,7 +53,6 @@ using Params = std::map<std::string, std::string>;
 const Params kEmbreeParams = {{"threads", "1"}};
 
 constexpr int kDefaultRepetitions = 5;
-constexpr float kAspect = 640.0f / 480.0f;  // RenderSettings' default image
 
 struct Structure {
     std::string label;  // name in benchmarks and the table
@@ -106,7 +105,7 @@ const Goal* goal_for(Phase phase, const std::string& label, const std::string& m
 
 struct Model {
     std::string name;  // as given: registry name or path
-    ResolvedModel resolved;
+    LoadedModel resolved;
 };
 
 double process_cpu_seconds() {
@@ -162,7 +161,7 @@ void bench_build(benchmark::State& state, const Model& m, const Structure& s) {
 }
 
 void bench_render(benchmark::State& state, const Model& m, const Structure& s) {
-    const ResolvedModel& model = m.resolved;
+    const LoadedModel& model = m.resolved;
     auto embree = make_accelerator("embree", kEmbreeParams);
     auto subject = make_accelerator(s.accel, s.params);
     embree->build(model.scene);
@@ -285,7 +284,7 @@ int main(int argc, char** argv) {
         const ModelRegistry registry = ModelRegistry::load_default();
         if (model_names.empty()) model_names = default_models(registry);
         for (const std::string& name : model_names) {
-            models.push_back(std::make_unique<Model>(Model{name, resolve_model(name, registry, kAspect)}));
+            models.push_back(std::make_unique<Model>(Model{name, resolve_model(name, registry, RenderSettings{})}));
             std::printf("model %s: %zu triangles\n", name.c_str(), models.back()->resolved.scene.triangle_count());
         }
     } catch (const std::exception& e) {
