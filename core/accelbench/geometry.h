@@ -149,6 +149,13 @@ struct BoxHit {
 // Bounds3::IntersectP).
 constexpr float kBoxSlack = 2.0f * (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f));
 
+// The interval [slack_below(t), slack_above(t)] holds the true value of a distance t
+// computed as (plane - origin) * (1 / dir), widened by kBoxSlack of its magnitude like
+// intersect_box's far distance (Ize 2013). An infinite t (a zero direction component)
+// stays itself, where t -+ kBoxSlack |t| would give NaN; NaN stays NaN.
+inline float slack_below(float t) { return std::isinf(t) ? t : t - kBoxSlack * std::fabs(t); }
+inline float slack_above(float t) { return std::isinf(t) ? t : t + kBoxSlack * std::fabs(t); }
+
 // Slab test (Williams et al. 2005, "An efficient and robust ray-box intersection"):
 // the near and far planes per axis are picked by the direction's sign, so no min/max swap
 // is needed. The only NaN possible is 0 * inf, when the origin lies exactly on a plane of

@@ -506,6 +506,18 @@ BuildStats KdTree::build_stats() const { return stats_; }
 // just the leaf's [t_min, t_max]: a primitive can stick out of the leaf and be hit
 // beyond it. Such a hit is kept but does not end the traversal; only a hit closer than
 // the next node's t_min does (nodes leave the stack in front-to-back order).
+//
+// Conservative in float (Ize 2013, as intersect_box): t_split is rounded up to three
+// times, so each comparison uses the interval [slack_below, slack_above](t_split) that
+// holds its true value, and the ranges handed to the children are widened the same way
+// (they overlap by the slack), so a node's [t_min, t_max] always contains its true range
+// and a child is culled only when the ray certainly misses it. Without this the tree
+// leaked rays aimed exactly at a vertex lying on two split planes (robustness case 1:
+// origin (-0.5, 0.25, 0.125), direction (0.33937797, 0.443780482, 0.577046454), vertex
+// at t = 1): the x-plane through the vertex gave t = 1 exactly and the y-plane through
+// it t_split = 0.99999994, so the node entered at t_min = 1 beyond the x-plane dropped
+// its below-y child as "crossed before entering" — the only child holding a triangle
+// that contains the vertex (its y range ends on the plane, so it is classified below).
 
 namespace {
 
@@ -525,7 +537,8 @@ void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& r
     counters.box();
     const BoxHit clip = intersect_box(bounds, rp, ray.tmin, ray.tmax);
     if (!clip.hit()) return;
-    float t_min = clip.tnear, t_max = clip.tfar;
+    // tfar is already widened by intersect_box; tnear is widened here the same way.
+    float t_min = slack_below(clip.tnear), t_max = clip.tfar;
     // Per-axis ray data as plain arrays: indexing a Vec3 by a run-time axis is a chain
     // of selects, and this loop indexes by the node's axis at every step.
     const float org[3] = {rp.org.x, rp.org.y, rp.org.z};
@@ -543,16 +556,17 @@ void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& r
         if (!node.is_leaf()) {
             const int axis = node.axis();
             const float t_split = (node.split() - org[axis]) * inv_dir[axis];
+            const float split_lo = slack_below(t_split), split_hi = slack_above(t_split);
             const uint32_t below = index + 1, above = node.above_child();
             const uint32_t swap = (below ^ above) & (0u - ((above_first >> axis) & 1u));
             const uint32_t first = below ^ swap, second = above ^ swap;
-            if (t_split > t_max) {
+            if (split_lo > t_max) {
                 index = first;
-            } else if (t_split < t_min) {
+            } else if (split_hi < t_min) {
                 index = second;
             } else {
-                stack[top++] = {second, t_split > t_min ? t_split : t_min, t_max};
-                t_max = t_split < t_max ? t_split : t_max;
+                stack[top++] = {second, split_lo > t_min ? split_lo : t_min, t_max};
+                t_max = split_hi < t_max ? split_hi : t_max;
                 index = first;
             }
             continue;
@@ -601,7 +615,11 @@ void KdTree::intersect(const Ray& ray, Hit& hit, C& counters) const {
             });
             return true;
         },
-        [&](float next_t_min) { return !(best < next_t_min); });
+        // next_t_min is a lower bound of the node's true entry distance, but a hit in it
+        // is a computed t that may round below its true value: stop only when the best
+        // hit lies before that node by more than the slack, so a hit at the node's
+        // boundary (a vertex on its plane) is never skipped for a farther one.
+        [&](float next_t_min) { return !(best < slack_below(next_t_min)); });
 }
 
 template <class C>
