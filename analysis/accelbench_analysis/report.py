@@ -81,6 +81,22 @@ def figure_lines(out_dir: Path, figures: dict | None) -> list[str]:
     return out
 
 
+def beyond_report_lines(out_dir: Path) -> list[str]:
+    """Links to the scaling and cost-image outputs (written by the `scaling` and
+    `cost-images` commands) when they exist in out_dir."""
+    out = []
+    if (out_dir / "figures" / "scaling.png").is_file():
+        out.append("- [Build and render time against triangles, log-log, with fitted slopes per "
+                   "structure](figures/scaling.png) ([slopes](tables/scaling.md)): the Stanford "
+                   "dragon decimated with OpenMesh and the bunny Loop-subdivided.")
+    for png in sorted((out_dir / "figures").glob("cost-*.png")):
+        model = png.stem[len("cost-"):]
+        out.append(f"- [Cost images, {model}](figures/{png.name}): node visits and triangle "
+                   f"tests per pixel for each structure beside the shaded image — where each "
+                   f"structure spends its work.")
+    return ["", "## Beyond the report", ""] + out if out else []
+
+
 def report_markdown(results: Results, out_dir: Path, claims: list[ClaimRow] | None,
                     figures: dict | None) -> str:
     out = ["# accelbench results", "",
@@ -101,6 +117,7 @@ def report_markdown(results: Results, out_dir: Path, claims: list[ClaimRow] | No
     out += ["- [The report's numbers](report/report-tables.csv) as printed "
             "([provenance](report/README.md))."]
     out += ["", "## Figures", ""] + figure_lines(out_dir, figures)
+    out += beyond_report_lines(out_dir)
     out += ["", "## Reading the comparison", "",
             f"- The report measured on another machine ({REPORT_MACHINE}) with a much slower "
             f"implementation: compare orderings and ratios (the 'relative to BVH' tables and "
