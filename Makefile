@@ -182,7 +182,7 @@ grid-search: build venv
 	if [ "$$mode" = successive_halving ]; then \
 	  $(ANALYSIS) grid-halve $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_RUNS)/pass-2.yaml; \
 	  $(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-2.csv $(GRID_RUNS)/pass-2.yaml > $(GRID_RUNS)/pass-2.log; \
-	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv $(GRID_RUNS)/pass-2.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
+	  $(ANALYSIS) grid $(GRID_RUNS)/pass-2.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
 	else \
 	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
 	fi
