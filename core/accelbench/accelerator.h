@@ -88,3 +88,11 @@ public:
 };
 
 }  // namespace accelbench
+
+// The per-ray members are templates defined in the structure's .cpp; this instantiates
+// them there for both counter types, the timed (NoCounters) and the counting (RayStats).
+#define ACCELBENCH_INSTANTIATE_RAY_QUERIES(Structure)                                   \
+    template void Structure::intersect(const Ray&, Hit&, NoCounters&) const;            \
+    template void Structure::intersect(const Ray&, Hit&, RayStats&) const;              \
+    template bool Structure::occluded(const Ray&, NoCounters&) const;                   \
+    template bool Structure::occluded(const Ray&, RayStats&) const

@@ -66,9 +66,6 @@ bool BruteForce::occluded(const Ray& ray, C& counters) const {
     return false;
 }
 
-template void BruteForce::intersect(const Ray&, Hit&, NoCounters&) const;
-template void BruteForce::intersect(const Ray&, Hit&, RayStats&) const;
-template bool BruteForce::occluded(const Ray&, NoCounters&) const;
-template bool BruteForce::occluded(const Ray&, RayStats&) const;
+ACCELBENCH_INSTANTIATE_RAY_QUERIES(BruteForce);
 
 }  // namespace accelbench

@@ -251,9 +251,6 @@ bool Bvh::occluded(const Ray& ray, C& counters) const {
     return occluded_bvh(traversal_, bvh_, ray, counters);
 }
 
-template void Bvh::intersect(const Ray&, Hit&, NoCounters&) const;
-template void Bvh::intersect(const Ray&, Hit&, RayStats&) const;
-template bool Bvh::occluded(const Ray&, NoCounters&) const;
-template bool Bvh::occluded(const Ray&, RayStats&) const;
+ACCELBENCH_INSTANTIATE_RAY_QUERIES(Bvh);
 
 }  // namespace accelbench

@@ -640,9 +640,6 @@ bool KdTree::occluded(const Ray& ray, C& counters) const {
     return found;
 }
 
-template void KdTree::intersect(const Ray&, Hit&, NoCounters&) const;
-template void KdTree::intersect(const Ray&, Hit&, RayStats&) const;
-template bool KdTree::occluded(const Ray&, NoCounters&) const;
-template bool KdTree::occluded(const Ray&, RayStats&) const;
+ACCELBENCH_INSTANTIATE_RAY_QUERIES(KdTree);
 
 }  // namespace accelbench

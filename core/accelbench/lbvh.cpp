@@ -279,9 +279,6 @@ bool Lbvh::occluded(const Ray& ray, C& counters) const {
     return occluded_bvh(traversal_, bvh_, ray, counters);
 }
 
-template void Lbvh::intersect(const Ray&, Hit&, NoCounters&) const;
-template void Lbvh::intersect(const Ray&, Hit&, RayStats&) const;
-template bool Lbvh::occluded(const Ray&, NoCounters&) const;
-template bool Lbvh::occluded(const Ray&, RayStats&) const;
+ACCELBENCH_INSTANTIATE_RAY_QUERIES(Lbvh);
 
 }  // namespace accelbench

@@ -297,9 +297,6 @@ bool ReferenceAccel::occluded(const Ray& ray, C& counters) const {
 
 template void ReferenceAccel::intersect_double(const Ray&, ReferenceHit&, NoCounters&) const;
 template void ReferenceAccel::intersect_double(const Ray&, ReferenceHit&, RayStats&) const;
-template void ReferenceAccel::intersect(const Ray&, Hit&, NoCounters&) const;
-template void ReferenceAccel::intersect(const Ray&, Hit&, RayStats&) const;
-template bool ReferenceAccel::occluded(const Ray&, NoCounters&) const;
-template bool ReferenceAccel::occluded(const Ray&, RayStats&) const;
+ACCELBENCH_INSTANTIATE_RAY_QUERIES(ReferenceAccel);
 
 }  // namespace accelbench
