@@ -582,7 +582,7 @@ private:
                 append_item(label, ",", spec.name, "=", *v);
             }
             if (ok) {
-                ParamSet set = resolve_params(proc->name, proc->params, m.procedural_params);
+                ParamSet set = resolve_params(proc->name, proc->params, m.procedural_params, "procedural scene");
                 m.procedural_canonical = set.canonical();
             }
             m.label = label.empty() ? proc->name : proc->name + "(" + label + ")";

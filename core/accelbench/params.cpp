@@ -46,8 +46,9 @@ std::string format_param(const ParamValue& v) {
     return std::get<std::string>(v);
 }
 
-ParamValue parse_param(const std::string& accel, const ParamSpec& spec, const std::string& text) {
-    const std::string where = "accelerator '" + accel + "', parameter '" + spec.name + "': ";
+ParamValue parse_param(const std::string& owner, const ParamSpec& spec, const std::string& text,
+                       const char* owner_kind) {
+    const std::string where = std::string(owner_kind) + " '" + owner + "', parameter '" + spec.name + "': ";
     switch (spec.type) {
         case ParamType::Int: {
             int64_t v = 0;
@@ -79,15 +80,15 @@ ParamValue parse_param(const std::string& accel, const ParamSpec& spec, const st
     throw ParamError(where + "unknown type");
 }
 
-ParamSet resolve_params(const std::string& accel, const std::vector<ParamSpec>& specs,
-                        const std::map<std::string, std::string>& given) {
+ParamSet resolve_params(const std::string& owner, const std::vector<ParamSpec>& specs,
+                        const std::map<std::string, std::string>& given, const char* owner_kind) {
     for (const auto& [name, value] : given) {
         bool known = false;
         for (const auto& s : specs) known |= s.name == name;
         if (!known) {
             std::vector<std::string> names;
             for (const auto& s : specs) names.push_back(s.name);
-            throw ParamError("accelerator '" + accel + "' has no parameter '" + name + "'" +
+            throw ParamError(std::string(owner_kind) + " '" + owner + "' has no parameter '" + name + "'" +
                              (names.empty() ? std::string(" (it takes none)")
                                             : " (it has: " + join(names) + ")"));
         }
@@ -101,7 +102,7 @@ ParamSet resolve_params(const std::string& accel, const std::vector<ParamSpec>& 
             set.text_.emplace_back(s.name, s.default_value);
             continue;
         }
-        ParamValue v = parse_param(accel, s, user ? it->second : s.default_value);
+        ParamValue v = parse_param(owner, s, user ? it->second : s.default_value, owner_kind);
         set.text_.emplace_back(s.name, format_param(v));
         set.values_.emplace(s.name, std::move(v));
     }

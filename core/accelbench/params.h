@@ -52,7 +52,7 @@ public:
 
 private:
     friend ParamSet resolve_params(const std::string&, const std::vector<ParamSpec>&,
-                                   const std::map<std::string, std::string>&);
+                                   const std::map<std::string, std::string>&, const char*);
     const ParamValue& at(const std::string& name) const;
     std::map<std::string, ParamValue> values_;
     std::map<std::string, bool> given_;
@@ -60,12 +60,14 @@ private:
 };
 
 // Parses one value as the spec's type; throws ParamError with a message that names the
-// accelerator, the parameter and what was expected.
-ParamValue parse_param(const std::string& accel, const ParamSpec& spec, const std::string& text);
+// owner ("accelerator 'bvh'", "procedural scene 'forest'"), the parameter and what was
+// expected.
+ParamValue parse_param(const std::string& owner, const ParamSpec& spec, const std::string& text,
+                       const char* owner_kind = "accelerator");
 
 // Validates user values against the specs and fills in defaults.
-ParamSet resolve_params(const std::string& accel, const std::vector<ParamSpec>& specs,
-                        const std::map<std::string, std::string>& given);
+ParamSet resolve_params(const std::string& owner, const std::vector<ParamSpec>& specs,
+                        const std::map<std::string, std::string>& given, const char* owner_kind = "accelerator");
 
 // Canonical text of a value (integers without decimals, floats round-trippable).
 std::string format_param(const ParamValue& v);

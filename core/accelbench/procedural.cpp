@@ -609,7 +609,7 @@ ProceduralScene generate_procedural(const std::string& kind, const std::map<std:
         for (const auto& i : procedural_registry()) known += (known.empty() ? "" : ", ") + i.name;
         throw ParamError("unknown procedural scene '" + kind + "' (known: " + known + ")");
     }
-    ParamSet set = resolve_params(kind, info->params, params);
+    ParamSet set = resolve_params(kind, info->params, params, "procedural scene");
     ProceduralScene scene = info->generate(set);
     if (resolved) *resolved = std::move(set);
     return scene;
