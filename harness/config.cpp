@@ -13,6 +13,7 @@
 #include "accelbench/params.h"
 #include "accelbench/procedural.h"
 #include "accelbench/registry.h"
+#include "accelbench/robustness_cases.h"
 #include "model_registry.h"
 #include "ray_file.h"
 #include "text.h"
@@ -360,7 +361,7 @@ public:
 
         // `grid:` belongs to the analysis's grid search (analysis/README.md): accepted, unread.
         Fields top(c_, root, "",
-                   {"name", "description", "repetitions", "warmup", "timeout_s", "render", "rays", "models",
+                   {"name", "description", "repetitions", "warmup", "timeout_s", "errors", "render", "rays", "models",
                     "accelerators", "skip", "grid"});
         if (!top.ok()) throw ConfigError(c_.issues);
 
@@ -379,6 +380,8 @@ public:
             if (auto v = read_int(c_, e->value, "warmup", 0, 100)) cfg_.warmup = int(*v);
         if (auto* e = top.find("timeout_s"))
             if (auto v = read_number(c_, e->value, "timeout_s", 0, 1e7, true)) cfg_.timeout_s = *v;
+        if (auto* e = top.find("errors"))
+            if (auto v = read_bool(c_, e->value, "errors")) cfg_.errors = *v;
         cfg_.render.shading = false;  // timing measures tracing; shading costs every structure the same
         if (auto* e = top.find("render")) read_render(e->value);
         if (auto* e = top.find("rays")) default_rays_ = read_rays(e->value, "rays");
@@ -514,17 +517,19 @@ private:
             return;
         }
         if (!n.IsMap()) {
-            c_.error(n, path, std::string("expected a registry name or a mapping (name:, path: or procedural:), got ") +
-                                  kind_of(n));
+            c_.error(n, path, std::string("expected a registry name or a mapping (name:, path:, procedural: or "
+                                          "case:), got ") + kind_of(n));
             return;
         }
         Fields f(c_, n, path, {});  // keys depend on the form: checked below
-        const bool has_name = f.has("name"), has_path = f.has("path"), has_proc = f.has("procedural");
-        if (int(has_name) + int(has_path) + int(has_proc) != 1) {
-            c_.error(n, path, "a model needs exactly one of 'name' (registry model), 'path' (mesh file) or "
-                              "'procedural' (generated scene)");
+        const bool has_name = f.has("name"), has_path = f.has("path"), has_proc = f.has("procedural"),
+                   has_case = f.has("case");
+        if (int(has_name) + int(has_path) + int(has_proc) + int(has_case) != 1) {
+            c_.error(n, path, "a model needs exactly one of 'name' (registry model), 'path' (mesh file), "
+                              "'procedural' (generated scene) or 'case' (robustness case)");
             return;
         }
+        if (has_case) return read_cases(f, std::move(m));
         const char* form = has_name ? "name" : has_path ? "path" : "procedural";
         std::vector<std::string> allowed = {form, "camera", "rays", "label", "repetitions", "warmup"};
         const auto* given = f.find(form);
@@ -608,6 +613,46 @@ private:
             if (auto s = read_string(c_, e->value, f.child("label"))) m.label = *s;
         ok &= read_effort(f, m.repetitions, m.warmup);
         if (ok) finish_model(std::move(m));
+    }
+
+    // `{case: ID}` or `{case: all}`: scenes of the extreme-case catalogue, each judged
+    // against its requirements by every accelerator entry (robustness_cases.h). They bring
+    // their own rays, so a camera, a ray file or a transform does not apply.
+    void read_cases(const Fields& f, ModelSpec m) {
+        bool ok = true;
+        for (const auto& e : f.entries())
+            if (e.key != "case" && e.key != "label") {
+                c_.error(e.key_node, f.child(e.key), "unknown key '" + e.key + "' for a robustness case (a case brings "
+                                                     "its own scene and rays); allowed here: case, label");
+                ok = false;
+            }
+        const auto* given = f.find("case");
+        auto id = read_string(c_, given->value, f.child("case"));
+        if (!id || !ok) return;
+        std::vector<std::string> ids;
+        for (const auto& entry : robustness_case_list())
+            if (*id == "all" || entry.id == *id) ids.push_back(entry.id);
+        if (ids.empty()) {
+            std::vector<std::string> known = {"all"};
+            for (const auto& entry : robustness_case_list()) known.push_back(entry.id);
+            c_.error(given->value, f.child("case"), "unknown robustness case '" + *id + "' (known: " + join(known) + ")");
+            return;
+        }
+        const auto* label = f.find("label");
+        if (label && ids.size() > 1) {
+            c_.error(label->key_node, f.child("label"), "one label cannot name every case: give `label` with one case");
+            return;
+        }
+        for (const auto& case_id : ids) {
+            ModelSpec one = m;
+            one.kind = ModelSpec::Kind::Case;
+            one.name = case_id;
+            one.key = "case:" + case_id;
+            one.label = "case-" + case_id + ":" + robustness_case_name(case_id);
+            if (label)
+                if (auto s = read_string(c_, label->value, f.child("label"))) one.label = *s;
+            finish_model(std::move(one));
+        }
     }
 
     // `decimate: N` or `subdivide: LEVELS` of a registry model: at most one, N below the

@@ -67,9 +67,11 @@ struct ModelTransformSpec {
 };
 
 struct ModelSpec {
-    enum class Kind { Registry, Path, Procedural };
+    // Case: a scene of the extreme-case catalogue (core/accelbench/robustness_cases.h),
+    // judged rather than timed.
+    enum class Kind { Registry, Path, Procedural, Case };
     Kind kind = Kind::Registry;
-    std::string name;           // registry name, path as written, or procedural kind
+    std::string name;           // registry name, path as written, procedural kind, or case id
     std::string resolved_path;  // Kind::Path: relative to the config file's directory
     std::map<std::string, std::string> procedural_params;  // Kind::Procedural: as given
     std::string procedural_canonical;  // Kind::Procedural: all parameters, defaults filled in
@@ -117,6 +119,9 @@ struct Config {
     int repetitions = 5;
     int warmup = 1;
     double timeout_s = 300;
+    // Trace every combination's rays through the `reference` accelerator too and write the
+    // error columns (issue 6); `errors: false` turns it off.
+    bool errors = true;
     RenderSettings render;  // shading defaults to off in configs (see docs/configs.md)
     std::vector<ModelSpec> models;
     std::vector<AcceleratorSpec> accelerators;

@@ -1,9 +1,12 @@
 #include "loaded_model.h"
 
+#include <chrono>
 #include <stdexcept>
 
 #include "accelbench/mesh_io.h"
 #include "accelbench/procedural.h"
+#include "accelbench/registry.h"
+#include "accelbench/robustness_cases.h"
 #include "derived_model.h"
 #include "model_registry.h"
 
@@ -25,6 +28,12 @@ LoadedModel load_model(const ModelSpec& spec, const ModelRegistry& registry, con
         case ModelSpec::Kind::Path:
             m.scene = load_mesh(spec.resolved_path);
             break;
+        case ModelSpec::Kind::Case: {
+            auto c = std::make_shared<const RobustnessCase>(make_robustness_case(spec.name));
+            m.scene = c->scene;
+            m.robustness_case = std::move(c);
+            return m;  // judged with the case's own rays: no view, no light
+        }
         case ModelSpec::Kind::Procedural: {
             ProceduralScene p = generate_procedural(spec.name, spec.procedural_params);
             m.scene = std::move(p.scene);
@@ -38,6 +47,38 @@ LoadedModel load_model(const ModelSpec& spec, const ModelRegistry& registry, con
     m.light = light ? *light : default_light(m.scene.bounds, m.camera);
     m.rays = spec.rays;
     return m;
+}
+
+TraceOutput trace_model(const Accelerator& accel, const LoadedModel& model, const TraceRequest& request) {
+    return model.rays ? trace_rays(accel, model.scene, model.rays->rays, request)
+                      : render(accel, model.scene, model.camera, request);
+}
+
+TraceRequest error_trace_request(const LoadedModel& model, const RenderSettings& render) {
+    TraceRequest r;
+    r.settings = render;
+    r.settings.light = render.light && render.shading;  // shadows matter only where they are seen
+    r.light = model.light;
+    r.albedo = model.albedo;
+    r.counts = CountMode::Off;
+    r.keep_hits = true;
+    return r;
+}
+
+void add_reference_answers(LoadedModel& model, const RenderSettings& render) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto reference = make_accelerator("reference", {});
+    reference->build(model.scene);
+    TraceRequest request = error_trace_request(model, render);
+    // One thread: the harness forks a measurement process per combination afterwards, and
+    // the answers do not depend on the thread count.
+    request.settings.threads = 1;
+    TraceOutput out = trace_model(*reference, model, request);
+    auto answers = std::make_shared<ReferenceAnswers>();
+    answers->hits = std::move(out.primary_hits);
+    answers->image = std::move(out.image);
+    answers->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    model.reference = std::move(answers);
 }
 
 std::optional<uint64_t> known_triangles(const ModelSpec& spec, const ModelRegistry& registry) {

@@ -15,13 +15,41 @@ namespace accelbench {
 
 class ModelRegistry;
 
+struct RobustnessCase;
+
+// What the `reference` accelerator answers for a model's rays (issue 6): the error columns
+// of every combination on the model are measured against it. Traced once per model, in
+// the parent process, before any combination's measurement.
+struct ReferenceAnswers {
+    std::vector<Hit> hits;       // one per primary ray (TraceOutput::primary_hits)
+    std::optional<Image> image;  // image runs (shading on) only
+    double seconds = 0;          // build and trace, for the progress line
+};
+
 struct LoadedModel {
     Scene scene;
     Camera camera;
     Light light;
     std::vector<Vec3> albedo;            // per-triangle colours (procedural scenes); may be empty
     std::shared_ptr<const RaySet> rays;  // traced instead of the camera's rays when set
+    // ModelSpec::Kind::Case: the case, complete with its reference answers. Its scene is
+    // also `scene`, unfinalized when the case expects it to be rejected; such a model has
+    // no view and is judged (judge_case), never timed.
+    std::shared_ptr<const RobustnessCase> robustness_case;
+    std::shared_ptr<const ReferenceAnswers> reference;  // set by add_reference_answers
 };
+
+// Traces the model's rays (its ray file, else its camera's) through `accel`.
+TraceOutput trace_model(const Accelerator& accel, const LoadedModel& model, const TraceRequest& request);
+
+// The trace whose primary hits (and image, for image runs) are compared with the
+// reference's: the measured render's settings, keeping every primary hit, without
+// counters, and without shadow rays unless they show in an image.
+TraceRequest error_trace_request(const LoadedModel& model, const RenderSettings& render);
+
+// Builds the `reference` accelerator on the model, traces error_trace_request through
+// it and keeps the answers in model.reference; the structure itself is freed.
+void add_reference_answers(LoadedModel& model, const RenderSettings& render);
 
 // The view: the config's camera, else the registry's or procedural scene's own, else
 // Camera::fit for the image's aspect. The light: the registry's or procedural scene's,

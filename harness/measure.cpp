@@ -1,5 +1,6 @@
 #include "measure.h"
 #include "instructions.h"
+#include "accelbench/memory.h"
 #include "text.h"
 
 #include <benchmark/benchmark.h>
@@ -185,6 +186,7 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
                     const LoadedModel& model, const RenderSettings& render_settings, const MeasureSettings& settings,
                     const StageFn& stage) {
     Measurement m;
+    reset_peak_rss();
     const auto start = Clock::now();
     std::string failure;     // first error; later repetitions are skipped with it
     bool timed_out = false;
@@ -228,10 +230,7 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
     TraceRequest counting = timed;
     counting.counts = CountMode::Totals;
     counting.settings.shading = false;  // counts do not depend on shading
-    auto trace = [&](const TraceRequest& req) {
-        return model.rays ? trace_rays(*accel, model.scene, model.rays->rays, req)
-                          : accelbench::render(*accel, model.scene, model.camera, req);
-    };
+    auto trace = [&](const TraceRequest& req) { return trace_model(*accel, model, req); };
     auto check_rays = [&](const TraceOutput& out, const std::string& what) {
         if (!first_trace) first_trace = out;
         else if (auto d = ray_count_difference(*first_trace, out); !d.empty())
@@ -355,6 +354,24 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
                     " of each (a --benchmark_* flag may have filtered them)";
         return m;
     }
+    if (model.reference) {
+        // Outside the timed part: one more trace keeping every primary hit (and the
+        // image of an image run), compared with the reference's answers.
+        try {
+            begin("error measurement against the reference");
+            const TraceOutput out = trace(error_trace_request(model, render_settings));
+            std::optional<ImageErrors> image;
+            if (out.image && model.reference->image)
+                image = compare_images(*out.image, *model.reference->image, out.primary_hits, model.reference->hits,
+                                       render_settings.spp);
+            m.columns = error_columns(compare_hits(out.primary_hits, model.reference->hits), image);
+        } catch (const std::exception& e) {
+            m.status = dynamic_cast<const StageTimeout*>(&e) ? "timeout" : "error";
+            m.message = e.what();
+            return m;
+        }
+    }
+    m.columns["peak_rss_bytes"] = std::to_string(peak_rss_bytes());
     m.build_s = reporter.build_s;
     m.render_s = reporter.render_s;
     m.build = *first_build;
@@ -365,6 +382,25 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
     m.counts = reported_counts(*first_count);
     m.instructions = instructions;
     return m;
+}
+
+std::map<std::string, std::string> error_columns(const HitErrors& hits, const std::optional<ImageErrors>& image) {
+    auto real = [](double v) {
+        char buf[40];
+        std::snprintf(buf, sizeof buf, "%.9g", v);
+        return std::string(buf);
+    };
+    std::map<std::string, std::string> c = {{"false_misses", std::to_string(hits.false_misses)},
+                                            {"false_hits", std::to_string(hits.false_hits)},
+                                            {"prim_mismatches", std::to_string(hits.prim_mismatches)},
+                                            {"nan_results", std::to_string(hits.nan_results)}};
+    if (hits.t_err_ulp_p50) c["t_err_ulp_p50"] = real(*hits.t_err_ulp_p50);
+    if (hits.t_err_ulp_max) c["t_err_ulp_max"] = real(*hits.t_err_ulp_max);
+    if (image) {
+        c["image_rmse"] = real(image->image_rmse);
+        c["hole_pixels"] = std::to_string(image->hole_pixels);
+    }
+    return c;
 }
 
 // ---- the text form --------------------------------------------------------------------
@@ -436,6 +472,7 @@ std::string serialize(const Measurement& m) {
         put("prim_tests", std::to_string(m.counts->prim_tests));
     }
     if (m.instructions) put("instructions", std::to_string(*m.instructions));
+    for (const auto& [k, v] : m.columns) put("column." + k, v);
     put("json", m.json);
     return s;
 }
@@ -474,6 +511,7 @@ Measurement deserialize(const std::string& text) {
         else if (k == "box_tests") counts().box_tests = u();
         else if (k == "prim_tests") counts().prim_tests = u();
         else if (k == "instructions") m.instructions = u();
+        else if (k.rfind("column.", 0) == 0) m.columns[k.substr(7)] = v;
         else if (k == "json") m.json = v;
         else throw std::runtime_error("unknown measurement key '" + k + "'");
     }

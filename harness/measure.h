@@ -15,11 +15,13 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "accelbench/accelerator.h"
+#include "accelbench/error_metrics.h"
 #include "accelbench/registry.h"
 #include "accelbench/renderer.h"
 #include "loaded_model.h"
@@ -48,6 +50,10 @@ struct Measurement {
     // at all (Embree), so that they are written as missing, never as zero.
     std::optional<RayStats> counts;
     std::optional<uint64_t> instructions;  // callgrind's Ir of one render (MeasureSettings::callgrind_out)
+    // Result columns beyond timing and counts, as CSV text by column name: the error
+    // columns against the reference (error_columns), peak_rss_bytes, a robustness case's
+    // verdict and verdict_counts.
+    std::map<std::string, std::string> columns;
     std::string json;   // GB JSONReporter run objects, comma-separated (MeasureSettings::json)
     std::string stage;  // the last stage begun, for timeout and crash messages
 };
@@ -69,7 +75,15 @@ const std::vector<BuildStatField>& build_stat_fields();
 
 using StageFn = std::function<void(const std::string&)>;
 
-// Measures in this process. Errors (exceptions from build or render, nondeterministic
+// The error columns of a combination (false_misses ... hole_pixels) as CSV text; the
+// image columns only with image errors, the t columns only when a t was compared.
+std::map<std::string, std::string> error_columns(const HitErrors& hits, const std::optional<ImageErrors>& image);
+
+// Measures in this process. When model.reference is set, the structure measured last
+// also traces error_trace_request after the timed part, and the error columns compare its
+// answers with the reference's. peak_rss_bytes is the process's memory high-water mark
+// over the measurement (reset at its start where Linux allows), loaded model included.
+// Errors (exceptions from build or render, nondeterministic
 // counters, an exceeded time limit at a stage boundary) end up in the returned status and
 // message; measure() itself does not throw for them.
 Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,

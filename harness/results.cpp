@@ -44,6 +44,8 @@ std::vector<std::string> result_columns() {
           "nodes", "leaves", "max_depth", "memory_bytes", "sah_cost", "avg_leaf_size", "build_extra",  //
           "prim_tests", "node_visits", "box_tests", "prim_tests_per_ray", "node_visits_per_ray",  //
           "instructions",  //
+          "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max", "nan_results",
+          "image_rmse", "hole_pixels", "peak_rss_bytes", "verdict", "verdict_counts",  //
           "width", "height", "spp", "light", "shading",  //
           "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version", "timestamp"})
         c.push_back(col);

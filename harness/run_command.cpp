@@ -27,6 +27,7 @@
 #include "results.h"
 #include "stats.h"
 #include "text.h"
+#include "verdicts.h"
 
 namespace fs = std::filesystem;
 
@@ -142,17 +143,20 @@ Row base_row(const Config& config, const Combination& c, std::optional<uint64_t>
     r["model"] = model.label;
     if (triangles) r["triangles"] = std::to_string(*triangles);
     if (vertices) r["vertices"] = std::to_string(*vertices);
-    r["ray_source"] = model.rays ? model.rays->display : "camera";
+    const bool judged = model.kind == ModelSpec::Kind::Case;  // its own rays; no image, no shadow rays
+    r["ray_source"] = judged ? "robustness-case" : model.rays ? model.rays->display : "camera";
     r["accel"] = c.accel;
     r["params"] = c.params.canonical();
     for (const auto& [k, v] : c.params.items()) r[param_column(k)] = v;
-    if (!model.rays) {
+    if (!model.rays && !judged) {
         r["width"] = std::to_string(config.render.width);
         r["height"] = std::to_string(config.render.height);
         r["spp"] = std::to_string(config.render.spp);
     }
-    r["light"] = config.render.light ? "true" : "false";
-    r["shading"] = config.render.shading ? "true" : "false";
+    if (!judged) {
+        r["light"] = config.render.light ? "true" : "false";
+        r["shading"] = config.render.shading ? "true" : "false";
+    }
     r["git_sha"] = p.git_sha;
     r["git_dirty"] = p.git_dirty ? "true" : "false";
     r["compiler"] = p.compiler;
@@ -168,6 +172,13 @@ void add_measurement(Row& r, const Measurement& m) {
     r["status"] = m.status;
     r["message"] = m.message;
     if (m.status != "ok") return;  // nothing that could be mistaken for a result
+    for (const auto& [k, v] : m.columns) r[k] = v;
+    if (m.render_s.empty()) {  // a judged robustness case: a verdict, no timing
+        r["rays"] = std::to_string(m.rays);
+        for (const auto& f : build_stat_fields())
+            if (auto v = f.get(m.build)) r[f.name] = std::to_string(uint64_t(*v));
+        return;
+    }
     r["repetitions"] = std::to_string(m.render_s.size());
     for (auto [prefix, samples] : {std::pair<std::string, const std::vector<double>*>{"build_s", &m.build_s},
                                    {"render_s", &m.render_s}}) {
@@ -338,6 +349,9 @@ int run(const RunOptions& opt) {
     size_t measured = 0, k = 0;
     std::map<std::string, size_t> by_status;
     bool first_measurement = true;
+    std::vector<std::string> unloadable;  // "label: why" of models that did not load
+    size_t not_run = 0;                   // their combinations
+    VerdictTable verdicts;
     for (size_t mi = 0; mi < config.models.size(); ++mi) {
         std::vector<const Combination*> mine;
         for (const Combination* c : todo)
@@ -347,8 +361,11 @@ int run(const RunOptions& opt) {
 
         // Loaded at most once, and only when something is measured on it (or when its
         // triangle count is needed for a skip rule and the registry does not know it).
+        // A model that does not load is bad input: its combinations get no rows at all
+        // (nothing that could be taken for a result; --resume runs them once it is
+        // fixed) and the run exits with 2.
         std::optional<LoadedModel> loaded;
-        std::string load_error;
+        std::string load_error, reference_error;
         auto ensure_loaded = [&] {
             if (loaded || !load_error.empty()) return;
             const auto t0 = Clock::now();
@@ -360,6 +377,23 @@ int run(const RunOptions& opt) {
             } catch (const std::exception& e) {
                 load_error = e.what();
                 std::fprintf(stderr, "accelbench run: cannot load %s: %s\n", spec.label.c_str(), e.what());
+                unloadable.push_back(spec.label + ": " + load_error);
+            }
+        };
+        // The reference's answers, once per model, before its first measurement (not under
+        // callgrind, whose instruction counts are the point of such a run).
+        auto ensure_reference = [&] {
+            if (!config.errors || loaded->robustness_case || !opt.callgrind_out.empty() || loaded->reference ||
+                !reference_error.empty())
+                return;
+            try {
+                add_reference_answers(*loaded, config.render);
+                std::fprintf(stderr, "accelbench run: reference answers for %s: %zu primary rays in %.2f s\n",
+                             spec.label.c_str(), loaded->reference->hits.size(), loaded->reference->seconds);
+            } catch (const std::exception& e) {
+                reference_error = e.what();
+                std::fprintf(stderr, "accelbench run: the reference cannot trace %s: %s\n", spec.label.c_str(),
+                             e.what());
             }
         };
         std::optional<uint64_t> triangles = known_triangles(spec, registry), vertices;
@@ -387,9 +421,13 @@ int run(const RunOptions& opt) {
                 m.message = *reason;
             } else {
                 ensure_loaded();
+                if (loaded) ensure_reference();
                 if (!loaded) {
+                    ++not_run;
+                    continue;
+                } else if (!reference_error.empty()) {
                     m.status = "error";
-                    m.message = "the model did not load: " + load_error;
+                    m.message = "no error measurement: the reference cannot trace the model: " + reference_error;
                 } else {
                     const AcceleratorInfo* info = find_accelerator(c->accel);
                     MeasureSettings ms;
@@ -409,6 +447,8 @@ int run(const RunOptions& opt) {
                     }
                     first_measurement = false;
                     auto work = [&](const StageFn& stage) {
+                        if (loaded->robustness_case)
+                            return judge_measurement(c->accel, c->given, *loaded->robustness_case, stage);
                         return measure(c->name, *info, c->params, *loaded, config.render, ms, stage);
                     };
                     const auto t0 = Clock::now();
@@ -420,6 +460,7 @@ int run(const RunOptions& opt) {
             }
             add_measurement(row, m);
             ++by_status[m.status];
+            if (spec.kind == ModelSpec::Kind::Case) verdicts.add(spec.label, *c, m);
             if (m.status != "ok")
                 std::fprintf(stderr, "[%zu/%zu] %s: %s%s%s\n", k, todo.size(), c->name.c_str(), m.status.c_str(),
                              m.message.empty() ? "" : ": ", m.message.c_str());
@@ -440,11 +481,22 @@ int run(const RunOptions& opt) {
             }
         }
     }
+    if (!verdicts.empty()) {
+        std::fflush(stdout);
+        verdicts.print(stdout);
+    }
     std::string counts;
     for (const auto& [s, n] : by_status) append_item(counts, ", ", std::to_string(n), " ", s);
-    std::fprintf(stderr, "accelbench run: %s: %zu rows written to %s (%s) in %s\n", config.name.c_str(), k, out.c_str(),
-                 counts.empty() ? "nothing to do" : counts.c_str(),
+    std::fprintf(stderr, "accelbench run: %s: %zu rows written to %s (%s) in %s\n", config.name.c_str(), k - not_run,
+                 out.c_str(), counts.empty() ? "nothing to do" : counts.c_str(),
                  clock_text(std::chrono::duration<double>(Clock::now() - t_start).count()).c_str());
+    if (!unloadable.empty()) {
+        for (const auto& u : unloadable) std::fprintf(stderr, "accelbench run: cannot load %s\n", u.c_str());
+        std::fprintf(stderr, "accelbench run: %zu combination%s not run and not written: %zu model%s did not load "
+                             "(fix and rerun with --resume)\n", not_run, not_run == 1 ? "" : "s", unloadable.size(),
+                     unloadable.size() == 1 ? "" : "s");
+        return 2;
+    }
     return by_status.count("error") ? 1 : 0;
 }
 

@@ -735,13 +735,21 @@ const std::vector<RobustnessCaseEntry>& robustness_case_list() {
     return list;
 }
 
-RobustnessCase make_robustness_case(const std::string& id) {
+namespace {
+
+const RobustnessCaseEntry& find_case(const std::string& id) {
     for (const auto& entry : robustness_case_list())
-        if (entry.id == id) return with_reference(entry.make());
+        if (entry.id == id) return entry;
     std::string known;
     for (const auto& entry : robustness_case_list()) known += (known.empty() ? "" : ", ") + entry.id;
     throw std::invalid_argument("unknown robustness case '" + id + "' (known: " + known + ")");
 }
+
+}  // namespace
+
+std::string robustness_case_name(const std::string& id) { return find_case(id).make().name; }
+
+RobustnessCase make_robustness_case(const std::string& id) { return with_reference(find_case(id).make()); }
 
 std::vector<RobustnessCase> robustness_catalogue() {
     std::vector<RobustnessCase> cases;

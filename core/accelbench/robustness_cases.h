@@ -84,6 +84,10 @@ struct RobustnessCaseEntry {
 };
 const std::vector<RobustnessCaseEntry>& robustness_case_list();
 
+// A case's short name ("closed-meshes-at-1e6"), generating the case to learn it. Throws
+// like make_robustness_case for an unknown id.
+std::string robustness_case_name(const std::string& id);
+
 // One case, complete with the reference's answers. Throws std::invalid_argument naming the
 // known ids for an unknown one.
 RobustnessCase make_robustness_case(const std::string& id);
