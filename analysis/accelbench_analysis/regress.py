@@ -38,6 +38,10 @@ EXIT_PASS, EXIT_REGRESSION, EXIT_BAD_INPUT, EXIT_REMEASURE = 0, 1, 2, 3
 
 EXACT_COUNTS = ["nodes", "leaves", "max_depth", "prim_tests", "node_visits", "rays", "hits",
                 "shadow_rays", "shadow_hits"]
+# Hit errors against the reference (issue 6) are as deterministic as the counts: a change is
+# a structure answering differently. Compared where the baseline has them (older
+# baselines predate the columns).
+ERROR_COUNTS = ["false_misses", "false_hits", "prim_mismatches", "nan_results"]
 SAH_COLUMN = "sah_cost"
 SAH_RTOL = 1e-9
 INSTRUCTIONS_TOLERANCE = 0.10  # fail above +10%, remind to update the baseline below -10%
@@ -174,6 +178,7 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
     t = Tier("1. Deterministic counts",
              header=["combination", "metric", "baseline", "current", "current/baseline"])
     changed_combos = set()
+    unchecked_errors: set[str] = set()
     common = [k for k in base if k in cur]
     for k in common:
         b, c = base[k], cur[k]
@@ -184,8 +189,10 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
             continue
         if b["status"] != "ok":
             continue
-        for metric in EXACT_COUNTS + [SAH_COLUMN]:
-            old, new = b[metric], c[metric]
+        errors = [m for m in ERROR_COUNTS if not _missing(b.get(m))]
+        unchecked_errors |= {m for m in ERROR_COUNTS if _missing(b.get(m)) and not _missing(c.get(m))}
+        for metric in EXACT_COUNTS + [SAH_COLUMN] + errors:
+            old, new = b[metric], c.get(metric)
             if _count_changed(metric, old, new):
                 t.rows.append([name[k], metric, _fmt_value(metric, old), _fmt_value(metric, new),
                                fmt_ratio(_ratio(new, old))])
@@ -195,12 +202,16 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
     if missing:
         t.notes.append("Missing from this run (a failure: the baseline measured them): "
                        + "; ".join(name[k] for k in missing) + ".")
+    if unchecked_errors:
+        t.notes.append("Error columns not in the baseline, so not compared: "
+                       + ", ".join(sorted(unchecked_errors)) + ". Update the baseline to cover them.")
     if added:
         t.notes.append("New in this run (not in the baseline; not compared): "
                        + "; ".join(name[k] for k in added)
                        + ". Update the baseline to cover them.")
     t.verdict = FAIL if (t.rows or missing) else PASS
     t.summary = (f"{len(common)} combinations compared on {len(EXACT_COUNTS) + 1} metrics "
+                 f"{'and the error counts ' if not unchecked_errors else ''}"
                  f"(+ status): {plural(len(t.rows), 'value')} changed in "
                  f"{plural(len(changed_combos), 'combination')}; {len(missing)} missing, "
                  f"{len(added)} added")

@@ -272,3 +272,18 @@ def test_bad_input_exits_2(run, tmp_path, capsys):
         rows[1]["extra"]["combo_id"] = rows[0]["extra"]["combo_id"]
     assert regress(base, run("dup", duplicate_id))[0] == 2
     assert "occurs more than once" in capsys.readouterr().err
+
+
+def test_error_counts_are_exact_counts_where_the_baseline_has_them(tmp_path, capsys):
+    def write(name, misses, with_errors=True):
+        rows = ci_rows()
+        for r in rows:
+            r["errors"] = {"false_misses": 0, "false_hits": 0, "prim_mismatches": 0, "nan_results": 0}
+        find(rows, "stanford-bunny", "lbvh")["errors"]["false_misses"] = misses
+        return write_csv(tmp_path / f"{name}.csv", rows, with_errors=with_errors, extra_columns=EXTRA)
+    assert regress(write("base", 0), write("same", 0), capsys=capsys)[0] == 0
+    code, out = regress(write("base", 0), write("leaky", 3), capsys=capsys)
+    assert code == 1 and "| stanford-bunny / lbvh | false_misses | 0 | 3 |" in out
+    # An older baseline without the columns: not compared, and said so.
+    code, out = regress(write("old", 0, with_errors=False), write("leaky", 3), capsys=capsys)
+    assert code == 0 and "Error columns not in the baseline, so not compared: false_hits, false_misses" in out

@@ -2,6 +2,7 @@
 // its file, line, column and key path — all of them at once.
 #include <gtest/gtest.h>
 
+#include "accelbench/robustness_cases.h"
 #include "config.h"
 #include "harness_test_util.h"
 
@@ -89,6 +90,44 @@ TEST_F(ConfigTest, DefaultsAndTheFileStemAsName) {
     EXPECT_EQ(c.render.height, 480);
     EXPECT_EQ(c.render.threads, 1);
     EXPECT_FALSE(c.render.shading);  // configs time tracing, not shading
+    EXPECT_TRUE(c.errors);            // every row says how wrong it is unless told not to
+}
+
+TEST_F(ConfigTest, RobustnessCasesAreModels) {
+    const Config c = load_config(write("c.yaml", R"(errors: false
+models: [{case: all}]
+accelerators: [{name: bvh}]
+)"), registry());
+    EXPECT_FALSE(c.errors);
+    ASSERT_EQ(c.models.size(), robustness_case_list().size());
+    EXPECT_EQ(c.models[0].kind, ModelSpec::Kind::Case);
+    EXPECT_EQ(c.models[0].label, "case-1:closed-meshes");
+    EXPECT_EQ(c.models[0].key, "case:1");
+    const Config one = load_config(write("d.yaml", "models: [{case: 3b, label: tiny}]\naccelerators: [{name: bvh}]\n"),
+                                   registry());
+    ASSERT_EQ(one.models.size(), 1u);
+    EXPECT_EQ(one.models[0].label, "tiny");
+    EXPECT_EQ(one.models[0].name, "3b");
+    // The same case twice is the same model twice.
+    const ConfigError e = load_error(write("e.yaml", "models: [{case: all}, {case: 3b}]\naccelerators: [{name: bvh}]\n"));
+    EXPECT_TRUE(has_issue(e, 1, 23, "models[1]", "the same model as models[0] ('case-3b:closed-meshes-scaled-2^-64')"));
+}
+
+TEST_F(ConfigTest, RobustnessCaseErrors) {
+    const ConfigError e = load_error(write("a.yaml", R"(models:
+  - {case: 99}
+  - {case: "1", camera: {eye: [0, 0, 1], look_at: [0, 0, 0]}}
+  - {case: all, label: x}
+  - {case: "2a", name: igea}
+errors: "yes"
+accelerators: [{name: embree}]
+)"));
+    EXPECT_EQ(e.issues().size(), 5u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 2, 12, "models[0].case", "unknown robustness case '99' (known: all, 1, 2a,"));
+    EXPECT_TRUE(has_issue(e, 3, 17, "models[1].camera", "unknown key 'camera' for a robustness case"));
+    EXPECT_TRUE(has_issue(e, 4, 17, "models[2].label", "one label cannot name every case"));
+    EXPECT_TRUE(has_issue(e, 5, 5, "models[3]", "exactly one of"));
+    EXPECT_TRUE(has_issue(e, 6, 9, "errors", "expected"));
 }
 
 TEST_F(ConfigTest, UnknownKeyWithSuggestion) {

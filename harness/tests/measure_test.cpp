@@ -94,6 +94,31 @@ TEST(MeasureTest, BruteForceReportsTimesCountsAndJson) {
     EXPECT_NE(m.json.find("Mrays/s"), std::string::npos);
 }
 
+// The error trace runs after the timed part and is compared with model.reference.
+TEST(MeasureTest, ErrorColumnsCompareWithTheModelsReferenceAnswers) {
+    LoadedModel model = box_model();
+    const AcceleratorInfo info = BruteForce::info();
+    add_reference_answers(model, tiny_render());
+    ASSERT_EQ(model.reference->hits.size(), 16u * 12u);
+    Measurement m = measure("box/brute_force", info, defaults(info), model, tiny_render(), quick());
+    ASSERT_EQ(m.status, "ok") << m.message;
+    EXPECT_EQ(m.columns.at("false_misses"), "0");
+    EXPECT_EQ(m.columns.at("false_hits"), "0");
+    EXPECT_EQ(m.columns.at("nan_results"), "0");
+    EXPECT_EQ(m.columns.count("image_rmse"), 0u);  // no image in a tracing run
+    EXPECT_GT(std::stoull(m.columns.at("peak_rss_bytes")), 0u);
+
+    // Answers that say every ray misses: each of the structure's hits is a false hit.
+    auto misses = std::make_shared<ReferenceAnswers>(*model.reference);
+    for (Hit& h : misses->hits) h = Hit{};
+    model.reference = misses;
+    m = measure("box/brute_force", info, defaults(info), model, tiny_render(), quick());
+    ASSERT_EQ(m.status, "ok") << m.message;
+    EXPECT_EQ(m.columns.at("false_hits"), std::to_string(m.hits));
+    EXPECT_EQ(m.columns.at("false_misses"), "0");
+    EXPECT_EQ(m.columns.count("t_err_ulp_p50"), 0u);  // no ray where both hit
+}
+
 TEST(MeasureTest, EmbreeCountsAreMissingNotZero) {
     const LoadedModel model = box_model();
     const AcceleratorInfo info = EmbreeAccel::info();
@@ -176,7 +201,9 @@ TEST(IsolationTest, SerializationRoundTrips) {
     m.build.extra["prim_refs"] = 99;
     m.counts = RayStats{1, 2, 3};
     m.json = "{\n  \"a\": 1\n}";
+    m.columns = {{"false_misses", "3"}, {"verdict_counts", "leaks=0 rays=7"}};
     const Measurement r = deserialize(serialize(m));
+    EXPECT_EQ(r.columns, m.columns);
     EXPECT_EQ(r.message, m.message);
     EXPECT_EQ(r.build_s, m.build_s);
     EXPECT_EQ(r.build.nodes, 7u);
