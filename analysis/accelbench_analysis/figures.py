@@ -50,7 +50,7 @@ def setup() -> None:
 
 def model_order(results: Results) -> list[tuple[str, str]]:
     """(our model, display name): the report's models first (in its order), then the rest."""
-    present = set(results.rows["model"])
+    present = set(results.measured_rows()["model"])
     out, seen = [], set()
     for rm in REPORT_MODELS:
         ours = our_model(rm.key, present)
