@@ -57,6 +57,8 @@ PEAK_RSS_COLUMN = "peak_rss_bytes"
 # `verdict` is pass/fail, `verdict_counts` the counts behind it ("leaks=0 false_hits=0 ...").
 VERDICT_COLUMNS = ["verdict", "verdict_counts"]
 VERDICTS = ("pass", "fail")
+# The model label of a catalogue case's rows: `case-<id>:<name>` (e.g. case-2a:closed-...).
+CASE_PREFIX = "case-"
 # Every optional column of issue 6, in the harness's order (after `instructions`).
 ISSUE6_COLUMNS = ERROR_COLUMNS + [PEAK_RSS_COLUMN] + VERDICT_COLUMNS
 
@@ -128,13 +130,16 @@ class Results:
     def ok(self) -> pd.DataFrame:
         return self.rows[self.rows["status"] == "ok"]
 
-    def verdict_rows(self) -> pd.DataFrame:
-        """Rows of robustness-catalogue cases: a verdict, no timings."""
-        return self.rows[self.rows["verdict"] != ""]
+    def is_case(self) -> pd.Series:
+        """Rows of robustness-catalogue cases: model `case-<id>:<name>`, or a verdict."""
+        return self.rows["model"].str.startswith(CASE_PREFIX) | (self.rows["verdict"] != "")
+
+    def case_rows(self) -> pd.DataFrame:
+        return self.rows[self.is_case()]
 
     def measured_rows(self) -> pd.DataFrame:
-        """Every row that is not a robustness-catalogue verdict."""
-        return self.rows[self.rows["verdict"] == ""]
+        """Every row that measures a structure on a model (not a catalogue case)."""
+        return self.rows[~self.is_case()]
 
 
 def parse_params(text: str) -> dict[str, str]:
