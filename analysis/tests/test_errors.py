@@ -188,3 +188,32 @@ def test_error_pareto_draws(zero, tmp_path):
     img = mpimg.imread(path)
     assert img.shape[0] > 300 and img[..., :3].std() > 0.05
     assert not math.isnan(float(np.asarray(img).mean()))
+
+
+def test_harness_column_order_loads(tmp_path, ref):
+    """The committed table4 run with issue 6's columns where the harness writes them (after
+    `instructions`, before `width`), filled: the errors reach Table 4."""
+    import csv
+    from pathlib import Path
+
+    from accelbench_analysis.schema import ISSUE6_COLUMNS
+    src = Path(__file__).resolve().parents[2] / "results" / "csv" / "table4.csv"
+    rows = list(csv.reader(src.open(newline="")))
+    # Whatever the committed run has in these columns, replace it with known values.
+    keep = [i for i, c in enumerate(rows[0]) if c not in ISSUE6_COLUMNS]
+    rows = [[r[i] for i in keep] for r in rows]
+    head = rows[0]
+    at = head.index("instructions") + 1
+    status = head.index("status")
+    filled = ["4", "0", "1", "0", "3", "0", "", "", str(200 << 20), "", ""]
+    rows = [head[:at] + ISSUE6_COLUMNS + head[at:]] + [
+        r[:at] + (filled if r[status] == "ok" else [""] * len(filled)) + r[at:]
+        for r in rows[1:]]
+    path = tmp_path / "table4.csv"
+    csv.writer(path.open("w", newline="")).writerows(rows)
+    res = load_results([path])
+    assert res.has_error_columns() and res.case_rows().empty
+    doc = model_table(res, ref, 4, ["stanford-bunny"])[0]
+    misses = section_rows(doc, "False misses (primary rays, vs the reference)")
+    assert misses and all(r[1] == "4" for r in misses if r[1] not in ("no row", "timeout", "error"))
+    assert any(r[1] == "4" for r in misses)
