@@ -1,6 +1,6 @@
 """Command line: python -m accelbench_analysis {check,tables,claims,figures,report,all} CSV...
 [--out DIR], plus `regress` (the CI regression check) and `grid` / `grid-halve` (parameter
-grid search), both from issue 7."""
+grid search), both from issue 7, and `robustness` (issue 6's catalogue verdicts)."""
 
 from __future__ import annotations
 
@@ -41,7 +41,28 @@ def parser() -> argparse.ArgumentParser:
     add_regress(sub)
     add_grid(sub)
     add_scaling(sub)
+    add_robustness(sub)
     return p
+
+
+def add_robustness(sub) -> None:
+    s = sub.add_parser("robustness", help="OUT/robustness.md: verdicts per catalogue case and "
+                                          "accelerator, failures, stiff-parameter rows",
+                       description="Reads a configs/robustness.yaml run: a pass/FAIL table of "
+                                   "case x accelerator setting, every failure with its counts "
+                                   "and message, and the timed stiff-parameter rows with "
+                                   "memory and errors.")
+    s.add_argument("--csv", nargs="+", type=Path, required=True, help="the robustness run's CSV(s)")
+    s.add_argument("--out", type=Path, required=True, help="output directory")
+
+
+def run_robustness(args: argparse.Namespace) -> int:
+    from .robustness import write_robustness
+    results = load_results(args.csv)
+    for w in results.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    print(write_robustness(results, args.out))
+    return 0
 
 
 def add_regress(sub) -> None:
@@ -167,6 +188,9 @@ def run(args: argparse.Namespace) -> list[Path]:
     claims = figures = None
     if args.command in ("tables", "all"):
         written += write_tables(results, ref, out / "tables")
+        if not results.case_rows().empty:
+            from .robustness import write_robustness
+            written.append(write_robustness(results, out / "tables"))
     if args.command in ("claims", "all", "report"):
         path, claims = write_claims(results, ref, out / "tables")
         if args.command != "report":
@@ -238,7 +262,8 @@ def main(argv: list[str] | None = None) -> int:
     from .grid_config import GridConfigError
     args = parser().parse_args(argv)
     handlers = {"regress": run_regress, "grid": run_grid, "grid-halve": run_grid_halve,
-                "scaling": run_scaling, "cost-images": run_cost_images}
+                "scaling": run_scaling, "cost-images": run_cost_images,
+                "robustness": run_robustness}
     try:
         if args.command in handlers:
             return handlers[args.command](args)

@@ -23,6 +23,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
+from .errors import wrong_answers  # noqa: E402
 from .reference import REPORT_MODELS, TABLE2_MODEL, our_model, reference_value  # noqa: E402
 from .schema import Results  # noqa: E402
 from .selection import STRUCTURE, STRUCTURES, Picker, setting_spec  # noqa: E402
@@ -50,7 +51,7 @@ def setup() -> None:
 
 def model_order(results: Results) -> list[tuple[str, str]]:
     """(our model, display name): the report's models first (in its order), then the rest."""
-    present = set(results.rows["model"])
+    present = set(results.measured_rows()["model"])
     out, seen = [], set()
     for rm in REPORT_MODELS:
         ours = our_model(rm.key, present)
@@ -277,20 +278,37 @@ def pareto_front(points: pd.DataFrame, x: str, y: str) -> pd.DataFrame:
     return pts.loc[keep]
 
 
+WRONG = "wrong answers"
+
+
+def error_frame(results: Results) -> pd.DataFrame:
+    """The timed ok rows with error counts (catalogue verdicts have no time), their display
+    model name and WRONG = false misses + false hits + wrong primitives."""
+    rows = results.measured_rows()
+    df = rows[rows["status"] == "ok"].dropna(
+        subset=["render_s_median", "false_misses", "false_hits"]).copy()
+    df["model"] = df["model"].map(dict(model_order(results)))
+    df[WRONG] = wrong_answers(df)
+    return df
+
+
 def error_pareto(results: Results, path: Path) -> Path | Skipped:
+    """Render time against wrong answers (false misses + false hits + wrong primitives vs
+    the reference) for every timed row, per model. Zero is the common case (watertight
+    structures), so the y axis is symlog (linear through 0 to 1) and a panel whose rows are
+    all zero says so instead of showing a flat line of dots as if it were a trade-off."""
     if not results.has_error_columns():
         return Skipped("the CSV has no false_misses/false_hits values (the harness's "
                        "reference comparison had not run)")
-    df = results.ok().dropna(subset=["render_s_median", "false_misses", "false_hits"]).copy()
+    df = error_frame(results)
     if df.empty:
         return Skipped("no ok row has both a render time and error counts")
     names = dict(model_order(results))
-    df["model"] = df["model"].map(names)
-    df["hit mismatches"] = df["false_misses"] + df["false_hits"]
+    y = WRONG
     setup()
     accels = [a for a in ACCEL_COLOURS if a in set(df["accel"])] + sorted(set(df["accel"]) - set(ACCEL_COLOURS))
     colours = {a: ACCEL_COLOURS.get(a, "black") for a in accels}
-    g = sns.relplot(data=df, x="render_s_median", y="hit mismatches", hue="accel",
+    g = sns.relplot(data=df, x="render_s_median", y=y, hue="accel",
                     hue_order=accels, palette=colours,
                     col="model", col_order=[n for n in names.values() if n in set(df["model"])],
                     col_wrap=min(3, df["model"].nunique()), height=3.0, aspect=1.2, s=40,
@@ -299,24 +317,31 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
         sub = df[df["model"] == name]
         # Each structure's own trade-off over its parameter sets ...
         for accel, pts in sub.groupby("accel"):
-            front = pareto_front(pts, "render_s_median", "hit mismatches")
+            front = pareto_front(pts, "render_s_median", y)
             if len(front) > 1:
-                ax.step(front["render_s_median"], front["hit mismatches"], where="post",
+                ax.step(front["render_s_median"], front[y], where="post",
                         color=colours[accel], lw=1, ls="--", alpha=0.9)
         # ... and the points nothing beats overall, ringed.
-        best = pareto_front(sub, "render_s_median", "hit mismatches")
-        ax.scatter(best["render_s_median"], best["hit mismatches"], s=120, facecolors="none",
+        best = pareto_front(sub, "render_s_median", y)
+        ax.scatter(best["render_s_median"], best[y], s=120, facecolors="none",
                    edgecolors="black", linewidths=1.2, zorder=5)
+        if (sub[y] == 0).all():
+            ax.text(0.5, 0.92, f"all {len(sub)} rows: 0 wrong answers", transform=ax.transAxes,
+                    ha="center", va="top", fontsize=8,
+                    bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.8})
     g.set(xscale="log", yscale="symlog")
-    ymax = max(1.0, float(df["hit mismatches"].max()))
+    ymax = max(1.0, float(df[y].max()))
     for ax in g.axes.flat:
+        ax.set_yscale("symlog", linthresh=1.0)
         ax.set_ylim(-0.3, ymax * 1.6 + 1)
         ax.yaxis.set_major_formatter(mticker.FuncFormatter(lambda v, _: f"{v:g}"))
         plain_log_ticks(ax, "x")
-    g.set_axis_labels("render time (s, median)", "false hits + false misses\nvs the reference")
+    g.set_axis_labels("render time (s, median)", "false misses + false hits\n+ wrong primitives "
+                      "vs the reference")
     g.set_titles("{col_name}")
-    g.figure.suptitle("Render time vs hit mismatches over every parameter set "
-                      "(dashed: each structure's Pareto front; ringed: optimal overall)", y=1.02)
+    zero = " — every row 0" if (df[y] == 0).all() else ""
+    g.figure.suptitle("Render time vs wrong answers over every parameter set (dashed: each "
+                      f"structure's Pareto front; ringed: optimal overall){zero}", y=1.02)
     return _save(g, path)
 
 
@@ -383,7 +408,8 @@ FIGURES = {
                       "to its first setting", table2_sweeps),
     "per_ray": ("Primitive tests and node visits per ray (primary + shadow)",
                 lambda res, ref, p: per_ray(res, p)),
-    "error_pareto": ("Render time vs hit mismatches against the reference, with the Pareto front",
+    "error_pareto": ("Render time vs wrong answers (false misses + false hits + wrong "
+                     "primitives) against the reference, with the Pareto front",
                      lambda res, ref, p: error_pareto(res, p)),
 }
 

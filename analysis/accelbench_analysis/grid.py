@@ -24,6 +24,7 @@ import yaml
 
 from .grid_config import GridConfig, GridConfigError
 from .render import fmt_sig, md_table
+from .errors import COMPACT_HEADER, compact_errors
 from .schema import ERROR_COLUMNS, Results, normalise_value
 from .selection import kd_auto_depth_pbrt, kd_auto_depth_report
 
@@ -146,6 +147,8 @@ def analyse(results: Results, cfg: GridConfig) -> GridAnalysis:
     for extra in ("combo_id", "config"):
         if extra in rows.columns:
             out[extra] = rows[extra].values
+    for col in ERROR_COLUMNS:  # how wrong each candidate is (issue 6), constrained or not
+        out[col] = rows[col].values
     dicts = list(rows["param_dict"])
     names = list(dict.fromkeys([n for n in cfg.given] + sorted({n for d in dicts for n in d})))
     varied = [n for n in names if len({d.get(n) for d in dicts}) > 1]
@@ -261,7 +264,8 @@ def write_ranked(a: GridAnalysis, path: Path) -> Path:
     cols = (["model", "rank", "objective", "rejected", "reason"]
             + [PARAM_COL + n for n in a.varied]
             + ["build_s_median", "render_s_median", "repetitions", "status"]
-            + list(a.config.constraints) + ["accel", "params"]
+            + list(dict.fromkeys(list(a.config.constraints) + ERROR_COLUMNS))
+            + ["accel", "params"]
             + [c for c in ("combo_id", "config") if c in a.ranked.columns])
     path.parent.mkdir(parents=True, exist_ok=True)
     a.ranked[cols].to_csv(path, index=False)
@@ -381,14 +385,14 @@ def summary_markdown(a: GridAnalysis, heatmaps: list[Path], extra_notes: list[st
         r = a.best(model)
         n = int((a.ranked["model"] == model).sum())
         if r is None:
-            rows.append([model, "—", "no accepted candidate", "—", f"0 of {n}"])
+            rows.append([model, "—", "no accepted candidate", "—", "—", f"0 of {n}"])
             continue
         rows.append([model, fmt_sig(r["objective"]),
                      ", ".join(f"{k}={v}" for k, v in snippet(cfg, r)[0]["params"].items()),
                      f"{fmt_sig(r['build_s_median'])} / {fmt_sig(r['render_s_median'])}",
-                     f"{len(a.accepted(model))} of {n}"])
+                     compact_errors(r), f"{len(a.accepted(model))} of {n}"])
     lines += md_table(["model", "objective (s)", "best parameters", "build / render (s)",
-                       "accepted"], rows, align="lrlrr")
+                       f"errors ({COMPACT_HEADER})", "accepted"], rows, align="lrlrrr")
     for n in a.notes + extra_notes:
         lines += ["", f"- {n}"]
     if heatmaps:

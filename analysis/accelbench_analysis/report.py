@@ -89,6 +89,12 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
         out.append("- [Build and render time against triangles, log-log, with fitted slopes per "
                    "structure](figures/scaling.png) ([slopes](tables/scaling.md)): the Stanford "
                    "dragon decimated with OpenMesh and the bunny Loop-subdivided.")
+    for rel in ("tables/robustness.md", "robustness.md"):
+        if (out_dir / rel).is_file():
+            out.append(f"- [Robustness]({rel}): a pass/FAIL verdict per extreme case "
+                       f"(configs/robustness.yaml) and accelerator, the failures with their "
+                       f"counts, and the stiff-parameter runs with memory and errors.")
+            break
     for png in sorted((out_dir / "figures").glob("cost-*.png")):
         model = png.stem[len("cost-"):]
         out.append(f"- [Cost images, {model}](figures/{png.name}): node visits and triangle "

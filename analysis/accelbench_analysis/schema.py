@@ -44,19 +44,30 @@ PROVENANCE_COLUMNS = [
 REQUIRED_COLUMNS = (IDENTITY_COLUMNS + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
                     + PROVENANCE_COLUMNS)
 
-# Written by the harness once the reference comparison exists; every consumer must cope
-# with their absence (has_error_columns()).
+# Written by the harness once the reference comparison exists (issue 6); every consumer
+# must cope with their absence (has_error_columns()). Counts are over the primary rays
+# (`rays`) against the double-precision `reference` accelerator; empty = not measured.
 ERROR_COLUMNS = [
     "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max",
     "nan_results", "image_rmse", "hole_pixels",
 ]
+# The measuring process's memory high-water mark (bytes, the loaded model included).
+PEAK_RSS_COLUMN = "peak_rss_bytes"
+# Robustness-catalogue rows (configs/robustness.yaml) carry a verdict instead of timings:
+# `verdict` is pass/fail, `verdict_counts` the counts behind it ("leaks=0 false_hits=0 ...").
+VERDICT_COLUMNS = ["verdict", "verdict_counts"]
+VERDICTS = ("pass", "fail")
+# The model label of a catalogue case's rows: `case-<id>:<name>` (e.g. case-2a:closed-...).
+CASE_PREFIX = "case-"
+# Every optional column of issue 6, in the harness's order (after `instructions`).
+ISSUE6_COLUMNS = ERROR_COLUMNS + [PEAK_RSS_COLUMN] + VERDICT_COLUMNS
 
 # Written by the harness for the CI regression runs (tier 2 of `regress`): callgrind's
 # instruction count (Ir) of the measured render, empty where it was not measured.
 INSTRUCTIONS_COLUMN = "instructions"
 
 NUMERIC_COLUMNS = (["triangles", "vertices", "repetitions"] + TIMING_COLUMNS + COUNT_COLUMNS
-                   + ["threads"] + ERROR_COLUMNS + [INSTRUCTIONS_COLUMN])
+                   + ["threads"] + ERROR_COLUMNS + [PEAK_RSS_COLUMN, INSTRUCTIONS_COLUMN])
 
 STATUSES = ("ok", "skipped", "timeout", "error")
 
@@ -118,6 +129,17 @@ class Results:
 
     def ok(self) -> pd.DataFrame:
         return self.rows[self.rows["status"] == "ok"]
+
+    def is_case(self) -> pd.Series:
+        """Rows of robustness-catalogue cases: model `case-<id>:<name>`, or a verdict."""
+        return self.rows["model"].str.startswith(CASE_PREFIX) | (self.rows["verdict"] != "")
+
+    def case_rows(self) -> pd.DataFrame:
+        return self.rows[self.is_case()]
+
+    def measured_rows(self) -> pd.DataFrame:
+        """Every row that measures a structure on a model (not a catalogue case)."""
+        return self.rows[~self.is_case()]
 
 
 def parse_params(text: str) -> dict[str, str]:
@@ -216,6 +238,15 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         problems.append(f"column 'status' must be one of {', '.join(STATUSES)}; found "
                         f"{sorted(set(df['status'][bad_status]))}")
     df["status"] = status
+
+    if "verdict" in df.columns:
+        verdict = df["verdict"].str.strip().str.lower()
+        bad = ~verdict.isin(VERDICTS + ("",))
+        if bad.any():
+            problems.append(f"column 'verdict' must be pass, fail or empty; found "
+                            f"{sorted(set(df['verdict'][bad]))} on lines "
+                            f"{[int(i) + 2 for i in df.index[bad][:5]]}")
+        df["verdict"] = verdict
 
     for col in ("model", "accel", "config"):
         empty = df[col].str.strip() == ""
@@ -348,9 +379,11 @@ def load_results(paths: list[str | Path]) -> Results:
             warnings.append(f"{n} (config, model, accel, params) keys occur in more than one "
                             f"file; where such a row fills a table cell the newest timestamp "
                             f"is used and the cell's note says so.")
-    for col in ERROR_COLUMNS + [INSTRUCTIONS_COLUMN]:
+    for col in ERROR_COLUMNS + [PEAK_RSS_COLUMN, INSTRUCTIONS_COLUMN]:
         if col not in rows.columns:
             rows[col] = np.nan
+    for col in VERDICT_COLUMNS:
+        rows[col] = rows[col].fillna("").astype(str).str.strip() if col in rows.columns else ""
     reps = pd.concat(rep_frames, ignore_index=True) if rep_frames else None
     return Results(rows=rows, groups=groups, warnings=warnings, reps=reps,
                    files=[str(p) for p in paths])

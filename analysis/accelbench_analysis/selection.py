@@ -143,7 +143,8 @@ class Picker:
 
     def __init__(self, results: Results):
         self.results = results
-        self.rows = results.rows
+        # Robustness-catalogue verdicts are not measurements of a structure on a model.
+        self.rows = results.measured_rows()
         self.models = set(self.rows["model"])
 
     def candidates(self, model: str, spec: Spec, variant: str | None = None) -> pd.DataFrame:

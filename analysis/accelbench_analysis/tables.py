@@ -19,6 +19,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from .errors import (COMPACT_HEADER, NOT_MEASURED, any_error_values, compact_errors, error_text,
+                     note_errors, shown_metrics)
 from .reference import (REPORT_MACHINE, REPORT_MODEL, REPORT_PRIMARY_RAYS, TABLE2_MODEL,
                         TABLE4_MODELS, TABLE5_MODELS, our_model, reference_value)
 from .render import (Cell, Section, TableDoc, fmt_count, fmt_measure, fmt_sig, is_missing,
@@ -58,10 +60,15 @@ def preferred_variant(variants: list[str]) -> str | None:
     return variants[0] if variants else None
 
 
+def missing_text(pick: Pick) -> str:
+    """Why a cell has no row of ours: "no row", "timeout", ... (the note has the message)."""
+    return pick.reason.split(":")[0] if pick.reason else "—"
+
+
 def ours_text(pick: Pick, metric: Metric) -> str:
     """Our cell: median [CI] for times, exact counts otherwise; why, when there is none."""
     if not pick.ok:
-        return pick.reason.split(":")[0] if pick.reason else "—"
+        return missing_text(pick)
     r = pick.row
     if metric.timed:
         base = metric.ours[: -len("_median")]
@@ -87,6 +94,49 @@ def triple(pick: Pick, metric: Metric, report_value, tag: str) -> list[Cell]:
 
 def tag_of(pick: Pick) -> str:
     return "" if pick.row is None else str(pick.row["prov_group"])
+
+
+# ---- errors against the reference (issue 6) --------------------------------------------
+
+def picked_rows(picks) -> pd.DataFrame:
+    """The rows behind a table's cells, for deciding which error metrics it shows."""
+    rows = [p.row for p in picks if p.ok]
+    return pd.DataFrame(rows) if rows else pd.DataFrame()
+
+
+def error_cell(pick: Pick, metric) -> Cell:
+    return Cell(error_text(pick.row, metric) if pick.ok else missing_text(pick), tag_of(pick))
+
+
+NOT_MEASURED_SECTION = ("Error against the reference (false misses, false hits, wrong "
+                        "primitives, NaN results, t error in ulps): not measured in this CSV")
+
+
+def error_sections(srows: list["StructureRow"], ours: list[str], pick_of, width: int,
+                   compact: bool = False) -> list:
+    """Error rows for a table with models as column groups of `width` cells: our value
+    first, the report's (it measured none) after. compact: the four counts in one cell per
+    structure instead of a section per metric."""
+    picked = picked_rows(pick_of(sr, o) for sr in srows for o in ours)
+    if not any_error_values(picked):
+        return [Section(NOT_MEASURED_SECTION)]
+    blank = [Cell("—")] * (width - 1)
+    if compact:
+        out: list = [Section(f"Errors vs the reference, ours ({COMPACT_HEADER})")]
+        for sr in srows:
+            cells = [Cell(sr.label)]
+            for o in ours:
+                pick = pick_of(sr, o)
+                cells += [Cell(compact_errors(pick.row) if pick.ok else missing_text(pick),
+                               tag_of(pick))] + blank
+            out.append(cells)
+        return out
+    out = []
+    for metric in shown_metrics(picked):
+        out.append(Section(metric.label))
+        out += [[Cell(sr.label)] + [c for o in ours for c in [error_cell(pick_of(sr, o), metric)] + blank]
+                for sr in srows]
+    return out
 
 
 def model_counts(results: Results, model: str) -> tuple[float | None, float | None]:
@@ -251,6 +301,8 @@ def model_table(results: Results, ref: pd.DataFrame, number: int,
                         and is_missing(pick.value(metric.ours))):
                     embree_missing_counters = True
             rows.append(cells)
+    rows += error_sections(srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)],
+                           len(SUBCOLUMNS))
     for (o, skey, variant), pick in picks.items():
         label = STRUCTURE[skey].label + (f" [traversal={variant}]" if variant else "")
         if not pick.ok:
@@ -261,6 +313,7 @@ def model_table(results: Results, ref: pd.DataFrame, number: int,
     fixed = [note_primitives(ref, results, report_models), note_bvh_nodes(ref, report_models),
              note_prim_tests(ref, report_models, number), note_times()]
     fixed += note_structures(variant_seen, embree_missing_counters)
+    fixed += [note_errors(picked_rows(picks.values()))]
     fixed += note_stand_ins(report_models, present) + note_tags(results)
     title = {4: "Table 4: BVH, LBVH and kd-tree on four models",
              5: "Table 5: much more complex scenes"}[number]
@@ -290,6 +343,8 @@ def relative_table(results: Results, ref: pd.DataFrame, number: int, report_mode
     groups = [(REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 2)
               for rm, o in zip(report_models, ours)]
     header = [""] + ["ours", "report"] * len(report_models)
+    picks = {(o, sr.structure.key, sr.variant): picker.pick(o, sr.structure.spec, sr.variant)
+             for sr in srows for o in ours}
     rows: list = []
     for metric in (METRIC["build"], METRIC["render"]):
         rows.append(Section(f"{metric.label} / BVH (median) {metric.label.split(' (')[0].lower()}"))
@@ -298,7 +353,7 @@ def relative_table(results: Results, ref: pd.DataFrame, number: int, report_mode
                 continue
             cells = [Cell(sr.label)]
             for rm, o in zip(report_models, ours):
-                pick = picker.pick(o, sr.structure.spec, sr.variant)
+                pick = picks[(o, sr.structure.key, sr.variant)]
                 den = denominators[(o, denominator_variant(sr.variant))]
                 r_ours = ratio(pick.value(metric.ours), den.value(metric.ours))
                 r_rep = None
@@ -308,13 +363,15 @@ def relative_table(results: Results, ref: pd.DataFrame, number: int, report_mode
                 tag = tag_of(pick) if tag_of(pick) == tag_of(den) else f"{tag_of(pick)}/{tag_of(den)}"
                 cells += [Cell(fmt_sig(r_ours), tag if r_ours is not None else ""), Cell(fmt_sig(r_rep))]
             rows.append(cells)
+    rows += error_sections(srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)], 2,
+                           compact=True)
     caption = ("Build and render time of each structure divided by that of BVH (median) on the "
                "same model, ours beside the report's: ratios within one machine are what can be "
-               "compared across machines.")
+               "compared across machines. The last rows: how wrong each of our rows is.")
     if len(bvh_variants) > 1:
         caption += (f" A [traversal=X] row is divided by the BVH with the same traversal; "
                     f"structures without traversal modes by the BVH with traversal={bvh_default}.")
-    notes = []
+    notes = [note_errors(picked_rows(picks.values()))]
     if results.mixed:
         notes.append("A tag X/Y means numerator and denominator come from different provenance "
                      "groups: that ratio mixes builds or machines.")
@@ -335,6 +392,7 @@ def table2(results: Results, ref: pd.DataFrame) -> list[TableDoc]:
     groups = [(m.label, 3) for m in metrics]
     header = ["report setting", "our parameters"] + SUBCOLUMNS * len(metrics)
     rows: list = [Section(f"kd-tree on the {REPORT_MODEL[TABLE2_MODEL].label}")]
+    row_picks: list[Pick] = []  # the pick behind each non-section row, for the error columns
     notes: list[str] = []
     fixed_mp = None
     for setting in settings:
@@ -342,6 +400,7 @@ def table2(results: Results, ref: pd.DataFrame) -> list[TableDoc]:
         if setting.startswith("maxDepth="):
             fixed_mp = dict(spec.required).get("max_prims")
         pick = picker.pick(model, spec)
+        row_picks.append(pick)
         rows.append([Cell(setting), Cell(kd_params_text(pick, spec))] +
                     [c for m in metrics for c in
                      triple(pick, m, reference_value(ref, TABLE2_MODEL, "kdtree", setting, m.report), tag_of(pick))])
@@ -355,10 +414,15 @@ def table2(results: Results, ref: pd.DataFrame) -> list[TableDoc]:
         variants = picker.variants([model], s.spec)
         for v in (variants if len(variants) > 1 else [None]):
             pick = picker.pick(model, s.spec, v)
+            row_picks.append(pick)
             rows.append([Cell(variant_label(s.label, v or "", variants)), Cell(s.spec.describe())] +
                         [c for m in metrics for c in triple(pick, m, None, tag_of(pick))])
             if not pick.ok:
                 notes.append(f"{s.label} on {model}: {pick.reason}.")
+
+    error_header = append_error_columns([r for r in rows if not isinstance(r, Section)], row_picks)
+    groups.append(("Error vs the reference (ours; the report measured none)", len(error_header)))
+    header += error_header
 
     tri, vert = model_counts(results, model)
     prims = sub["primitives"].iloc[0] if len(sub) else None
@@ -377,11 +441,26 @@ def table2(results: Results, ref: pd.DataFrame) -> list[TableDoc]:
         fixed.append(f"The report's maxPrims=1 row ({int(mp1):,} nodes) and its Table 4 kd-tree "
                      f"on the same bunny with the same maxPrims=1 default ({int(kd_default):,} "
                      f"nodes) differ: the report's two runs were not identical.")
-    fixed += [note_prim_tests(ref, [TABLE2_MODEL], 2), note_times()] + note_tags(results)
+    fixed += [note_prim_tests(ref, [TABLE2_MODEL], 2), note_times(),
+              note_errors(picked_rows(row_picks))] + note_tags(results)
     doc = TableDoc("table2", "Table 2: kd-tree parameters on the Stanford bunny", caption,
                    groups, header, rows, notes=fixed + notes, warnings=list(results.warnings),
                    show_tags=results.mixed)
     return [doc]
+
+
+def append_error_columns(rows: list[list[Cell]], picks: list[Pick]) -> list[str]:
+    """Appends one error column per metric to each row (rows[i] is picks[i]'s), or a single
+    "not measured" column when none of the rows has error values; returns the headers."""
+    picked = picked_rows(picks)
+    if not any_error_values(picked):
+        for cells, pick in zip(rows, picks):
+            cells.append(Cell(NOT_MEASURED if pick.ok else missing_text(pick), tag_of(pick)))
+        return ["errors"]
+    metrics = shown_metrics(picked)
+    for cells, pick in zip(rows, picks):
+        cells += [error_cell(pick, m) for m in metrics]
+    return [m.short for m in metrics]
 
 
 def kd_params_text(pick: Pick, spec: Spec) -> str:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accelbench_analysis.schema import (COUNT_COLUMNS, ERROR_COLUMNS, IDENTITY_COLUMNS,
+from accelbench_analysis.schema import (COUNT_COLUMNS, IDENTITY_COLUMNS, ISSUE6_COLUMNS,
                                         PROVENANCE_COLUMNS, STATUS_COLUMNS, TIMING_COLUMNS)
 
 # The harness's per-parameter columns, in the order the contract lists them.
@@ -34,10 +34,11 @@ MODELS = {  # name: (triangles, vertices)
 
 def header(with_errors: bool = False) -> list[str]:
     """The harness's header: note that max_depth and threads occur twice (parameter and
-    statistic/provenance), which the loader resolves by position."""
+    statistic/provenance), which the loader resolves by position. with_errors adds issue 6's
+    columns (errors vs the reference, peak_rss_bytes, verdict, verdict_counts)."""
     cols = IDENTITY_COLUMNS + PARAM_NAMES + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
     if with_errors:
-        cols += ERROR_COLUMNS
+        cols += ISSUE6_COLUMNS
     return cols + PROVENANCE_COLUMNS
 
 
@@ -46,7 +47,8 @@ def row(model: str, accel: str, params: dict, *, build=None, render=None, nodes=
         ci=0.02, rays=307200, shadow_rays=150000, errors: dict | None = None,
         tree_depth=None, sah_cost=None, extra: dict | None = None, **provenance) -> dict:
     """One CSV row as a dict keyed by the header's positions (see write_csv). `extra` holds
-    the values of write_csv's extra_columns (combo_id, instructions, ...)."""
+    the values of write_csv's extra_columns (combo_id, instructions, ...); `errors` the
+    values of issue 6's columns (written with write_csv(with_errors=True))."""
     tri, vert = MODELS.get(model, (1000, 600))
     canon = ";".join(f"{k}={v}" for k, v in params.items())
     r = {"config": config, "model": model, "triangles": tri, "vertices": vert, "accel": accel,
@@ -93,7 +95,7 @@ def write_csv(path: Path, rows: list[dict], with_errors: bool = False,
         vals += [r[c] for c in STATUS_COLUMNS + TIMING_COLUMNS]
         vals += [r["stat_max_depth"] if c == "max_depth" else r[c] for c in COUNT_COLUMNS]
         if with_errors:
-            vals += [r["errors"].get(c, "") for c in ERROR_COLUMNS]
+            vals += [r["errors"].get(c, "") for c in ISSUE6_COLUMNS]
         vals += [r["extra"].get(c, "") for c in extra_columns]
         vals += [r["prov"][c] for c in PROVENANCE_COLUMNS]
         lines.append(vals)
@@ -183,4 +185,58 @@ def realistic_rows(seed: int = 7, with_errors: bool = True) -> list[dict]:
                         errors={"false_misses": int(rng.poisson(2)), "false_hits": 0}))
     rows.append(row("stanford-dragon", "kdtree", dict(KD, max_prims="1", max_depth="40"),
                     status="timeout", message="build exceeded 600 s", config="table4"))
+    return rows
+
+
+# ---- a robustness run (configs/robustness.yaml) -------------------------------------------
+
+ZERO_ERRORS = {"false_misses": 0, "false_hits": 0, "prim_mismatches": 0, "nan_results": 0,
+               "t_err_ulp_p50": 0, "t_err_ulp_max": 1}
+
+
+def case_row(case: str, accel: str, params: dict, verdict: str, counts: str = "",
+             message: str = "", status: str = "ok") -> dict:
+    """A catalogue case's row: model `case-<id>:<name>`, a verdict, no timings."""
+    r = row(case, accel, params, status=status, message=message, config="robustness",
+            rays=120, shadow_rays=0,
+            errors={"verdict": verdict, "verdict_counts": counts, "peak_rss_bytes": 50 << 20})
+    r["repetitions"] = ""
+    return r
+
+
+ROBUST_CASES = ["case-1a:closed-sphere-vertex-rays", "case-2a:closed-meshes-translated-1.5e5",
+                "case-14a:nan-inf-vertices"]
+ROBUST_ACCELS = [("brute_force", {}), ("bvh", {"split": "sah"}), ("lbvh", {"bits": "30"}),
+                 ("kdtree", {"max_prims": "1"}), ("embree", {"robust": "false"}),
+                 ("embree", {"robust": "true"}), ("reference", {})]
+PASS_COUNTS = "leaks=0 false_hits=0 wrong_prims=0 nan=0 occlusion_mismatches=0 nondeterministic=0 depth=12/64 rays=120"
+EMBREE_LEAKS = "leaks=3 false_hits=0 wrong_prims=0 nan=0 occlusion_mismatches=1 nondeterministic=0 depth=9/64 rays=120"
+
+
+def robustness_rows() -> list[dict]:
+    """Three cases on seven accelerator settings (Embree robust=false leaks on case 2a; the
+    kd-tree refuses case 14a) plus stiff-parameter timed rows on the dragon."""
+    rows = []
+    for case in ROBUST_CASES:
+        for accel, params in ROBUST_ACCELS:
+            if case.startswith("case-2a") and accel == "embree" and params["robust"] == "false":
+                rows.append(case_row(case, accel, params, "fail", EMBREE_LEAKS,
+                                     "3 rays leaked through vertices at 1.5e5 | see case 2"))
+            elif case.startswith("case-14a") and accel == "kdtree":
+                rows.append(case_row(case, accel, params, "", status="error",
+                                     message="scene rejected: NaN vertex in face 3"))
+            else:
+                rows.append(case_row(case, accel, params, "pass", PASS_COUNTS))
+    dragon = "stanford-dragon"
+    stiff = [("kdtree", {"max_prims": "1", "max_depth": "100"}, 9.5, 0.8, 4_000_000, 100, 900),
+             ("kdtree", {"max_prims": "1", "isect_cost": "10000"}, 3.1, 2.5, 20_001, 12, 400),
+             ("bvh", {"split": "median", "max_depth": "1"}, 0.2, 40.0, 3, 1, 250),
+             ("bvh", {"split": "median", "max_depth": "200"}, 0.3, 0.4, 1_742_827, 33, 300),
+             ("embree", {"robust": "true"}, 0.1, 0.1, None, None, 260)]
+    for accel, params, build, render, nodes, depth, rss_mib in stiff:
+        r = row(dragon, accel, params, build=build, render=render, nodes=nodes, tree_depth=depth,
+                config="robustness", errors=dict(ZERO_ERRORS, peak_rss_bytes=rss_mib << 20))
+        rows.append(r)
+    rows.append(row(dragon, "lbvh", {"bits": "1"}, status="error", config="robustness",
+                    message="lbvh: bits=1 is below the minimum 2 (Morton codes need a bit per axis)"))
     return rows

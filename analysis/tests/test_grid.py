@@ -275,6 +275,11 @@ def test_ranked_csv(outputs):
     first = ranked.iloc[0]
     assert (first["rank"], first["param:max_prims"], first["param:max_depth"]) == (1, 2, 20)
     assert ranked["rejected"].sum() == 2 and ranked["rank"].isna().sum() == 2
+    # Every candidate says how wrong it is (issue 6): D's two false misses, the others none.
+    assert {"false_hits", "prim_mismatches", "t_err_ulp_max"} <= set(ranked.columns)
+    d = ranked[(ranked["param:max_prims"] == 4) & (ranked["param:max_depth"] == 30)
+               & (ranked["param:empty_bonus"] == 0.5)].iloc[0]
+    assert d["false_misses"] == 2 and ranked["false_misses"].sum() == 2
 
 
 def test_summary_states_objective_and_constraints(outputs):
@@ -282,6 +287,9 @@ def test_summary_states_objective_and_constraints(outputs):
     text = (out / "summary.md").read_text()
     assert "objective: build + 3 * render" in text and "false_misses <= 0 (checked)" in text
     assert "| stanford-bunny | 9.50 | max_prims=2, max_depth=20, empty_bonus=0.5, isect_cost=80 |" in text
+    # The winner's errors: 0 false misses and hits; wrong prims and NaN were not written (n/a).
+    assert "| errors (false misses / false hits / wrong prims / NaN) |" in text
+    assert "| 5.00 / 1.50 | 0 / 0 / n/a / n/a | 16 of 18 |" in text
 
 
 def test_grid_exit_codes(tmp_path, capsys):
