@@ -23,7 +23,7 @@ DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: deps venv build models test test-cpp test-python reproduce-tables \
-        test-sanitize regress update-baseline grid-search clean
+        test-sanitize regress update-baseline grid-search robustness clean
 
 # ---- set-up -----------------------------------------------------------------------
 # Installs only what is missing; `apt-get update` runs once, and only if something is.
@@ -186,6 +186,20 @@ grid-search: build venv
 	else \
 	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
 	fi
+
+# ---- robustness (issue 6) ----------------------------------------------------------------
+# configs/robustness.yaml: every case of the extreme-case catalogue judged by every
+# accelerator setting (the verdict table ends the log), the stiff parameters timed on a
+# dense cluster and the 871k dragon; then the analysis's robustness report. Always a fresh
+# run (about 2.5 minutes). Writes results/robustness/{robustness.csv,robustness.log,robustness.md}.
+ROBUSTNESS_DIR ?= results/robustness
+
+robustness: build models venv
+	mkdir -p $(ROBUSTNESS_DIR)
+	rm -f $(ROBUSTNESS_DIR)/robustness.csv $(ROBUSTNESS_DIR)/robustness.reps.csv
+	set -o pipefail; $(ACCELBENCH) run --out $(ROBUSTNESS_DIR)/robustness.csv configs/robustness.yaml \
+	  | tee $(ROBUSTNESS_DIR)/robustness.log | sed -n '/^Robustness verdicts/,$$p'
+	$(ANALYSIS) robustness --csv $(ROBUSTNESS_DIR)/robustness.csv --out $(ROBUSTNESS_DIR)
 
 clean:
 	rm -rf $(BUILD_DIR) $(SAN_DIR)

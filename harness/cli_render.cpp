@@ -15,6 +15,7 @@
 #include "accelbench/mesh_io.h"
 #include "accelbench/procedural.h"
 #include "accelbench/registry.h"
+#include "accelbench/robustness_cases.h"
 #include "accelbench/renderer.h"
 #include "cost_image.h"
 #include "model_registry.h"
@@ -221,6 +222,13 @@ int list_command(int, char**) {
     for (const auto& kind : procedural_registry()) {
         std::printf("  %s — %s\n", kind.name.c_str(), kind.description.c_str());
         print_params(kind.params);
+    }
+    // Generating a case takes microseconds to milliseconds; its requirement is part of it.
+    std::printf("\nrobustness cases (configs: models: [{case: ID}] or [{case: all}]):\n");
+    for (const auto& entry : robustness_case_list()) {
+        const RobustnessCase c = entry.make();
+        std::printf("  %-4s %s — %zu triangles, %zu rays: %s\n", c.id.c_str(), c.name.c_str(), c.scene.triangle_count(),
+                    c.rays.size(), c.requirement.c_str());
     }
     return 0;
 }

@@ -170,8 +170,8 @@ def robustness_markdown(results: Results) -> str:
     out += provenance_lines(results)
     out += ["", "## Verdicts per case and accelerator setting", "",
             "Each cell is the harness's verdict for the case's scene and rays on that "
-            "configuration (configs/robustness.yaml states beside each case what a correct "
-            "implementation must do). A status (error, timeout, skipped) means the case did "
+            "configuration (what a correct implementation must do is written beside each case in "
+            "core/accelbench/robustness_cases.cpp; `accelbench list` prints it). A status (error, timeout, skipped) means the case did "
             "not complete; — means no row. Columns show only the parameters that vary "
             "between the accelerator's case rows.", ""]
     out += verdicts
