@@ -339,9 +339,9 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
     g.set_axis_labels("render time (s, median)", "false misses + false hits\n+ wrong primitives "
                       "vs the reference")
     g.set_titles("{col_name}")
-    zero = " — every row 0" if (df[y] == 0).all() else ""
-    g.figure.suptitle("Render time vs wrong answers over every parameter set (dashed: each "
-                      f"structure's Pareto front; ringed: optimal overall){zero}", y=1.02)
+    zero = ": every row has 0 wrong answers" if (df[y] == 0).all() else ""
+    g.figure.suptitle(f"Render time vs wrong answers over every parameter set{zero}\n(dashed: each "
+                      "structure's Pareto front; ringed: optimal overall)", y=1.04)
     return _save(g, path)
 
 
