@@ -14,6 +14,7 @@
 #include "accelbench/procedural.h"
 #include "accelbench/registry.h"
 #include "accelbench/robustness_cases.h"
+#include "accelbench/unknown_name.h"
 #include "model_registry.h"
 #include "ray_file.h"
 #include "text.h"
@@ -558,10 +559,8 @@ private:
             m.kind = ModelSpec::Kind::Procedural;
             proc = find_procedural(m.name);
             if (!proc) {
-                std::vector<std::string> names;
-                for (const auto& p : procedural_registry()) names.push_back(p.name);
                 c_.error(given->value, f.child(form),
-                         "unknown procedural scene '" + m.name + "' (known: " + join(names) + ")");
+                         unknown_name("procedural scene", m.name, names_of(procedural_registry(), &ProceduralInfo::name)));
                 return;
             }
             for (const auto& s : proc->params) allowed.push_back(s.name);
@@ -633,9 +632,9 @@ private:
         for (const auto& entry : robustness_case_list())
             if (*id == "all" || entry.id == *id) ids.push_back(entry.id);
         if (ids.empty()) {
-            std::vector<std::string> known = {"all"};
-            for (const auto& entry : robustness_case_list()) known.push_back(entry.id);
-            c_.error(given->value, f.child("case"), "unknown robustness case '" + *id + "' (known: " + join(known) + ")");
+            std::vector<std::string> known = names_of(robustness_case_list(), &RobustnessCaseEntry::id);
+            known.insert(known.begin(), "all");
+            c_.error(given->value, f.child("case"), unknown_name("robustness case", *id, known));
             return;
         }
         const auto* label = f.find("label");
@@ -735,10 +734,8 @@ private:
         a.name = *name;
         const AcceleratorInfo* info = find_accelerator(a.name);
         if (!info) {
-            std::vector<std::string> names;
-            for (const auto& i : accelerator_registry()) names.push_back(i.name);
-            c_.error(ne->value, f.child("name"),
-                     "unknown accelerator '" + a.name + "'" + suggestion(a.name, names) + " (known: " + join(names) + ")");
+            const auto names = names_of(accelerator_registry(), &AcceleratorInfo::name);
+            c_.error(ne->value, f.child("name"), unknown_name("accelerator", a.name, names, suggestion(a.name, names)));
             return;
         }
         bool ok = read_effort(f, a.repetitions, a.warmup);

@@ -1,4 +1,5 @@
 #include "accelbench/procedural.h"
+#include "accelbench/unknown_name.h"
 
 #include <algorithm>
 #include <cmath>
@@ -604,11 +605,8 @@ const ProceduralInfo* find_procedural(std::string_view kind) {
 ProceduralScene generate_procedural(const std::string& kind, const std::map<std::string, std::string>& params,
                                     ParamSet* resolved) {
     const ProceduralInfo* info = find_procedural(kind);
-    if (!info) {
-        std::string known;
-        for (const auto& i : procedural_registry()) known += (known.empty() ? "" : ", ") + i.name;
-        throw ParamError("unknown procedural scene '" + kind + "' (known: " + known + ")");
-    }
+    if (!info)
+        throw ParamError(unknown_name("procedural scene", kind, names_of(procedural_registry(), &ProceduralInfo::name)));
     ParamSet set = resolve_params(kind, info->params, params, "procedural scene");
     ProceduralScene scene = info->generate(set);
     if (resolved) *resolved = std::move(set);

@@ -1,4 +1,5 @@
 #include "accelbench/registry.h"
+#include "accelbench/unknown_name.h"
 
 #include "accelbench/brute_force.h"
 #include "accelbench/bvh.h"
@@ -31,11 +32,7 @@ std::unique_ptr<Accelerator> make_accelerator(const std::string& name,
                                               const std::map<std::string, std::string>& params,
                                               ParamSet* resolved) {
     const AcceleratorInfo* info = find_accelerator(name);
-    if (!info) {
-        std::string known;
-        for (const auto& i : accelerator_registry()) known += (known.empty() ? "" : ", ") + i.name;
-        throw ParamError("unknown accelerator '" + name + "' (known: " + known + ")");
-    }
+    if (!info) throw ParamError(unknown_name("accelerator", name, names_of(accelerator_registry(), &AcceleratorInfo::name)));
     ParamSet set = resolve_params(name, info->params, params);
     auto accel = info->create(set);
     if (resolved) *resolved = std::move(set);

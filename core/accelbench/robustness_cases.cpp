@@ -1,4 +1,5 @@
 #include "accelbench/robustness_cases.h"
+#include "accelbench/unknown_name.h"
 
 #include <algorithm>
 #include <charconv>
@@ -740,9 +741,8 @@ namespace {
 const RobustnessCaseEntry& find_case(const std::string& id) {
     for (const auto& entry : robustness_case_list())
         if (entry.id == id) return entry;
-    std::string known;
-    for (const auto& entry : robustness_case_list()) known += (known.empty() ? "" : ", ") + entry.id;
-    throw std::invalid_argument("unknown robustness case '" + id + "' (known: " + known + ")");
+    throw std::invalid_argument(
+        unknown_name("robustness case", id, names_of(robustness_case_list(), &RobustnessCaseEntry::id)));
 }
 
 }  // namespace
