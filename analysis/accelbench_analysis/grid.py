@@ -378,6 +378,7 @@ class HeatmapData:
     objective: pd.DataFrame  # minimum over the other parameters among accepted rows; NaN: none
     source: pd.DataFrame     # the pass of the row giving that minimum (FINAL, CHEAP; "": none)
     rejected: pd.DataFrame   # the cell has rows, and every one was rejected
+    remeasured: pd.DataFrame  # the cell has a final-pass row (accepted or not)
 
     @property
     def xs(self) -> list[str]:
@@ -401,16 +402,22 @@ def heatmap_data(a: GridAnalysis, model: str, p: str, q: str) -> HeatmapData:
     def cells(column: str) -> pd.DataFrame:
         return best.pivot(index=qy, columns=px, values=column).reindex(index=ys, columns=xs)
 
-    measured = (sel.groupby([qy, px]).size().unstack().reindex(index=ys, columns=xs).notna())
+    def having(rows: pd.DataFrame) -> pd.DataFrame:
+        counts = rows.groupby([qy, px]).size()
+        return counts.unstack().reindex(index=ys, columns=xs).notna() if len(counts) else \
+            pd.DataFrame(False, index=ys, columns=xs)
+
     objective = cells("objective").astype(float)
-    return HeatmapData(objective, cells(PASS_COL).fillna(""), measured & objective.isna())
+    return HeatmapData(objective, cells(PASS_COL).fillna(""), having(sel) & objective.isna(),
+                       having(sel[sel[PASS_COL] == FINAL]))
 
 
 def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     """The objective over (p, q), each cell the minimum over the other parameters among
     accepted rows (heatmap_data); grey cells have no row, hatched ones only rejected rows.
-    With a cheap pass, the cells whose minimum was re-measured are outlined. References
-    and the best cell are marked."""
+    With a cheap pass, cells holding a re-measured candidate are outlined and numbers that
+    are final-pass values bold: a cheap minimum (one noisy repetition, and the least of
+    several) can sit below every final value. References and the best cell are marked."""
     import matplotlib.pyplot as plt
     import seaborn as sns
     from matplotlib.lines import Line2D
@@ -437,13 +444,20 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
         title += f"\nminimum over {', '.join(others)}"
     handles = []
     if a.cheap is not None:
-        title += "\nfinal pass where re-measured (outlined), cheap pass elsewhere"
-        for (iy, ix) in zip(*np.nonzero((data.source == FINAL).to_numpy())):
+        title += "\nfinal-pass values where re-measured (bold), cheap pass elsewhere"
+        for (iy, ix) in zip(*np.nonzero(data.remeasured.to_numpy())):
             ax.add_patch(Rectangle((ix + 0.06, iy + 0.06), 0.88, 0.88, fill=False,
                                    edgecolor="black", lw=1.2, ls=":"))
+        final_cells = data.source == FINAL
+        for text in ax.texts:  # seaborn's numbers sit at the cell centres
+            x, y = text.get_position()
+            if final_cells.iat[int(y), int(x)]:
+                text.set_fontweight("bold")
         handles.append(Patch(facecolor="none", edgecolor="black", ls=":", label=(
-            f"outlined: the cell's minimum is a final-pass row ({a.final.repetitions_text()}); "
-            f"other cells: cheap pass ({a.cheap.repetitions_text()}, noisier)")))
+            f"dotted: holds a candidate re-measured in the final pass "
+            f"({a.final.repetitions_text()}); bold number: the minimum is a final value\n"
+            f"  other numbers: cheap pass ({a.cheap.repetitions_text()}: noisier, and a minimum "
+            f"of noisy values is biased low)")))
     ax.set_title(title, fontsize=10)
     for (iy, ix) in zip(*np.nonzero(data.rejected.to_numpy())):
         ax.add_patch(Rectangle((ix, iy), 1, 1, fill=False, hatch="xxx", edgecolor="#707070", lw=0))
@@ -451,8 +465,9 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     if best is not None:
         bx, by = xs.index(best[PARAM_COL + p]), ys.index(best[PARAM_COL + q])
         ax.add_patch(Rectangle((bx, by), 1, 1, fill=False, edgecolor="red", lw=2.5))
-        handles.append(Patch(facecolor="none", edgecolor="red", lw=2,
-                             label=f"best: {p}={best[PARAM_COL + p]}, {q}={best[PARAM_COL + q]}"))
+        handles.append(Patch(facecolor="none", edgecolor="red", lw=2, label=(
+            f"best: {p}={best[PARAM_COL + p]}, {q}={best[PARAM_COL + q]} "
+            f"({fmt_sig(best['objective'])} s at {int(best['repetitions'])} repetitions)")))
     triangles = float(sel["triangles"].iloc[0])
     for ref in references(a.config.accel, triangles):
         vx, vy = ref.values.get(p), ref.values.get(q)

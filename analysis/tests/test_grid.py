@@ -403,6 +403,8 @@ def test_heatmap_cells_cover_the_cheap_pass_and_show_rejections(tmp_path):
     assert obj.loc["20", "1"] == pytest.approx(2.0) and src.loc["20", "1"] == CHEAP   # E
     assert obj.loc["10", "1"] == pytest.approx(35.0)  # the other row timed out
     assert src.loc["10", "1"] == CHEAP and obj.notna().sum().sum() == 7
+    assert d.remeasured.loc["10", "4"] and d.remeasured.loc["20", "2"]  # outlined: B, C
+    assert int(d.remeasured.sum().sum()) == 2
     # (4, 30): both rows are cheap and break false_misses <= 0: rejected, not missing.
     for eb, misses in ((0, 3), (0.5, 2)):
         r = ranked_row(a, (4, 30, eb))
