@@ -168,7 +168,9 @@ update-baseline: build
 # harness (resumable: rerunning continues an interrupted run) and ranks it into
 # results/grid/NAME/. A config with `grid.mode: successive_halving` runs the cheap pass,
 # `grid-halve` picks the best candidates and the harness re-measures them at full
-# repetitions; `full` runs the config as written.
+# repetitions; `grid` picks the best among the re-measured only (pass-2.csv) and draws
+# the heatmaps over the whole grid with the cheap pass as context (--cheap pass-1.csv).
+# `full` runs the config as written.
 GRID_CONFIG ?= configs/grid-kdtree-bunny.yaml
 GRID_NAME    = $(basename $(notdir $(GRID_CONFIG)))
 GRID_RUNS    = results/runs/grid-$(GRID_NAME)
@@ -182,7 +184,7 @@ grid-search: build venv
 	if [ "$$mode" = successive_halving ]; then \
 	  $(ANALYSIS) grid-halve $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_RUNS)/pass-2.yaml; \
 	  $(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-2.csv $(GRID_RUNS)/pass-2.yaml > $(GRID_RUNS)/pass-2.log; \
-	  $(ANALYSIS) grid $(GRID_RUNS)/pass-2.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
+	  $(ANALYSIS) grid $(GRID_RUNS)/pass-2.csv --cheap $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
 	else \
 	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
 	fi

@@ -92,11 +92,18 @@ def add_grid(sub) -> None:
     s = sub.add_parser("grid", help="rank a grid search's rows: best.yaml, ranked.csv, heatmaps",
                        description="Reads the grid config's objective and constraints, ranks "
                                    "the CSV's candidates per model and writes OUT/best.yaml, "
-                                   "OUT/ranked.csv, OUT/heatmap-*.png and OUT/summary.md.")
+                                   "OUT/ranked.csv, OUT/heatmap-*.png and OUT/summary.md. With "
+                                   "successive halving, give the second pass as CSV and the "
+                                   "first with --cheap: only the second is ranked, the first "
+                                   "fills the heatmaps and ranked.csv over the whole grid.")
     s.add_argument("csv", nargs="+", type=Path,
-                   help="the grid run's CSV(s) (several: shards, or both passes of successive "
-                        "halving; a candidate measured twice counts with its most repetitions)")
+                   help="the CSV(s) whose rows are ranked (several: shards of one pass; a "
+                        "candidate measured twice counts with its most repetitions)")
     s.add_argument("--config", type=Path, required=True, help="configs/grid-NAME.yaml")
+    s.add_argument("--cheap", nargs="+", type=Path, metavar="CSV",
+                   help="the cheap first pass of successive halving: context for the heatmaps "
+                        "and ranked.csv (same constraints), never ranked; a candidate also in "
+                        "CSV shows CSV's values")
     s.add_argument("--out", type=Path, help="output directory (default: results/grid/NAME/)")
     s.add_argument("--no-heatmaps", action="store_true", help="skip the PNGs")
     h = sub.add_parser("grid-halve",
@@ -225,9 +232,10 @@ def run_grid(args: argparse.Namespace) -> int:
     from .grid_config import load_grid_config
     cfg = load_grid_config(args.config)
     results = load_results(args.csv)
-    for w in results.warnings:
+    cheap = load_results(args.cheap) if args.cheap else None
+    for w in results.warnings + (cheap.warnings if cheap else []):
         print(f"warning: {w}", file=sys.stderr)
-    a = analyse(results, cfg)
+    a = analyse(results, cfg, cheap)
     out = args.out or Path("results") / "grid" / cfg.name
     written = write_outputs(a, out, heatmaps=not args.no_heatmaps)
     print((out / "summary.md").read_text(), end="")

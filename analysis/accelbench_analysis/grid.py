@@ -7,6 +7,12 @@ an entry for another config's `accelerators:` list), ranked.csv (every candidate
 objective, rank, and why it was rejected), heatmap-<model>-<p>-<q>.png (the objective over
 each pair of varied parameters, minimum over the others, with the report's and pbrt's
 defaults marked) and summary.md. `halve` writes the second pass of successive halving.
+
+With successive halving, `analyse` takes the second (final) pass as the candidates and the
+first (cheap) pass as context: only final rows are ranked, so best.yaml's winner was
+measured at full repetitions, while the heatmaps and ranked.csv also show the cheap pass
+over the whole grid (its rows judged by the same constraints, never ranked). Ranking both
+passes together would let a lucky one-repetition row beat every re-measured candidate.
 """
 
 from __future__ import annotations
@@ -70,6 +76,29 @@ def references(accel: str, triangles: float) -> list[Reference]:
 # ---- analysis --------------------------------------------------------------------------------------
 
 PARAM_COL = "param:"  # ranked.csv's per-parameter columns, so they never meet a statistic's name
+PASS_COL = "pass"
+FINAL, CHEAP = "final", "cheap"  # ranked candidates; the cheap pass's rows shown as context
+
+
+def final_config_name(cfg: GridConfig) -> str:
+    """The name `halve` gives the second pass's config (its rows carry it in `config`)."""
+    return f"{cfg.name}-final"
+
+
+@dataclass
+class PassInfo:
+    """What one pass contributed: its CSVs, its rows of the accelerator (one per candidate)
+    and the repetitions its measured rows had."""
+    files: list[str]
+    rows: int
+    repetitions: list[int]
+
+    def repetitions_text(self) -> str:
+        reps = "/".join(str(r) for r in self.repetitions) or "no measured"
+        return f"{reps} repetition{'' if self.repetitions == [1] else 's'}"
+
+    def describe(self) -> str:
+        return f"{', '.join(self.files)}: {self.rows} rows at {self.repetitions_text()}"
 
 
 @dataclass
@@ -79,7 +108,12 @@ class GridAnalysis:
     varied: list[str]
     notes: list[str] = field(default_factory=list)
     constraints_checked: dict[str, bool] = field(default_factory=dict)
-    files: list[str] = field(default_factory=list)
+    final: PassInfo | None = None
+    cheap: PassInfo | None = None  # the cheap pass given as context, if any
+
+    @property
+    def files(self) -> list[str]:
+        return self.final.files if self.final else []
 
     def models(self) -> list[str]:
         return list(dict.fromkeys(self.ranked["model"]))
@@ -88,8 +122,15 @@ class GridAnalysis:
         r = self.ranked[(self.ranked["model"] == model) & (self.ranked["rank"] == 1)]
         return None if r.empty else r.iloc[0]
 
-    def accepted(self, model: str | None = None) -> pd.DataFrame:
-        r = self.ranked[~self.ranked["rejected"]]
+    def candidates(self, model: str | None = None) -> pd.DataFrame:
+        """The rows that compete for the best: the final pass's."""
+        r = self.ranked[self.ranked[PASS_COL] == FINAL]
+        return r if model is None else r[r["model"] == model]
+
+    def accepted(self, model: str | None = None, with_cheap: bool = False) -> pd.DataFrame:
+        """Candidates no constraint rejected; with_cheap adds the cheap pass's such rows."""
+        r = self.ranked if with_cheap else self.candidates()
+        r = r[~r["rejected"]]
         return r if model is None else r[r["model"] == model]
 
 
@@ -110,8 +151,8 @@ def axis_order(texts) -> list[str]:
 
 
 def _dedupe(rows: pd.DataFrame, notes: list[str]) -> pd.DataFrame:
-    """One candidate per (model, params): given several CSVs (e.g. both passes of successive
-    halving), the row with the most repetitions wins, then the newest."""
+    """One candidate per (model, params): given several CSVs (shards, or a rerun), the row
+    with the most repetitions wins, then the newest."""
     ordered = rows.sort_values(["repetitions", "timestamp"], ascending=False, kind="stable")
     kept = ordered.drop_duplicates(["model", "params"]).sort_index()
     if len(kept) < len(rows):
@@ -120,21 +161,51 @@ def _dedupe(rows: pd.DataFrame, notes: list[str]) -> pd.DataFrame:
     return kept
 
 
-def analyse(results: Results, cfg: GridConfig) -> GridAnalysis:
-    notes: list[str] = []
+def _accel_rows(results: Results, cfg: GridConfig, what: str, notes: list[str]) -> pd.DataFrame:
+    """The rows of the config's accelerator, one per candidate (what: "the CSV", ...)."""
     df = results.rows
     others = df[df["accel"] != cfg.accel]
     if not others.empty:
-        notes.append(f"{len(others)} rows of other accelerators "
+        notes.append(f"{what}: {len(others)} rows of other accelerators "
                      f"({', '.join(sorted(set(others['accel'])))}) were ignored")
     rows = df[df["accel"] == cfg.accel]
     if rows.empty:
-        raise GridConfigError(f"the CSV has no rows of accelerator {cfg.accel!r} "
+        raise GridConfigError(f"{what} has no rows of accelerator {cfg.accel!r} "
                               f"(the config's accelerator)")
     configs = sorted(set(rows["config"]))
-    if cfg.name not in configs:
-        notes.append(f"the CSV's rows come from config(s) {', '.join(configs)}, not {cfg.name!r}")
-    rows = _dedupe(rows, notes)
+    if not {cfg.name, final_config_name(cfg)} & set(configs):
+        notes.append(f"{what}'s rows come from config(s) {', '.join(configs)}, not {cfg.name!r} "
+                     f"or its second pass {final_config_name(cfg)!r}")
+    return _dedupe(rows, notes)
+
+
+def _pass_info(results: Results, rows: pd.DataFrame) -> PassInfo:
+    ok = rows[rows["status"] == "ok"]
+    return PassInfo(list(results.files), len(rows),
+                    sorted({int(r) for r in pd.to_numeric(ok["repetitions"]).dropna()}))
+
+
+def analyse(results: Results, cfg: GridConfig, cheap: Results | None = None) -> GridAnalysis:
+    """Ranks the rows of `results`; `cheap` (the first pass of successive halving) adds
+    context rows, judged by the same constraints but never ranked (module doc)."""
+    notes: list[str] = []
+    rows = _accel_rows(results, cfg, "the CSV", notes)
+    final = _pass_info(results, rows)
+    if len(final.repetitions) > 1 and cheap is None:
+        notes.append(f"the ranked rows were measured with different repetitions "
+                     f"({', '.join(map(str, final.repetitions))}): a candidate measured only "
+                     f"cheaply competes with re-measured ones; give a cheap pass with --cheap")
+    rows = rows.assign(**{PASS_COL: FINAL})
+    cheap_info = None
+    if cheap is not None:
+        context = _accel_rows(cheap, cfg, "the cheap pass's CSV", notes)
+        cheap_info = _pass_info(cheap, context)
+        final_keys = pd.MultiIndex.from_frame(rows[["model", "params"]])
+        again = pd.MultiIndex.from_frame(context[["model", "params"]]).isin(final_keys)
+        if again.any():
+            notes.append(f"{int(again.sum())} cheap-pass rows were re-measured in the final "
+                         f"pass: their final values are used")
+        rows = pd.concat([rows, context[~again].assign(**{PASS_COL: CHEAP})], ignore_index=True)
 
     out = pd.DataFrame({
         "model": rows["model"].values, "accel": rows["accel"].values,
@@ -143,7 +214,7 @@ def analyse(results: Results, cfg: GridConfig) -> GridAnalysis:
         "objective": cfg.objective.value(rows["build_s_median"], rows["render_s_median"]).values,
         "build_s_median": rows["build_s_median"].values,
         "render_s_median": rows["render_s_median"].values,
-        "repetitions": rows["repetitions"].values})
+        "repetitions": rows["repetitions"].values, PASS_COL: rows[PASS_COL].values})
     for extra in ("combo_id", "config"):
         if extra in rows.columns:
             out[extra] = rows[extra].values
@@ -184,18 +255,22 @@ def analyse(results: Results, cfg: GridConfig) -> GridAnalysis:
     out["rejected"] = out["reason"] != ""
     out["rank"] = pd.array([pd.NA] * len(out), dtype="Int64")
     for model in dict.fromkeys(out["model"]):
-        ok = out[(out["model"] == model) & ~out["rejected"]]
+        ok = out[(out["model"] == model) & ~out["rejected"] & (out[PASS_COL] == FINAL)]
         order = ok.sort_values(["objective", "params"], kind="stable").index
         out.loc[order, "rank"] = list(range(1, len(order) + 1))
-    out = out.sort_values(["model", "rejected", "rank", "params"], kind="stable",
-                          na_position="last").reset_index(drop=True)
-    notes += _coverage(cfg, out)
-    return GridAnalysis(cfg, out, varied, notes, checked, results.files)
+    out = (out.assign(_cheap=out[PASS_COL] == CHEAP)
+           .sort_values(["model", "_cheap", "rejected", "rank", "objective", "params"],
+                        kind="stable", na_position="last")
+           .drop(columns="_cheap").reset_index(drop=True))
+    second_pass_only = cheap is None and set(rows["config"]) == {final_config_name(cfg)}
+    notes += _coverage(cfg, out, second_pass_only)
+    return GridAnalysis(cfg, out, varied, notes, checked, final, cheap_info)
 
 
-def _coverage(cfg: GridConfig, ranked: pd.DataFrame) -> list[str]:
-    """Grid points of the config with no row in the CSV (an unfinished run or a missing
-    shard), and rows outside the grid (a CSV of another config)."""
+def _coverage(cfg: GridConfig, ranked: pd.DataFrame, second_pass_only: bool) -> list[str]:
+    """Grid points of the config with no row in the CSV (an unfinished run, a missing
+    shard, or a second pass given without its first), and rows outside the grid (a CSV of
+    another config)."""
     names = cfg.given
     if not names:
         return []
@@ -205,9 +280,11 @@ def _coverage(cfg: GridConfig, ranked: pd.DataFrame) -> list[str]:
         sel = ranked[ranked["model"] == model]
         seen = {tuple(sel[PARAM_COL + n].iat[i] for n in names) for i in range(len(sel))}
         missing, extra = expected - seen, seen - expected
+        why = ("only the second pass was given: add the first with --cheap" if second_pass_only
+               else "run not finished, or a shard not merged")
         if missing:
             notes.append(f"{model}: {len(missing)} of the config's {len(expected)} grid points "
-                         f"have no row (run not finished, or a shard not merged)")
+                         f"have no row ({why})")
         if extra:
             notes.append(f"{model}: {len(extra)} candidates lie outside the config's grid "
                          f"(ranked all the same)")
@@ -243,17 +320,16 @@ def best_document(a: GridAnalysis) -> dict:
     best = {}
     for model in a.models():
         r = a.best(model)
-        n_ok = len(a.accepted(model))
+        n_ok, n = len(a.accepted(model)), len(a.candidates(model))
         if r is None:
-            best[model] = {"accepted": 0, "candidates": int((a.ranked["model"] == model).sum()),
-                           "accelerators": None}
+            best[model] = {"accepted": 0, "candidates": n, "accelerators": None}
             continue
         best[model] = {
             "objective_s": float(r["objective"]), "build_s_median": float(r["build_s_median"]),
             "render_s_median": float(r["render_s_median"]), "repetitions": int(r["repetitions"]),
-            "accepted": n_ok, "candidates": int((a.ranked["model"] == model).sum()),
-            "accelerators": snippet(cfg, r)}
-    return {"config": cfg.name, "config_file": str(cfg.path), "csv": a.files,
+            "accepted": n_ok, "candidates": n, "accelerators": snippet(cfg, r)}
+    context = {"cheap_csv": a.cheap.files} if a.cheap else {}
+    return {"config": cfg.name, "config_file": str(cfg.path), "csv": a.files, **context,
             "objective": cfg.objective.label,
             "constraint": {c: (v if not float(v).is_integer() else int(v))
                            for c, v in cfg.constraints.items()},
@@ -263,7 +339,7 @@ def best_document(a: GridAnalysis) -> dict:
 def write_ranked(a: GridAnalysis, path: Path) -> Path:
     cols = (["model", "rank", "objective", "rejected", "reason"]
             + [PARAM_COL + n for n in a.varied]
-            + ["build_s_median", "render_s_median", "repetitions", "status"]
+            + ["build_s_median", "render_s_median", "repetitions", PASS_COL, "status"]
             + list(dict.fromkeys(list(a.config.constraints) + ERROR_COLUMNS))
             + ["accel", "params"]
             + [c for c in ("combo_id", "config") if c in a.ranked.columns])
@@ -296,9 +372,52 @@ def marker_position(axis_values: list[str], value) -> float | None:
 MARKER_HEIGHT = 0.2  # reference markers sit this far up their cell (the number is at 0.5)
 
 
+@dataclass
+class HeatmapData:
+    """One heatmap's cells, rows the values of q and columns those of p (axis order)."""
+    objective: pd.DataFrame  # minimum over the other parameters among accepted rows; NaN: none
+    source: pd.DataFrame     # the pass of the row giving that minimum (FINAL, CHEAP; "": none)
+    rejected: pd.DataFrame   # the cell has rows, and every one was rejected
+    remeasured: pd.DataFrame  # the cell has a final-pass row (accepted or not)
+
+    @property
+    def xs(self) -> list[str]:
+        return list(self.objective.columns)
+
+    @property
+    def ys(self) -> list[str]:
+        return list(self.objective.index)
+
+
+def heatmap_data(a: GridAnalysis, model: str, p: str, q: str) -> HeatmapData:
+    """The cells of heatmap(): every pass's rows count, so with a cheap pass the map covers
+    the whole grid, its re-measured cells taking the final values (analyse keeps only the
+    final row of a candidate measured in both)."""
+    sel = a.ranked[a.ranked["model"] == model]
+    px, qy = PARAM_COL + p, PARAM_COL + q
+    xs, ys = axis_order(sel[px]), axis_order(sel[qy])
+    acc = sel[~sel["rejected"]]
+    best = acc.loc[acc.groupby([qy, px])["objective"].idxmin()] if not acc.empty else acc
+
+    def cells(column: str) -> pd.DataFrame:
+        return best.pivot(index=qy, columns=px, values=column).reindex(index=ys, columns=xs)
+
+    def having(rows: pd.DataFrame) -> pd.DataFrame:
+        counts = rows.groupby([qy, px]).size()
+        return counts.unstack().reindex(index=ys, columns=xs).notna() if len(counts) else \
+            pd.DataFrame(False, index=ys, columns=xs)
+
+    objective = cells("objective").astype(float)
+    return HeatmapData(objective, cells(PASS_COL).fillna(""), having(sel) & objective.isna(),
+                       having(sel[sel[PASS_COL] == FINAL]))
+
+
 def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     """The objective over (p, q), each cell the minimum over the other parameters among
-    accepted candidates; grey cells have none. References and the best cell are marked."""
+    accepted rows (heatmap_data); grey cells have no row, hatched ones only rejected rows.
+    With a cheap pass, cells holding a re-measured candidate are outlined and numbers that
+    are final-pass values bold: a cheap minimum (one noisy repetition, and the least of
+    several) can sit below every final value. References and the best cell are marked."""
     import matplotlib.pyplot as plt
     import seaborn as sns
     from matplotlib.lines import Line2D
@@ -308,10 +427,8 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
 
     setup()
     sel = a.ranked[a.ranked["model"] == model]
-    xs, ys = axis_order(sel[PARAM_COL + p]), axis_order(sel[PARAM_COL + q])
-    acc = sel[~sel["rejected"]]
-    grid = (acc.pivot_table(index=PARAM_COL + q, columns=PARAM_COL + p, values="objective",
-                            aggfunc="min").reindex(index=ys, columns=xs))
+    data = heatmap_data(a, model, p, q)
+    xs, ys, grid = data.xs, data.ys, data.objective
     fig, ax = plt.subplots(figsize=(max(5.0, 0.75 * len(xs) + 2.5), max(4.0, 0.5 * len(ys) + 2.2)))
     ax.set_facecolor("#d0d0d0")
     small = len(xs) <= 12 and len(ys) <= 12
@@ -322,16 +439,35 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     ax.set_xlabel(p)
     ax.set_ylabel(q)
     others = [n for n in a.varied if n not in (p, q)]
-    ax.set_title(f"{model}: {a.config.accel}, {a.config.objective.label}"
-                 + (f"\nminimum over {', '.join(others)}" if others else ""), fontsize=10)
-
+    title = f"{model}: {a.config.accel}, {a.config.objective.label}"
+    if others:
+        title += f"\nminimum over {', '.join(others)}"
     handles = []
+    if a.cheap is not None:
+        title += "\nfinal-pass values where re-measured (bold), cheap pass elsewhere"
+        for (iy, ix) in zip(*np.nonzero(data.remeasured.to_numpy())):
+            ax.add_patch(Rectangle((ix + 0.06, iy + 0.06), 0.88, 0.88, fill=False,
+                                   edgecolor="black", lw=1.2, ls=":"))
+        final_cells = data.source == FINAL
+        for text in ax.texts:  # seaborn's numbers sit at the cell centres
+            x, y = text.get_position()
+            if final_cells.iat[int(y), int(x)]:
+                text.set_fontweight("bold")
+        handles.append(Patch(facecolor="none", edgecolor="black", ls=":", label=(
+            f"dotted: holds a candidate re-measured in the final pass "
+            f"({a.final.repetitions_text()}); bold number: the minimum is a final value\n"
+            f"  other numbers: cheap pass ({a.cheap.repetitions_text()}: noisier, and a minimum "
+            f"of noisy values is biased low)")))
+    ax.set_title(title, fontsize=10)
+    for (iy, ix) in zip(*np.nonzero(data.rejected.to_numpy())):
+        ax.add_patch(Rectangle((ix, iy), 1, 1, fill=False, hatch="xxx", edgecolor="#707070", lw=0))
     best = a.best(model)
     if best is not None:
         bx, by = xs.index(best[PARAM_COL + p]), ys.index(best[PARAM_COL + q])
         ax.add_patch(Rectangle((bx, by), 1, 1, fill=False, edgecolor="red", lw=2.5))
-        handles.append(Patch(facecolor="none", edgecolor="red", lw=2,
-                             label=f"best: {p}={best[PARAM_COL + p]}, {q}={best[PARAM_COL + q]}"))
+        handles.append(Patch(facecolor="none", edgecolor="red", lw=2, label=(
+            f"best: {p}={best[PARAM_COL + p]}, {q}={best[PARAM_COL + q]} "
+            f"({fmt_sig(best['objective'])} s at {int(best['repetitions'])} repetitions)")))
     triangles = float(sel["triangles"].iloc[0])
     for ref in references(a.config.accel, triangles):
         vx, vy = ref.values.get(p), ref.values.get(q)
@@ -347,8 +483,12 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
         else:
             where += " (off this grid)"
         handles.append(Line2D([], [], ms=9, label=f"{ref.label}: {where}\n  {ref.note}", **style))
-    if grid.isna().any().any():
-        handles.append(Patch(facecolor="#d0d0d0", label="grey: no accepted candidate"))
+    if data.rejected.any().any():
+        why = [f"{c} > {v:g}" for c, v in a.config.constraints.items()] + ["a failed run"]
+        handles.append(Patch(facecolor="#d0d0d0", hatch="xxx", edgecolor="#707070",
+                             label=f"hatched: every row here rejected ({' or '.join(why)})"))
+    if (grid.isna() & ~data.rejected).any().any():
+        handles.append(Patch(facecolor="#d0d0d0", label="grey: not measured"))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0, -0.14), fontsize=7,
               frameon=False)
     return _save(fig, path)
@@ -362,19 +502,29 @@ def write_heatmaps(a: GridAnalysis, out: Path) -> tuple[list[Path], list[str]]:
         if len(varied) < 2:
             notes.append(f"{model}: no heatmap, fewer than two parameters vary")
             continue
-        if a.accepted(model).empty:
-            notes.append(f"{model}: no heatmap, every candidate was rejected")
+        if a.accepted(model, with_cheap=True).empty:
+            notes.append(f"{model}: no heatmap, every row was rejected")
             continue
         for p, q in itertools.combinations(varied, 2):
             written.append(heatmap(a, model, p, q, out / f"heatmap-{_slug(model)}-{p}-{q}.png"))
     return written, notes
 
 
+def _pass_lines(a: GridAnalysis) -> list[str]:
+    if a.cheap is None:
+        return [f"- CSV: {a.final.describe()}"]
+    context = int((a.ranked[PASS_COL] == CHEAP).sum())
+    return [f"- final pass (ranked: the best is chosen among these only): {a.final.describe()}",
+            f"- cheap pass (context: heatmaps and ranked.csv, never ranked): "
+            f"{a.cheap.describe()}; {a.cheap.rows - context} of them re-measured in the final "
+            f"pass, the other {context} shown with their cheap values"]
+
+
 def summary_markdown(a: GridAnalysis, heatmaps: list[Path], extra_notes: list[str]) -> str:
     cfg = a.config
     lines = [f"# Grid search {cfg.name}: {cfg.accel}", "",
              f"- config: {cfg.path} ({cfg.mode}; {cfg.combinations()} combinations in the grid)",
-             f"- CSV: {', '.join(a.files)}",
+             *_pass_lines(a),
              f"- objective: {cfg.objective.label} (seconds, medians of the repetitions)",
              "- constraints: " + (", ".join(
                  f"{c} <= {v:g} ({'checked' if a.constraints_checked[c] else 'NOT CHECKED'})"
@@ -383,7 +533,7 @@ def summary_markdown(a: GridAnalysis, heatmaps: list[Path], extra_notes: list[st
     rows = []
     for model in a.models():
         r = a.best(model)
-        n = int((a.ranked["model"] == model).sum())
+        n = len(a.candidates(model))
         if r is None:
             rows.append([model, "—", "no accepted candidate", "—", "—", f"0 of {n}"])
             continue
@@ -392,7 +542,8 @@ def summary_markdown(a: GridAnalysis, heatmaps: list[Path], extra_notes: list[st
                      f"{fmt_sig(r['build_s_median'])} / {fmt_sig(r['render_s_median'])}",
                      compact_errors(r), f"{len(a.accepted(model))} of {n}"])
     lines += md_table(["model", "objective (s)", "best parameters", "build / render (s)",
-                       f"errors ({COMPACT_HEADER})", "accepted"], rows, align="lrlrrr")
+                       f"errors ({COMPACT_HEADER})",
+                       "accepted" + (" (final pass)" if a.cheap else "")], rows, align="lrlrrr")
     for n in a.notes + extra_notes:
         lines += ["", f"- {n}"]
     if heatmaps:
@@ -444,7 +595,7 @@ def halve(a: GridAnalysis, keep: int, csv_files: list[str]) -> tuple[dict, str]:
                 params[n] = next(iter(values)) if len(values) == 1 else \
                     typed(acc[PARAM_COL + n].iat[0])
     doc = copy.deepcopy(cfg.raw)
-    doc["name"] = f"{cfg.name}-final"
+    doc["name"] = final_config_name(cfg)
     if cfg.final_repetitions is not None:
         doc["repetitions"] = cfg.final_repetitions
     if cfg.final_warmup is not None:

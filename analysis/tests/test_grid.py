@@ -13,7 +13,8 @@ import yaml
 from PIL import Image
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.grid import analyse, marker_position, references
+from accelbench_analysis.grid import (CHEAP, FINAL, analyse, heatmap_data, marker_position,
+                                      references)
 from accelbench_analysis.grid_config import (GridConfigError, expand_range, load_grid_config,
                                              parse_objective)
 from accelbench_analysis.schema import load_results, parse_params
@@ -51,10 +52,12 @@ def grid_config(tmp_path: Path, objective="build + k * render", frames=3, extra_
     return path
 
 
-def grid_rows(skip=(), config="grid-test", reps=1) -> list[dict]:
+def grid_rows(skip=(), config="grid-test", reps=1, only=None, changes=None) -> list[dict]:
+    """The grid's rows (only: just these points); changes: point -> (build, render, false
+    misses) replacing the table above."""
     rows = []
     for mp, md, eb in itertools.product(*GRID.values()):
-        if (mp, md, eb) in skip:
+        if (mp, md, eb) in skip or (only is not None and (mp, md, eb) not in only):
             continue
         params = dict(KD, max_prims=str(mp), max_depth=str(md), empty_bonus=str(eb),
                       isect_cost="80")
@@ -64,6 +67,7 @@ def grid_rows(skip=(), config="grid-test", reps=1) -> list[dict]:
             continue
         _, build, render = SPECIAL.get((mp, md, eb), ("", 20.0, 5.0))
         misses = 2 if (mp, md, eb) == (4, 30, 0.5) else 0
+        build, render, misses = (changes or {}).get((mp, md, eb), (build, render, misses))
         r = row("stanford-bunny", "kdtree", params, build=build, render=render, nodes=1001,
                 config=config, errors={"false_misses": misses, "false_hits": 0})
         r["repetitions"] = reps
@@ -332,3 +336,111 @@ def test_grid_halve_writes_the_second_pass(tmp_path, grid_csv, capsys):
                ["[max_prims, max_depth, empty_bonus]"]) == 3
     assert main(["grid-halve", str(grid_csv), "--config", str(grid_config(tmp_path)),
                  "--out", str(nxt)]) == 2
+
+
+# ---- successive halving: the final pass ranked, the cheap pass as context ------------------------
+
+B, C, E = (4, 10, 0), (2, 20, 0.5), (1, 20, 0)
+# The cheap pass (1 repetition): the table above, plus E, which looks best of all (0.5 + 3 *
+# 0.5 = 2) but was not re-measured, and (4, 30, 0) breaking the constraint like D, so the
+# cell (max_prims 4, max_depth 30) holds only rejected rows; (1, 30, *) was never measured.
+CHEAP_CHANGES = {E: (0.5, 0.5, 0), (4, 30, 0): (0.1, 0.1, 3)}
+CHEAP_SKIP = [(1, 30, 0), (1, 30, 0.5)]
+
+
+def halving_csvs(tmp_path: Path) -> tuple[Path, Path]:
+    """(final, cheap): the final pass re-measures B and C at 5 repetitions; C turns out
+    worse (render 4: 5 + 3 * 4 = 17) than its cheap value (9.5), B stays at 10."""
+    cheap = write_csv(tmp_path / "pass-1.csv", grid_rows(skip=CHEAP_SKIP, changes=CHEAP_CHANGES),
+                      with_errors=True)
+    final = write_csv(tmp_path / "pass-2.csv",
+                      grid_rows(config="grid-test-final", reps=5, only=[B, C],
+                                changes={C: (5.0, 4.0, 0)}), with_errors=True)
+    return final, cheap
+
+
+def ranked_row(a, point) -> pd.Series:
+    return a.ranked[[key(r) == point for _, r in a.ranked.iterrows()]].iloc[0]
+
+
+def test_the_best_comes_from_the_final_pass_only(tmp_path):
+    final, cheap = halving_csvs(tmp_path)
+    a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)),
+                cheap=load_results([cheap]))
+    best = a.best("stanford-bunny")
+    assert key(best) == B and best["objective"] == pytest.approx(10.0)
+    assert best["pass"] == FINAL and best["repetitions"] == 5
+    e = ranked_row(a, E)  # better looking, but only cheaply measured: context, unranked
+    assert e["objective"] == pytest.approx(2.0) and e["pass"] == CHEAP
+    assert not e["rejected"] and pd.isna(e["rank"])
+    c = ranked_row(a, C)  # measured in both passes: one row, the final values
+    assert c["pass"] == FINAL and c["objective"] == pytest.approx(17.0) and c["rank"] == 2
+    assert len(a.candidates()) == 2 and len(a.accepted()) == 2
+    assert len(a.ranked) == 16  # 16 cheap rows, 2 of them re-measured, + 0 final-only
+    assert (a.ranked["pass"] == CHEAP).sum() == 14
+    assert "2 cheap-pass rows were re-measured in the final pass: their final values are " \
+           "used" in a.notes
+    assert not any("come from config" in n for n in a.notes)  # <name>-final is expected
+    # Coverage counts both passes: only (1, 30, *) is missing, not the 16 cheap-only points.
+    assert "stanford-bunny: 2 of the config's 18 grid points have no row (run not finished, " \
+           "or a shard not merged)" in a.notes
+    # Without --cheap, feeding both passes as ranked CSVs is what let E win: it is noted.
+    both = analyse(load_results([cheap, final]), load_grid_config(grid_config(tmp_path)))
+    assert key(both.best("stanford-bunny")) == E
+    assert any("different repetitions (1, 5)" in n and "--cheap" in n for n in both.notes)
+
+
+def test_heatmap_cells_cover_the_cheap_pass_and_show_rejections(tmp_path):
+    final, cheap = halving_csvs(tmp_path)
+    a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)),
+                cheap=load_results([cheap]))
+    d = heatmap_data(a, "stanford-bunny", "max_prims", "max_depth")
+    assert d.xs == ["1", "2", "4"] and d.ys == ["10", "20", "30"]
+    obj, src = d.objective, d.source
+    # The minimum over empty_bonus in every cell, from whichever pass measured it.
+    assert obj.loc["10", "4"] == pytest.approx(10.0) and src.loc["10", "4"] == FINAL  # B
+    assert obj.loc["20", "2"] == pytest.approx(17.0) and src.loc["20", "2"] == FINAL  # C
+    assert obj.loc["20", "1"] == pytest.approx(2.0) and src.loc["20", "1"] == CHEAP   # E
+    assert obj.loc["10", "1"] == pytest.approx(35.0)  # the other row timed out
+    assert src.loc["10", "1"] == CHEAP and obj.notna().sum().sum() == 7
+    assert d.remeasured.loc["10", "4"] and d.remeasured.loc["20", "2"]  # outlined: B, C
+    assert int(d.remeasured.sum().sum()) == 2
+    # (4, 30): both rows are cheap and break false_misses <= 0: rejected, not missing.
+    for eb, misses in ((0, 3), (0.5, 2)):
+        r = ranked_row(a, (4, 30, eb))
+        assert r["pass"] == CHEAP and r["rejected"] and r["reason"] == f"false_misses = {misses} > 0"
+    assert d.rejected.loc["30", "4"] and pd.isna(obj.loc["30", "4"]) and src.loc["30", "4"] == ""
+    # (1, 30) has no row at all: empty, and not called rejected.
+    assert pd.isna(obj.loc["30", "1"]) and not d.rejected.loc["30", "1"]
+    assert int(d.rejected.sum().sum()) == 1
+
+
+def test_grid_with_cheap_writes_both_passes(tmp_path):
+    final, cheap = halving_csvs(tmp_path)
+    out = tmp_path / "out"
+    assert main(["grid", str(final), "--cheap", str(cheap), "--config",
+                 str(grid_config(tmp_path)), "--out", str(out)]) == 0
+    bunny = yaml.safe_load((out / "best.yaml").read_text())
+    assert bunny["csv"] == [str(final)] and bunny["cheap_csv"] == [str(cheap)]
+    best = bunny["best"]["stanford-bunny"]
+    assert best["objective_s"] == pytest.approx(10.0) and best["repetitions"] == 5
+    assert (best["accepted"], best["candidates"]) == (2, 2)
+    ranked = pd.read_csv(out / "ranked.csv")
+    assert len(ranked) == 16 and list(ranked["pass"][:2]) == [FINAL, FINAL]
+    assert list(ranked["rank"][:2]) == [1, 2] and ranked["rank"].notna().sum() == 2
+    text = (out / "summary.md").read_text()
+    assert f"- final pass (ranked: the best is chosen among these only): {final}: 2 rows at " \
+           f"5 repetitions" in text
+    assert f"- cheap pass (context: heatmaps and ranked.csv, never ranked): {cheap}: 16 rows " \
+           f"at 1 repetition; 2 of them re-measured in the final pass, the other 14 shown " \
+           f"with their cheap values" in text
+    assert "| 2 of 2 |" in text
+    assert len(list(out.glob("heatmap-*.png"))) == 3
+
+
+def test_a_second_pass_alone_says_the_cheap_pass_is_missing(tmp_path):
+    final, _ = halving_csvs(tmp_path)
+    a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)))
+    assert key(a.best("stanford-bunny")) == B and a.cheap is None
+    assert "stanford-bunny: 16 of the config's 18 grid points have no row (only the second " \
+           "pass was given: add the first with --cheap)" in a.notes
