@@ -73,11 +73,13 @@ test-python: venv
 
 test: test-cpp test-python
 
-# ASan + UBSan (incl. float-divide-by-zero) over the whole C++ test suite.
+# ASan + UBSan (incl. float-divide-by-zero and float-cast-overflow; flags in CMakeLists.txt,
+# ACCELBENCH_SANITIZE) over the whole C++ test suite. Any finding aborts its test. UBSan
+# prints a stack trace with the finding (its default is the one line only).
 test-sanitize: deps
 	cmake -S . -B $(SAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DACCELBENCH_SANITIZE=ON >/dev/null
 	ninja -C $(SAN_DIR) -j $(JOBS)
-	ctest --test-dir $(SAN_DIR) --output-on-failure -j $(JOBS)
+	UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(SAN_DIR) --output-on-failure -j $(JOBS)
 
 # ---- the main job ----------------------------------------------------------------------
 # Runs the report's tables through the harness and the analysis over their CSVs.

@@ -144,8 +144,12 @@ public:
         }
         ok_ = true;
         std::map<std::string, YAML::Mark> seen;
-        for (auto it = map.begin(); it != map.end(); ++it) {
-            const YAML::Node& k = it->first;
+        // Range-for, not `it->first`: yaml-cpp's iterator::operator-> returns a proxy that
+        // holds the key/value pair by value, so a reference to `it->first` dangles as soon
+        // as the statement ends (ASan: stack-use-after-scope). `*it` yields the pair by
+        // value and the range-for keeps it alive for the whole body.
+        for (const auto& entry : map) {
+            const YAML::Node& k = entry.first;
             std::string key;
             if (k.IsScalar()) key = k.Scalar();
             else if (k.IsSequence()) key = flow_key(k);  // [max_prims, max_depth]: ...
@@ -165,7 +169,7 @@ public:
                                            join(allowed));
                 continue;
             }
-            entries_.push_back({key, k, it->second});
+            entries_.push_back({key, k, entry.second});
         }
     }
 
