@@ -89,7 +89,9 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
         out.append("- [Build and render time against triangles, log-log, with fitted slopes per "
                    "structure](figures/scaling.png) ([slopes](tables/scaling.md)): the Stanford "
                    "dragon decimated with OpenMesh and the bunny Loop-subdivided.")
-    for rel in ("tables/robustness.md", "robustness.md"):
+    # `make robustness` writes results/robustness/; `tables`/`all` write tables/robustness.md
+    # when given a robustness run's CSV.
+    for rel in ("robustness/robustness.md", "tables/robustness.md", "robustness.md"):
         if (out_dir / rel).is_file():
             out.append(f"- [Robustness]({rel}): a pass/FAIL verdict per extreme case "
                        f"(configs/robustness.yaml) and accelerator, the failures with their "
