@@ -63,6 +63,10 @@ inline BvhTraversal bvh_traversal_from(const ParamSet& params) {
 // always suffice: the stack is sized from the finished tree's depth and cannot overflow,
 // whatever the builder did. Trees up to 64 levels deep (all balanced ones) use the inline
 // array; deeper ones allocate once per ray.
+//
+// The traversal loops keep the top of the stack in a local pointer (Cursor) rather than
+// in this object: a count held here would be written through the same kind of pointer
+// as the entries, so the compiler would have to reload it from memory after every push.
 class BvhTraversalStack {
 public:
     struct Entry {
@@ -79,16 +83,24 @@ public:
     BvhTraversalStack(const BvhTraversalStack&) = delete;
     BvhTraversalStack& operator=(const BvhTraversalStack&) = delete;
 
-    bool empty() const { return size_ == 0; }
-    void push(uint32_t node, float tnear = 0.0f) { data_[size_++] = {node, tnear}; }
-    Entry pop() { return data_[--size_]; }
+    // The stack's top, a value the traversal keeps in a register.
+    class Cursor {
+    public:
+        explicit Cursor(BvhTraversalStack& s) : bottom_(s.data_), top_(s.data_) {}
+        bool empty() const { return top_ == bottom_; }
+        void push(uint32_t node, float tnear = 0.0f) { *top_++ = {node, tnear}; }
+        Entry pop() { return *--top_; }
+
+    private:
+        Entry* bottom_;
+        Entry* top_;
+    };
 
 private:
     static constexpr uint32_t kInline = 64;
     Entry inline_[kInline];
     std::unique_ptr<Entry[]> heap_;
     Entry* data_ = inline_;
-    uint32_t size_ = 0;
 };
 
 // Tests the triangles of one leaf against [tmin, tmax); on a closer hit, writes `hit` and
@@ -137,7 +149,8 @@ ACCELBENCH_BVH_HOT bool traverse_bvh_ordered(const FlatBvh& bvh, const Ray& ray,
     c.box();
     if (!intersect_box(bvh.nodes[0].bounds, rp, ray.tmin, tmax).hit()) return false;
     const WatertightRay wr(ray);
-    BvhTraversalStack stack(bvh.depth);
+    BvhTraversalStack storage(bvh.depth);
+    BvhTraversalStack::Cursor stack(storage);
     uint32_t index = 0;
     for (;;) {
         c.node();
@@ -195,7 +208,8 @@ template <class C, class Leaf>
 ACCELBENCH_BVH_HOT bool visit_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c, Leaf&& leaf) {
     if (bvh.empty()) return false;
     const RayPrecomp rp(ray);
-    BvhTraversalStack stack(bvh.depth);
+    BvhTraversalStack storage(bvh.depth);
+    BvhTraversalStack::Cursor stack(storage);
     uint32_t index = 0;
     for (;;) {
         c.node();
