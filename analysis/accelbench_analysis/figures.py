@@ -331,9 +331,12 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
                     bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.8})
     g.set(xscale="log", yscale="symlog")
     ymax = max(1.0, float(df[y].max()))
+    # symlog's default locator leaves counts between 1 and 10 unlabelled: 0, 1, 2, 5, 10, 20, ...
+    yticks = [0.0] + [m * 10.0 ** e for e in range(0, 10) for m in (1, 2, 5) if m * 10.0 ** e <= ymax * 1.6 + 1]
     for ax in g.axes.flat:
         ax.set_yscale("symlog", linthresh=1.0)
         ax.set_ylim(-0.3, ymax * 1.6 + 1)
+        ax.set_yticks(yticks)
         ax.yaxis.set_major_formatter(mticker.FuncFormatter(lambda v, _: f"{v:g}"))
         plain_log_ticks(ax, "x")
     g.set_axis_labels("render time (s, median)", "false misses + false hits\n+ wrong primitives "
