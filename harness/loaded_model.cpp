@@ -54,25 +54,19 @@ TraceOutput trace_model(const Accelerator& accel, const LoadedModel& model, cons
                       : render(accel, model.scene, model.camera, request);
 }
 
-TraceRequest error_trace_request(const LoadedModel& model, const RenderSettings& render) {
-    TraceRequest r;
-    r.settings = render;
-    r.settings.light = render.light && render.shading;  // shadows matter only where they are seen
-    r.light = model.light;
-    r.albedo = model.albedo;
-    r.counts = CountMode::Off;
-    r.keep_hits = true;
-    return r;
-}
-
 void add_reference_answers(LoadedModel& model, const RenderSettings& render) {
     const auto t0 = std::chrono::steady_clock::now();
     auto reference = make_accelerator("reference", {});
     reference->build(model.scene);
-    TraceRequest request = error_trace_request(model, render);
+    TraceRequest request;
+    request.settings = render;
+    request.settings.light = render.light && render.shading;  // shadows matter only where they are seen
     // One thread: the harness forks a measurement process per combination afterwards, and
     // the answers do not depend on the thread count.
     request.settings.threads = 1;
+    request.light = model.light;
+    request.albedo = model.albedo;
+    request.keep_hits = true;
     TraceOutput out = trace_model(*reference, model, request);
     auto answers = std::make_shared<ReferenceAnswers>();
     answers->hits = std::move(out.primary_hits);

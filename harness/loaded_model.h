@@ -42,13 +42,11 @@ struct LoadedModel {
 // Traces the model's rays (its ray file, else its camera's) through `accel`.
 TraceOutput trace_model(const Accelerator& accel, const LoadedModel& model, const TraceRequest& request);
 
-// The trace whose primary hits (and image, for image runs) are compared with the
-// reference's: the measured render's settings, keeping every primary hit, without
-// counters, and without shadow rays unless they show in an image.
-TraceRequest error_trace_request(const LoadedModel& model, const RenderSettings& render);
-
-// Builds the `reference` accelerator on the model, traces error_trace_request through
-// it and keeps the answers in model.reference; the structure itself is freed.
+// Builds the `reference` accelerator on the model, traces the model's rays through it
+// with the render settings, keeping every primary hit (and the image, for image runs;
+// no counters, no shadow rays unless an image shows them), and keeps the answers in
+// model.reference; the structure itself is freed. Measurements compare their second
+// counting render with these (measure.h).
 void add_reference_answers(LoadedModel& model, const RenderSettings& render);
 
 // The view: the config's camera, else the registry's or procedural scene's own, else

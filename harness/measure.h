@@ -79,9 +79,9 @@ using StageFn = std::function<void(const std::string&)>;
 // image columns only with image errors, the t columns only when a t was compared.
 std::map<std::string, std::string> error_columns(const HitErrors& hits, const std::optional<ImageErrors>& image);
 
-// Measures in this process. When model.reference is set, the structure measured last
-// also traces error_trace_request after the timed part, and the error columns compare its
-// answers with the reference's. peak_rss_bytes is the process's memory high-water mark
+// Measures in this process. When model.reference is set, the second counting render
+// (after the timed part) also keeps every primary hit and, in an image run, shades; the
+// error columns compare those answers with the reference's. peak_rss_bytes is the process's memory high-water mark
 // over the measurement (reset at its start where Linux allows), loaded model included.
 // Errors (exceptions from build or render, nondeterministic
 // counters, an exceeded time limit at a stage boundary) end up in the returned status and
