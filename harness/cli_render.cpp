@@ -11,12 +11,12 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/embree_accel.h"
-#include "accelbench/mesh_io.h"
-#include "accelbench/procedural.h"
-#include "accelbench/registry.h"
-#include "accelbench/robustness_cases.h"
-#include "accelbench/renderer.h"
+#include "accelbench/accel/baseline/embree_accel.h"
+#include "accelbench/scene/mesh_io.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/accel/registry.h"
+#include "accelbench/verify/robustness_cases.h"
+#include "accelbench/render/renderer.h"
 #include "cost_image.h"
 #include "model_registry.h"
 

@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
-#include "accelbench/registry.h"
+#include "accelbench/accel/registry.h"
 #include "text.h"
 
 namespace accelbench {

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/params.h"
+#include "accelbench/base/params.h"
 #include "config.h"
 
 namespace accelbench {

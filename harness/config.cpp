@@ -10,11 +10,11 @@
 #include <filesystem>
 #include <set>
 
-#include "accelbench/params.h"
-#include "accelbench/procedural.h"
-#include "accelbench/registry.h"
-#include "accelbench/robustness_cases.h"
-#include "accelbench/unknown_name.h"
+#include "accelbench/base/params.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/accel/registry.h"
+#include "accelbench/verify/robustness_cases.h"
+#include "accelbench/base/unknown_name.h"
 #include "model_registry.h"
 #include "ray_file.h"
 #include "text.h"

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/camera.h"
-#include "accelbench/geometry.h"
-#include "accelbench/renderer.h"
+#include "accelbench/scene/camera.h"
+#include "accelbench/base/geometry.h"
+#include "accelbench/render/renderer.h"
 
 namespace accelbench {
 

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/counters.h"
-#include "accelbench/image.h"
+#include "accelbench/base/counters.h"
+#include "accelbench/base/image.h"
 
 namespace accelbench {
 

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <unistd.h>
 
-#include "accelbench/mesh_io.h"
-#include "accelbench/mesh_transform.h"
+#include "accelbench/scene/mesh_io.h"
+#include "accelbench/scene/mesh_transform.h"
 
 namespace accelbench {
 

@@ -10,7 +10,7 @@
 
 #include <string>
 
-#include "accelbench/scene.h"
+#include "accelbench/scene/scene.h"
 #include "config.h"
 #include "model_registry.h"
 

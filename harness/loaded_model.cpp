@@ -3,10 +3,10 @@
 #include <chrono>
 #include <stdexcept>
 
-#include "accelbench/mesh_io.h"
-#include "accelbench/procedural.h"
-#include "accelbench/registry.h"
-#include "accelbench/robustness_cases.h"
+#include "accelbench/scene/mesh_io.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/accel/registry.h"
+#include "accelbench/verify/robustness_cases.h"
 #include "derived_model.h"
 #include "model_registry.h"
 

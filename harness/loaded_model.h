@@ -6,9 +6,9 @@
 #include <memory>
 #include <vector>
 
-#include "accelbench/camera.h"
-#include "accelbench/renderer.h"
-#include "accelbench/scene.h"
+#include "accelbench/scene/camera.h"
+#include "accelbench/render/renderer.h"
+#include "accelbench/scene/scene.h"
 #include "config.h"
 
 namespace accelbench {

@@ -1,6 +1,6 @@
 #include "measure.h"
 #include "instructions.h"
-#include "accelbench/memory.h"
+#include "accelbench/base/memory.h"
 #include "text.h"
 
 #include <benchmark/benchmark.h>

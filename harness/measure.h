@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/accelerator.h"
-#include "accelbench/error_metrics.h"
-#include "accelbench/registry.h"
-#include "accelbench/renderer.h"
+#include "accelbench/accel/accelerator.h"
+#include "accelbench/verify/error_metrics.h"
+#include "accelbench/accel/registry.h"
+#include "accelbench/render/renderer.h"
 #include "loaded_model.h"
 
 namespace accelbench {

@@ -12,8 +12,8 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "accelbench/mesh_io.h"
-#include "accelbench/temp_dir.h"
+#include "accelbench/scene/mesh_io.h"
+#include "accelbench/base/temp_dir.h"
 #include "sha256.h"
 
 namespace accelbench {

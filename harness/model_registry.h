@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/camera.h"
-#include "accelbench/renderer.h"
-#include "accelbench/scene.h"
+#include "accelbench/scene/camera.h"
+#include "accelbench/render/renderer.h"
+#include "accelbench/scene/scene.h"
 
 namespace accelbench {
 

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <memory>
 
-#include "accelbench/embree_accel.h"
+#include "accelbench/accel/baseline/embree_accel.h"
 
 #ifndef ACCELBENCH_SOURCE_DIR
 #define ACCELBENCH_SOURCE_DIR "."

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/geometry.h"
+#include "accelbench/base/geometry.h"
 #include "config.h"
 
 namespace accelbench {

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "accelbench/registry.h"
+#include "accelbench/accel/registry.h"
 #include "csv.h"
 
 namespace fs = std::filesystem;

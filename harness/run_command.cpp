@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/registry.h"
+#include "accelbench/accel/registry.h"
 #include "combinations.h"
 #include "config.h"
 #include "instructions.h"

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "accelbench/memory.h"
+#include "accelbench/base/memory.h"
 #include "text.h"
 
 namespace accelbench {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/robustness_cases.h"
+#include "accelbench/verify/robustness_cases.h"
 #include "combinations.h"
 #include "measure.h"
 

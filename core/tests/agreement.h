@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/error_metrics.h"
-#include "accelbench/registry.h"
-#include "accelbench/scene.h"
+#include "accelbench/verify/error_metrics.h"
+#include "accelbench/accel/registry.h"
+#include "accelbench/scene/scene.h"
 
 namespace accelbench::test {
 

@@ -1,4 +1,4 @@
-#include "accelbench/brute_force.h"
+#include "accelbench/accel/baseline/brute_force.h"
 
 #include <gtest/gtest.h>
 

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/bvh_node.h"
-#include "accelbench/scene.h"
+#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/scene/scene.h"
 
 namespace accelbench::test {
 

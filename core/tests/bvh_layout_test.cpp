@@ -2,9 +2,9 @@
 // two traversals with their exact counts.
 #include <gtest/gtest.h>
 
-#include "accelbench/bvh_metrics.h"
-#include "accelbench/bvh_node.h"
-#include "accelbench/bvh_traversal.h"
+#include "accelbench/accel/bvh/bvh_metrics.h"
+#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/accel/bvh/bvh_traversal.h"
 
 using namespace accelbench;
 

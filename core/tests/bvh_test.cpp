@@ -1,6 +1,6 @@
 // The top-down BVH: agreement with Embree for every parameter combination, exact trees
 // on hand-made scenes, and termination on degenerate input.
-#include "accelbench/bvh.h"
+#include "accelbench/accel/bvh/bvh.h"
 
 #include <gtest/gtest.h>
 
@@ -9,10 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/bvh_metrics.h"
+#include "accelbench/accel/bvh/bvh_metrics.h"
 #include "agreement.h"
 #include "bvh_check.h"
-#include "model_registry.h"
 #include "test_scenes.h"
 
 using namespace accelbench;
@@ -378,11 +377,8 @@ TEST(Bvh, ParametersAreValidated) {
 // ---- a real model ---------------------------------------------------------------------
 
 TEST(Bvh, StanfordBunnyAgreesWithEmbree) {
-    const ModelRegistry registry = ModelRegistry::load_default();
-    const ModelEntry* entry = registry.find("stanford-bunny");
-    ASSERT_NE(entry, nullptr);
-    ASSERT_FALSE(registry.locate(*entry).path.empty()) << "stanford-bunny.obj not found (../shared/models should hold it)";
-    const Scene scene = registry.load_scene(*entry);
+    const Scene scene = test::stanford_bunny();
+    ASSERT_EQ(scene.triangle_count(), 69451u);
     const auto rays = probe_rays(scene, 20000, 11);
     for (const std::map<std::string, std::string>& p : std::vector<std::map<std::string, std::string>>{
              {}, {{"split", "sah"}}, {{"split", "sah"}, {"max_prims", "8"}, {"traversal", "report"}}}) {

@@ -1,4 +1,4 @@
-#include "accelbench/error_metrics.h"
+#include "accelbench/verify/error_metrics.h"
 
 #include <gtest/gtest.h>
 

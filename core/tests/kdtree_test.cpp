@@ -1,6 +1,6 @@
 // The kd-tree: agreement with Embree, identical trees from both builders, hand-derived
 // trees and counters, the depth rule, degenerate scenes and stiff parameters, the bunny.
-#include "accelbench/kdtree.h"
+#include "accelbench/accel/kdtree/kdtree.h"
 
 #include <gtest/gtest.h>
 
@@ -8,10 +8,11 @@
 #include <cstring>
 #include <string>
 
-#include "accelbench/mesh_io.h"
-#include "accelbench/procedural.h"
-#include "accelbench/random.h"
+#include "accelbench/scene/mesh_io.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/base/random.h"
 #include "agreement.h"
+#include "test_scenes.h"
 
 using namespace accelbench;
 
@@ -547,8 +548,7 @@ TEST(KdTree, AgreesWithEmbreeOnAProceduralForest) {
 // 128,943 intersection tests on it (Tables 2 and 4); ours differs (see the report to the
 // team) and is printed, not asserted.
 TEST(KdTree, StanfordBunny) {
-    const std::string path = std::string(ACCELBENCH_SOURCE_DIR) + "/../shared/models/stanford-bunny.obj";
-    const Scene bunny = load_mesh(path);
+    const Scene bunny = test::stanford_bunny();
     ASSERT_EQ(bunny.triangle_count(), 69451u);
     auto kd = build_kdtree(bunny, {});
     auto pbrt = build_kdtree(bunny, {{"build", "pbrt"}});

@@ -1,6 +1,6 @@
 // The LBVH: the tree against the split rule itself, agreement with Embree, the same tree
 // for any thread count, exact trees on hand-made scenes and degenerate input.
-#include "accelbench/lbvh.h"
+#include "accelbench/accel/bvh/lbvh.h"
 
 #include <gtest/gtest.h>
 
@@ -9,12 +9,11 @@
 #include <string>
 #include <utility>
 
-#include "accelbench/morton_code.h"
-#include "accelbench/procedural.h"
-#include "accelbench/random.h"
+#include "accelbench/accel/bvh/morton_code.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/base/random.h"
 #include "agreement.h"
 #include "bvh_check.h"
-#include "model_registry.h"
 #include "test_scenes.h"
 
 using namespace accelbench;
@@ -364,11 +363,8 @@ TEST(Lbvh, RefusesOutOfRangeParameters) {
 }
 
 TEST(Lbvh, StanfordBunnyAgreesWithEmbree) {
-    const ModelRegistry registry = ModelRegistry::load_default();
-    const ModelEntry* entry = registry.find("stanford-bunny");
-    ASSERT_NE(entry, nullptr);
-    ASSERT_FALSE(registry.locate(*entry).path.empty()) << "stanford-bunny.obj not found (../shared/models should hold it)";
-    const Scene scene = registry.load_scene(*entry);
+    const Scene scene = test::stanford_bunny();
+    ASSERT_EQ(scene.triangle_count(), 69451u);
     const auto rays = test::probe_rays(scene, 20000, 11);
     for (const std::map<std::string, std::string>& p : std::vector<std::map<std::string, std::string>>{
              {}, {{"bits", "21"}, {"traversal", "report"}}, {{"max_prims", "4"}, {"threads", "2"}}}) {

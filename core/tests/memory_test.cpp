@@ -1,4 +1,4 @@
-#include "accelbench/memory.h"
+#include "accelbench/base/memory.h"
 
 #include <gtest/gtest.h>
 

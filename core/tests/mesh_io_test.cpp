@@ -1,8 +1,8 @@
 // load_mesh on tiny files of every format, written here byte by byte, so the expected
 // counts, fan triangles and coordinates are known exactly.
-#include "accelbench/mesh_io.h"
+#include "accelbench/scene/mesh_io.h"
 
-#include "accelbench/temp_dir.h"
+#include "accelbench/base/temp_dir.h"
 
 #include <gtest/gtest.h>
 #include <zlib.h>

@@ -1,4 +1,4 @@
-#include "accelbench/mesh_transform.h"
+#include "accelbench/scene/mesh_transform.h"
 
 #include <gtest/gtest.h>
 

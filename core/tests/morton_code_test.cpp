@@ -1,4 +1,4 @@
-#include "accelbench/morton_code.h"
+#include "accelbench/accel/bvh/morton_code.h"
 
 #include <gtest/gtest.h>
 

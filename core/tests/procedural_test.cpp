@@ -1,10 +1,11 @@
 // Procedural scenes: deterministic for a seed, sized as asked, finite, and shaped like what
 // they claim to be.
-#include "accelbench/procedural.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/render/renderer.h"
 
 #include <gtest/gtest.h>
 
-#include "accelbench/registry.h"
+#include "accelbench/accel/registry.h"
 
 using namespace accelbench;
 

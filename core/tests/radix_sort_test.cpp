@@ -1,4 +1,4 @@
-#include "accelbench/radix_sort.h"
+#include "accelbench/accel/bvh/radix_sort.h"
 
 #include <gtest/gtest.h>
 

@@ -1,10 +1,10 @@
 // The reference is the ground truth, so it is checked against something it does not
 // share code with: exact rational arithmetic (GMP's mpq_class) for the triangle test, and
 // Embree (robust) for whole scenes.
-#include "accelbench/reference.h"
+#include "accelbench/accel/baseline/reference.h"
 
-#include "accelbench/procedural.h"
-#include "accelbench/random.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/base/random.h"
 
 #include <gmpxx.h>
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // Camera, renderer and image: the renderer traces exactly the rays the report's setup
 // asks for (one primary ray per sample, one shadow ray per hit), whatever is switched on
 // around them, and its results do not depend on threads.
-#include "accelbench/renderer.h"
+#include "accelbench/render/renderer.h"
 
 #include <gtest/gtest.h>
 
@@ -10,8 +10,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "accelbench/procedural.h"
-#include "accelbench/registry.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/accel/registry.h"
 #include "agreement.h"
 
 using namespace accelbench;

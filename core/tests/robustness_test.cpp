@@ -6,7 +6,7 @@
 // Leaks through edges and vertices are required of watertight structures only; for
 // Embree (without robust, and with robust on the denormal-scale cases 3b/3c) they are
 // printed as findings, not failed: Embree is the third-party baseline.
-#include "accelbench/robustness_cases.h"
+#include "accelbench/verify/robustness_cases.h"
 
 #include <gtest/gtest.h>
 
@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/embree_accel.h"
-#include "accelbench/registry.h"
+#include "accelbench/accel/baseline/embree_accel.h"
+#include "accelbench/accel/registry.h"
 
 using namespace accelbench;
 

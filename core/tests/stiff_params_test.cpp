@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/error_metrics.h"
-#include "accelbench/memory.h"
-#include "accelbench/random.h"
-#include "accelbench/registry.h"
-#include "accelbench/robustness_cases.h"
+#include "accelbench/verify/error_metrics.h"
+#include "accelbench/base/memory.h"
+#include "accelbench/base/random.h"
+#include "accelbench/accel/registry.h"
+#include "accelbench/verify/robustness_cases.h"
 #include "agreement.h"
 
 using namespace accelbench;

@@ -3,11 +3,24 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
-#include "accelbench/scene.h"
+#include "accelbench/scene/mesh_io.h"
+#include "accelbench/scene/scene.h"
 
 namespace accelbench::test {
+
+// The Stanford bunny of ../shared/models (beside the project, as CI lays it out). ctest sets
+// ACCELBENCH_SOURCE_DIR; the model registry (harness) is not used here, core's tests stay
+// below the harness.
+inline Scene stanford_bunny() {
+    const char* src = std::getenv("ACCELBENCH_SOURCE_DIR");
+    if (!src) throw std::runtime_error("ACCELBENCH_SOURCE_DIR is not set (run the test through ctest)");
+    return load_mesh(std::string(src) + "/../shared/models/stanford-bunny.obj");
+}
 
 // Uniform floats in [0, 1) from a xorshift64 state.
 class TestRandom {

@@ -1,4 +1,4 @@
-#include "accelbench/triangle.h"
+#include "accelbench/base/triangle.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // its file, line, column and key path — all of them at once.
 #include <gtest/gtest.h>
 
-#include "accelbench/robustness_cases.h"
+#include "accelbench/verify/robustness_cases.h"
 #include "config.h"
 #include "harness_test_util.h"
 

@@ -5,7 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 
-#include "accelbench/mesh_io.h"
+#include "accelbench/scene/mesh_io.h"
 #include "derived_model.h"
 #include "harness_test_util.h"
 #include "sha256.h"

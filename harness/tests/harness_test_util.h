@@ -8,7 +8,7 @@
 #include <fstream>
 #include <string>
 
-#include "accelbench/temp_dir.h"
+#include "accelbench/base/temp_dir.h"
 #include "config.h"
 #include "model_registry.h"
 

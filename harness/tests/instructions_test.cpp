@@ -2,7 +2,7 @@
 // (Counting itself needs valgrind; `make regress` exercises it.)
 #include <gtest/gtest.h>
 
-#include "accelbench/temp_dir.h"
+#include "accelbench/base/temp_dir.h"
 #include "harness_test_util.h"
 #include "instructions.h"
 

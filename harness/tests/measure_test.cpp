@@ -5,8 +5,8 @@
 #include <csignal>
 #include <thread>
 
-#include "accelbench/brute_force.h"
-#include "accelbench/embree_accel.h"
+#include "accelbench/accel/baseline/brute_force.h"
+#include "accelbench/accel/baseline/embree_accel.h"
 #include "measure.h"
 
 namespace accelbench {

@@ -13,7 +13,7 @@
 #include <string>
 #include <utility>
 
-#include "accelbench/temp_dir.h"
+#include "accelbench/base/temp_dir.h"
 #include "sha256.h"
 
 namespace accelbench {

@@ -3,7 +3,7 @@
 
 #include <filesystem>
 
-#include "accelbench/registry.h"
+#include "accelbench/accel/registry.h"
 #include "csv.h"
 #include "harness_test_util.h"
 #include "results.h"

@@ -1,0 +1,112 @@
+// The one interface every acceleration structure answers, in the shape of pbrt-v4's
+// aggregates: build once from a scene, then closest-hit and any-hit queries.
+//
+// Queries are batched: the virtual call happens once per batch (a tile of the image, a
+// chunk of a ray file), and the per-ray loop inside is concrete code of the structure,
+// instantiated twice — with NoCounters for the timed path and with RayStats when the
+// caller wants counts. So there is no virtual call and no counting branch per ray.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "accelbench/base/counters.h"
+#include "accelbench/base/geometry.h"
+#include "accelbench/base/params.h"
+#include "accelbench/scene/scene.h"
+
+namespace accelbench {
+
+// What a structure reports after build. A value a structure cannot know (Embree's node
+// count) stays empty and is reported as missing, never as zero.
+struct BuildStats {
+    std::optional<uint64_t> nodes, leaves, max_depth, memory_bytes;
+    std::optional<double> avg_leaf_size;  // primitive references per leaf
+    std::optional<double> sah_cost;       // of the finished tree, constants in docs
+    // Structure-specific extras, e.g. "degenerate_splits", "prim_refs".
+    std::map<std::string, double> extra;
+};
+
+class Accelerator {
+public:
+    virtual ~Accelerator() = default;
+
+    // Builds over the scene. The scene must outlive the accelerator (structures keep a
+    // reference to its vertex data rather than copying it).
+    virtual void build(const Scene& scene) = 0;
+
+    // Closest hit of each ray within [ray.tmin, ray.tmax). hits[i] is overwritten.
+    // When stats is non-empty it has one entry per ray and receives that ray's counts
+    // (added to what is there).
+    virtual void closest_hits(std::span<const Ray> rays, std::span<Hit> hits,
+                              std::span<RayStats> stats = {}) const = 0;
+
+    // Whether anything lies within [ray.tmin, ray.tmax) (shadow rays): occluded[i] is 1
+    // or 0. May stop at the first hit found.
+    virtual void any_hits(std::span<const Ray> rays, std::span<uint8_t> occluded,
+                          std::span<RayStats> stats = {}) const = 0;
+
+    virtual BuildStats build_stats() const = 0;
+};
+
+// Turns a structure with per-ray template members
+//   template <class C> void intersect(const Ray&, Hit&, C& counters) const;
+//   template <class C> bool occluded(const Ray&, C& counters) const;
+// into an Accelerator (CRTP: the per-ray calls are static and inline).
+template <class Derived>
+class AcceleratorBase : public Accelerator {
+public:
+    void closest_hits(std::span<const Ray> rays, std::span<Hit> hits,
+                      std::span<RayStats> stats = {}) const override {
+        const Derived& self = static_cast<const Derived&>(*this);
+        if (stats.empty()) {
+            NoCounters none;
+            for (size_t i = 0; i < rays.size(); ++i) {
+                hits[i] = Hit{};
+                self.intersect(rays[i], hits[i], none);
+            }
+        } else {
+            for (size_t i = 0; i < rays.size(); ++i) {
+                hits[i] = Hit{};
+                self.intersect(rays[i], hits[i], stats[i]);
+            }
+        }
+    }
+
+    void any_hits(std::span<const Ray> rays, std::span<uint8_t> occluded,
+                  std::span<RayStats> stats = {}) const override {
+        const Derived& self = static_cast<const Derived&>(*this);
+        if (stats.empty()) {
+            NoCounters none;
+            for (size_t i = 0; i < rays.size(); ++i) occluded[i] = self.occluded(rays[i], none) ? 1 : 0;
+        } else {
+            for (size_t i = 0; i < rays.size(); ++i) occluded[i] = self.occluded(rays[i], stats[i]) ? 1 : 0;
+        }
+    }
+};
+
+// What the factory and the harness know of a structure: its name, its declared
+// parameters and how to make one. Each structure's static info() returns it; only the
+// registry (accel/registry.cpp) lists them all.
+struct AcceleratorInfo {
+    std::string name;
+    std::string description;
+    std::vector<ParamSpec> params;
+    std::function<std::unique_ptr<Accelerator>(const ParamSet&)> create;
+};
+
+}  // namespace accelbench
+
+// The per-ray members are templates defined in the structure's .cpp; this instantiates
+// them there for both counter types, the timed (NoCounters) and the counting (RayStats).
+#define ACCELBENCH_INSTANTIATE_RAY_QUERIES(Structure)                                   \
+    template void Structure::intersect(const Ray&, Hit&, NoCounters&) const;            \
+    template void Structure::intersect(const Ray&, Hit&, RayStats&) const;              \
+    template bool Structure::occluded(const Ray&, NoCounters&) const;                   \
+    template bool Structure::occluded(const Ray&, RayStats&) const

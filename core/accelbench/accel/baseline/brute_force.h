@@ -1,0 +1,28 @@
+// Brute force: every ray tests every triangle — the report's O(N*P) starting point
+// (section 1.2). It is the simplest correct answer and the floor every structure beats;
+// it refuses large scenes unless forced, because a 640x480 image of a 100k-triangle
+// model would take hours.
+#pragma once
+
+#include "accelbench/accel/accelerator.h"
+
+namespace accelbench {
+
+class BruteForce final : public AcceleratorBase<BruteForce> {
+public:
+    static AcceleratorInfo info();
+    explicit BruteForce(const ParamSet& params);
+
+    void build(const Scene& scene) override;
+    BuildStats build_stats() const override;
+
+    template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
+    template <class C> bool occluded(const Ray& ray, C& counters) const;
+
+private:
+    const Scene* scene_ = nullptr;
+    int64_t max_triangles_;
+    bool force_;
+};
+
+}  // namespace accelbench

@@ -1,0 +1,256 @@
+#include "accelbench/accel/bvh/bvh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "accelbench/accel/bvh/bvh_metrics.h"
+
+namespace accelbench {
+
+AcceleratorInfo Bvh::info() {
+    return {"bvh",
+            "top-down BVH (report section 2): fit & split with median/midpoint/mean/spatial-median or binned SAH "
+            "splits, flattened depth-first",
+            {
+                {"split", ParamType::Enum, "median", {"median", "midpoint", "mean", "spatial_median", "sah"}, 0, 0,
+                 "where a node splits: object median (report default), centre of the centroid box (report's "
+                 "centroid method), centroid mean, equal triangle area (spatial median), binned SAH (Wald 2007)"},
+                {"axis", ParamType::Enum, "longest", {"longest", "round_robin"}, 0, 0,
+                 "split axis: longest axis of the node's centroid box (report, Figure 6) or x, y, z by depth"},
+                {"max_prims", ParamType::Int, "1", {}, 1, 1e9,
+                 "largest leaf; ranges above it are split (sah may also stop below it when a leaf is cheaper)"},
+                {"max_depth", ParamType::Int, "50", {}, 0, 1000,
+                 "nodes at this depth become leaves whatever their size (report Table 3: 50)"},
+                {"bins", ParamType::Int, "16", {}, 2, 1024, "SAH bins along the split axis (split=sah only)"},
+                {"traversal_cost", ParamType::Float, "1", {}, 0, 1e6, "SAH cost of visiting a node (split=sah only)"},
+                {"isect_cost", ParamType::Float, "1", {}, 1e-6, 1e6,
+                 "SAH cost of one triangle test (split=sah only)"},
+                bvh_traversal_param(),
+            },
+            [](const ParamSet& p) { return std::make_unique<Bvh>(p); }};
+}
+
+namespace {
+
+Bvh::Split split_from(const std::string& s) {
+    if (s == "midpoint") return Bvh::Split::midpoint;
+    if (s == "mean") return Bvh::Split::mean;
+    if (s == "spatial_median") return Bvh::Split::spatial_median;
+    if (s == "sah") return Bvh::Split::sah;
+    return Bvh::Split::median;
+}
+
+// Moves the references whose centroid lies below `plane` on `axis` to the front; no
+// split when that leaves a side empty.
+std::optional<BvhSplit> partition_at(std::span<BvhPrimRef> refs, int axis, float plane) {
+    const size_t mid = with_axis(axis, [&](auto a) {
+        return size_t(std::partition(refs.begin(), refs.end(), [a, plane](const BvhPrimRef& r) { return r.centroid(a) < plane; }) -
+                      refs.begin());
+    });
+    if (mid == 0 || mid == refs.size()) return std::nullopt;
+    return BvhSplit{mid, axis};
+}
+
+// Object median (report 2.2.1): half the primitives on each side, by centroid order.
+// Balanced by construction, blind to the primitives' sizes and to empty space.
+struct MedianSplit {
+    std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) const {
+        return detail::split_equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis],
+                                          r.centroid_bounds.upper[r.axis]);
+    }
+};
+
+// The report's centroid method (equation 1): cut the node's centroid box in half. Adapts
+// to the distribution (sparse regions are cut off quickly) but gives unbalanced trees on
+// clustered input.
+struct MidpointSplit {
+    std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) const {
+        const float plane = 0.5f * (r.centroid_bounds.lower[r.axis] + r.centroid_bounds.upper[r.axis]);
+        return partition_at(refs, r.axis, plane);
+    }
+};
+
+// Object mean: the plane at the mean centroid (the report's example {1,3,3,6,7,8,9}:
+// mean 5.29, left {1,3,3}).
+struct MeanSplit {
+    std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) const {
+        const double sum = with_axis(r.axis, [&](auto a) {
+            double acc = 0;  // double: millions of floats
+            for (const BvhPrimRef& ref : refs) acc += ref.centroid(a);
+            return acc;
+        });
+        return partition_at(refs, r.axis, float(sum / double(refs.size())));
+    }
+};
+
+// Spatial median (report 2.2.1, Figure 5c): order the primitives along the axis and cut
+// where the triangle areas on the two sides are closest to equal, so one large triangle
+// can balance many small ones. Sorting makes it O(n log n) per node.
+class SpatialMedianSplit {
+public:
+    explicit SpatialMedianSplit(const Scene& scene) : area_(scene.triangle_count()) {
+        for (size_t i = 0; i < area_.size(); ++i) {
+            const Vec3 p0 = scene.vertex(uint32_t(i), 0);
+            area_[i] = 0.5 * double(length(cross(scene.vertex(uint32_t(i), 1) - p0, scene.vertex(uint32_t(i), 2) - p0)));
+        }
+    }
+
+    std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) const {
+        with_axis(r.axis, [&](auto a) {
+            std::sort(refs.begin(), refs.end(),
+                      [a](const BvhPrimRef& x, const BvhPrimRef& y) { return x.centroid(a) < y.centroid(a); });
+        });
+        double total = 0;
+        for (const BvhPrimRef& ref : refs) total += area_[ref.id];
+        if (!(total > 0)) return std::nullopt;  // only degenerate triangles: no area to halve
+        const double half = 0.5 * total;
+        double left = 0, best_gap = kInfinity;
+        size_t best = 0;
+        for (size_t mid = 1; mid < refs.size(); ++mid) {
+            left += area_[refs[mid - 1].id];
+            const double gap = std::fabs(left - half);
+            if (gap < best_gap) {
+                best_gap = gap;
+                best = mid;
+            }
+        }
+        return BvhSplit{best, r.axis};
+    }
+
+private:
+    std::vector<double> area_;  // per scene triangle
+};
+
+// Binned SAH (Wald 2007): instead of sorting, drop each centroid into one of K equal
+// bins along the axis (O(n)), keep each bin's box and count, and evaluate the SAH
+//   cost(plane) = C_trav * A + C_isect * (A_left * N_left + A_right * N_right)
+// (the usual cost multiplied by the node's area A, so a flat node needs no division) at
+// the K-1 bin boundaries with two sweeps over the bins. Like pbrt-v4's BVH build, a range
+// small enough to be a leaf (<= max_prims) stays a leaf when that is cheaper
+// (C_isect * N * A).
+class SahSplit {
+public:
+    static constexpr bool kMayStopEarly = true;
+
+    SahSplit(uint32_t bins, float traversal_cost, float isect_cost)
+        : bins_(bins), traversal_cost_(traversal_cost), isect_cost_(isect_cost), bin_bounds_(bins), bin_counts_(bins),
+          right_area_(bins), right_count_(bins) {}
+
+    std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) {
+        const int axis = r.axis;
+        const float lo = r.centroid_bounds.lower[axis];
+        // (1 - 1e-6): the largest centroid lands in the last bin, not one past it.
+        const float scale = float(bins_) * (1.0f - 1e-6f) / (r.centroid_bounds.upper[axis] - lo);
+        const uint32_t last = bins_ - 1;
+        // Clamped in float before the conversion: a tiny extent can make scale infinite.
+        auto bin_of = [=](const BvhPrimRef& ref, auto a) {
+            return uint32_t(std::min(float(last), std::max(0.0f, (ref.centroid(a) - lo) * scale)));
+        };
+        // The bins are empty on entry (cleared after use below).
+        with_axis(axis, [&](auto a) {
+            for (const BvhPrimRef& ref : refs) {
+                const uint32_t b = bin_of(ref, a);
+                bin_bounds_[b].extend(ref);
+                ++bin_counts_[b];
+            }
+        });
+        // Right sweep: box area and count of bins [i, K). An empty bin adds nothing, and
+        // a small range leaves most bins empty: skip them.
+        BvhBoxAccumulator acc;
+        uint32_t count = 0;
+        for (uint32_t i = last; i > 0; --i) {
+            if (bin_counts_[i] != 0) {
+                acc.extend(bin_bounds_[i]);
+                count += bin_counts_[i];
+            }
+            right_area_[i] = acc.area();
+            right_count_[i] = count;
+        }
+        // Left sweep: plane i separates bins [0, i) from [i, K). After an empty bin the
+        // partition equals the previous plane's, so it cannot cost strictly less: skip.
+        const float node_area = r.bounds.area();
+        float best_cost = kInfinity;
+        uint32_t best_plane = 0;
+        acc = BvhBoxAccumulator{};
+        count = 0;
+        for (uint32_t i = 1; i < bins_; ++i) {
+            if (bin_counts_[i - 1] == 0) continue;
+            acc.extend(bin_bounds_[i - 1]);
+            count += bin_counts_[i - 1];
+            if (right_count_[i] == 0) continue;
+            const float cost = traversal_cost_ * node_area +
+                               isect_cost_ * (acc.area() * float(count) + right_area_[i] * float(right_count_[i]));
+            if (cost < best_cost) {
+                best_cost = cost;
+                best_plane = i;
+            }
+        }
+        for (uint32_t i = 0; i < bins_; ++i) {
+            if (bin_counts_[i] == 0) continue;
+            bin_counts_[i] = 0;
+            bin_bounds_[i] = BvhBoxAccumulator{};
+        }
+        if (best_plane == 0) return std::nullopt;
+        if (r.leaf_allowed && isect_cost_ * float(refs.size()) * node_area <= best_cost) return std::nullopt;
+        const size_t mid = with_axis(axis, [&](auto a) {
+            return size_t(std::partition(refs.begin(), refs.end(),
+                                         [&](const BvhPrimRef& ref) { return bin_of(ref, a) < best_plane; }) -
+                          refs.begin());
+        });
+        return BvhSplit{mid, axis};
+    }
+
+private:
+    uint32_t bins_;
+    float traversal_cost_, isect_cost_;
+    std::vector<BvhBoxAccumulator> bin_bounds_;  // allocated once per build, reused by every node
+    std::vector<uint32_t> bin_counts_;
+    std::vector<float> right_area_;
+    std::vector<uint32_t> right_count_;
+};
+
+}  // namespace
+
+Bvh::Bvh(const ParamSet& params)
+    : split_(split_from(params.get_enum("split"))),
+      settings_{uint32_t(params.get_int("max_prims")), uint32_t(params.get_int("max_depth")),
+                params.get_enum("axis") == "round_robin" ? BvhAxisRule::round_robin : BvhAxisRule::longest},
+      bins_(uint32_t(params.get_int("bins"))),
+      traversal_cost_(float(params.get_float("traversal_cost"))),
+      isect_cost_(float(params.get_float("isect_cost"))),
+      traversal_(bvh_traversal_from(params)) {}
+
+void Bvh::build(const Scene& scene) {
+    auto build_with = [&](auto&& strategy) { bvh_ = build_bvh_top_down(scene, settings_, strategy, counts_); };
+    switch (split_) {
+        case Split::median: build_with(MedianSplit{}); break;
+        case Split::midpoint: build_with(MidpointSplit{}); break;
+        case Split::mean: build_with(MeanSplit{}); break;
+        case Split::spatial_median: build_with(SpatialMedianSplit(scene)); break;
+        case Split::sah: build_with(SahSplit(bins_, traversal_cost_, isect_cost_)); break;
+    }
+}
+
+BuildStats Bvh::build_stats() const {
+    BuildStats s = bvh_build_stats(bvh_);
+    s.extra["degenerate_splits"] = double(counts_.degenerate_splits);
+    s.extra["forced_leaves"] = double(counts_.forced_leaves);
+    return s;
+}
+
+template <class C>
+void Bvh::intersect(const Ray& ray, Hit& hit, C& counters) const {
+    intersect_bvh(traversal_, bvh_, ray, hit, counters);
+}
+
+template <class C>
+bool Bvh::occluded(const Ray& ray, C& counters) const {
+    return occluded_bvh(traversal_, bvh_, ray, counters);
+}
+
+ACCELBENCH_INSTANTIATE_RAY_QUERIES(Bvh);
+
+}  // namespace accelbench

@@ -1,0 +1,46 @@
+#include "accelbench/accel/bvh/bvh_node.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+namespace accelbench {
+
+void FlatBvh::finalize(const Scene& scene) {
+    triangles.resize(prim_ids.size());
+    for (size_t slot = 0; slot < prim_ids.size(); ++slot) {
+        const uint32_t p = prim_ids[slot];
+        triangles[slot] = {scene.vertex(p, 0), scene.vertex(p, 1), scene.vertex(p, 2)};
+    }
+    // In depth-first order a node follows either its parent (as first child) or, after a
+    // leaf, the second child of the deepest ancestor not yet finished — the top of a
+    // stack of pending second children. So one forward pass with that stack (at most
+    // depth entries) knows every node's depth.
+    depth = 0;
+    struct Pending {
+        uint32_t node, depth;
+    };
+    std::vector<Pending> pending;
+    uint32_t d = 0;
+    for (size_t i = 0; i < nodes.size(); ++i) {
+        if (i > 0 && nodes[i - 1].is_leaf()) {
+            if (pending.empty() || pending.back().node != i)
+                throw std::logic_error("FlatBvh: node " + std::to_string(i) +
+                                       " follows a leaf but is no pending second child (not depth-first)");
+            d = pending.back().depth;
+            pending.pop_back();
+        } else if (i > 0) {
+            ++d;  // first child of the inner node before it
+        }
+        depth = std::max(depth, d);
+        if (nodes[i].is_leaf()) continue;
+        const uint32_t second = nodes[i].second_child();
+        if (second <= i + 1 || second >= nodes.size())
+            throw std::logic_error("FlatBvh: inner node " + std::to_string(i) + " has second child " +
+                                   std::to_string(second) + ", not after its first child and inside the array");
+        pending.push_back({second, d + 1});
+    }
+    if (!pending.empty()) throw std::logic_error("FlatBvh: second child " + std::to_string(pending.back().node) + " never reached");
+}
+
+}  // namespace accelbench

@@ -1,0 +1,264 @@
+// Traversal of a FlatBvh (bvh_node.h), shared by the top-down BVH and the LBVH: the
+// report uses one traversal for both (section 3.2: "the same traversal algorithm used in
+// the BVH will be utilized for LBVH"), and so do we, so that differences between the two
+// rows come from the trees alone.
+//
+// Two algorithms, chosen by the structure's `traversal` parameter:
+//
+//  ordered  What production tracers do (pbrt-v4's BVHAggregate::Intersect, Embree,
+//           madmann91/bvh): iterative with an explicit stack; at an inner node both
+//           children's boxes are tested and the nearer one (by entry distance) is entered
+//           first, the other is pushed with its entry distance; a popped node whose entry
+//           distance lies beyond the closest hit so far is skipped, and every box test is
+//           clipped to the closest hit. Any-hit queries stop at the first hit.
+//
+//  report   The report's Algorithm 1 (section 2.2.3): visit every node whose box the ray
+//           hits (left child, then right child), collect the primitives of every leaf
+//           reached into a hit list, and take the nearest of them. Box tests are never
+//           clipped to a hit found earlier, so it visits exactly the nodes Algorithm 1
+//           visits. The hit list is not materialised: each collected primitive is tested
+//           when it is collected and the nearest is kept, which tests the same primitives
+//           and returns the same one (the first of equally near hits in visiting order)
+//           without a per-ray allocation. Any-hit queries may stop at the first hit.
+//
+// Both count with the shared counters: c.node() per node entered, c.box() per ray/box
+// slab test, c.prim() per ray/triangle test.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+
+#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/base/geometry.h"
+#include "accelbench/base/params.h"
+#include "accelbench/base/triangle.h"
+
+namespace accelbench {
+
+// The per-ray loops inline everything they call (box and triangle tests): GCC otherwise
+// keeps intersect_box out of line in these large loops, and the call costs more than
+// the slab test itself.
+#if defined(__GNUC__)
+#define ACCELBENCH_BVH_HOT [[gnu::flatten]]
+#else
+#define ACCELBENCH_BVH_HOT
+#endif
+
+enum class BvhTraversal { ordered, report };
+
+// The `traversal` parameter as both BVH structures declare it, and its value.
+inline ParamSpec bvh_traversal_param() {
+    return {"traversal", ParamType::Enum, "ordered", {"ordered", "report"}, 0, 0,
+            "ordered: near child first, clipped to the closest hit (pbrt/Embree); "
+            "report: the report's Algorithm 1 (every hit box, nearest of the collected hits)"};
+}
+inline BvhTraversal bvh_traversal_from(const ParamSet& params) {
+    return params.get_enum("traversal") == "report" ? BvhTraversal::report : BvhTraversal::ordered;
+}
+
+// The stack of nodes still to visit. Both traversals push at most one node per level
+// below the root (the sibling of the child they descend into), so depth + 1 entries
+// always suffice: the stack is sized from the finished tree's depth and cannot overflow,
+// whatever the builder did. Trees up to 64 levels deep (all balanced ones) use the inline
+// array; deeper ones allocate once per ray.
+//
+// The traversal loops keep the top of the stack in a local pointer (Cursor) rather than
+// in this object: a count held here would be written through the same kind of pointer
+// as the entries, so the compiler would have to reload it from memory after every push.
+class BvhTraversalStack {
+public:
+    struct Entry {
+        uint32_t node;
+        float tnear;  // entry distance into the node's box (ordered traversal)
+    };
+
+    explicit BvhTraversalStack(uint32_t tree_depth) {
+        if (tree_depth + 1 > kInline) {
+            heap_ = std::make_unique<Entry[]>(size_t(tree_depth) + 1);
+            data_ = heap_.get();
+        }
+    }
+    BvhTraversalStack(const BvhTraversalStack&) = delete;
+    BvhTraversalStack& operator=(const BvhTraversalStack&) = delete;
+
+    // The stack's top, a value the traversal keeps in a register.
+    class Cursor {
+    public:
+        explicit Cursor(BvhTraversalStack& s) : bottom_(s.data_), top_(s.data_) {}
+        bool empty() const { return top_ == bottom_; }
+        void push(uint32_t node, float tnear = 0.0f) { *top_++ = {node, tnear}; }
+        Entry pop() { return *--top_; }
+
+    private:
+        Entry* bottom_;
+        Entry* top_;
+    };
+
+private:
+    static constexpr uint32_t kInline = 64;
+    Entry inline_[kInline];
+    std::unique_ptr<Entry[]> heap_;
+    Entry* data_ = inline_;
+};
+
+// Tests the triangles of one leaf against [tmin, tmax); on a closer hit, writes `hit` and
+// shrinks tmax. Returns whether any triangle was hit.
+template <class C>
+inline bool intersect_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const WatertightRay& wr, float tmin,
+                               float& tmax, Hit& hit, C& c) {
+    bool found = false;
+    const uint32_t end = leaf.first_prim() + leaf.prim_count();
+    for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
+        c.prim();
+        const LeafTriangle& tri = bvh.triangles[slot];
+        float t, u, v;
+        if (intersect_triangle(wr, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) {
+            tmax = t;
+            hit = {bvh.prim_ids[slot], t, u, v};
+            found = true;
+        }
+    }
+    return found;
+}
+
+// Whether any triangle of one leaf lies within [tmin, tmax).
+template <class C>
+inline bool occluded_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const WatertightRay& wr, float tmin,
+                              float tmax, C& c) {
+    const uint32_t end = leaf.first_prim() + leaf.prim_count();
+    for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
+        c.prim();
+        const LeafTriangle& tri = bvh.triangles[slot];
+        float t, u, v;
+        if (intersect_triangle(wr, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) return true;
+    }
+    return false;
+}
+
+// Ordered traversal. Closest hit (kAnyHit false): `hit` must come in empty (Hit{}) and
+// receives the closest hit; the search interval shrinks to it. Any hit (kAnyHit true):
+// returns at the first hit found (the near-first order costs one comparison and tends to
+// meet occluders early).
+template <bool kAnyHit, class C>
+ACCELBENCH_BVH_HOT bool traverse_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+    if (bvh.empty()) return false;
+    const RayPrecomp rp(ray);
+    float tmax = ray.tmax;  // the closest hit so far: nothing beyond it matters
+    c.box();
+    if (!intersect_box(bvh.nodes[0].bounds, rp, ray.tmin, tmax).hit()) return false;
+    const WatertightRay wr(ray);
+    BvhTraversalStack storage(bvh.depth);
+    BvhTraversalStack::Cursor stack(storage);
+    uint32_t index = 0;
+    for (;;) {
+        c.node();
+        const BvhNode& node = bvh.nodes[index];
+        if (!node.is_leaf()) {
+            uint32_t near = index + 1, far = node.second_child();
+            c.box(2);
+            BoxHit hn = intersect_box(bvh.nodes[near].bounds, rp, ray.tmin, tmax);
+            BoxHit hf = intersect_box(bvh.nodes[far].bounds, rp, ray.tmin, tmax);
+            if (hn.hit() && hf.hit()) {
+                if (hf.tnear < hn.tnear) {
+                    std::swap(near, far);
+                    std::swap(hn, hf);
+                }
+                stack.push(far, hf.tnear);
+                index = near;
+                continue;
+            }
+            if (hn.hit() || hf.hit()) {
+                index = hn.hit() ? near : far;
+                continue;
+            }
+        } else if constexpr (kAnyHit) {
+            if (occluded_bvh_leaf(bvh, node, wr, ray.tmin, tmax, c)) return true;
+        } else {
+            intersect_bvh_leaf(bvh, node, wr, ray.tmin, tmax, hit, c);
+        }
+        // Next: the nearest pushed node the ray can still reach before the closest hit.
+        for (;;) {
+            if (stack.empty()) return hit.found();
+            const BvhTraversalStack::Entry e = stack.pop();
+            if (e.tnear <= tmax) {
+                index = e.node;
+                break;
+            }
+        }
+    }
+}
+
+template <class C>
+inline void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+    traverse_bvh_ordered<false>(bvh, ray, hit, c);
+}
+
+template <class C>
+inline bool occluded_bvh_ordered(const FlatBvh& bvh, const Ray& ray, C& c) {
+    Hit unused;
+    return traverse_bvh_ordered<true>(bvh, ray, unused, c);
+}
+
+// The report's Algorithm 1: visits every node whose box the ray hits over its whole
+// interval, left child before right child, and calls leaf(node) for each leaf reached;
+// stops as soon as leaf() returns true. Returns whether it stopped.
+template <class C, class Leaf>
+ACCELBENCH_BVH_HOT bool visit_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c, Leaf&& leaf) {
+    if (bvh.empty()) return false;
+    const RayPrecomp rp(ray);
+    BvhTraversalStack storage(bvh.depth);
+    BvhTraversalStack::Cursor stack(storage);
+    uint32_t index = 0;
+    for (;;) {
+        c.node();
+        c.box();
+        const BvhNode& node = bvh.nodes[index];
+        if (intersect_box(node.bounds, rp, ray.tmin, ray.tmax).hit()) {
+            if (!node.is_leaf()) {
+                stack.push(node.second_child());
+                index = index + 1;
+                continue;
+            }
+            if (leaf(node)) return true;
+        }
+        if (stack.empty()) return false;
+        index = stack.pop().node;
+    }
+}
+
+// Algorithm 1, closest hit: the nearest of the primitives of every leaf reached.
+template <class C>
+ACCELBENCH_BVH_HOT void intersect_bvh_report(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+    const WatertightRay wr(ray);
+    float nearest = ray.tmax;  // nearest hit among the primitives collected so far
+    visit_bvh_report(bvh, ray, c, [&](const BvhNode& leaf) {
+        intersect_bvh_leaf(bvh, leaf, wr, ray.tmin, nearest, hit, c);
+        return false;
+    });
+}
+
+// Algorithm 1, any hit: the same visiting order, stopping at the first hit.
+template <class C>
+ACCELBENCH_BVH_HOT bool occluded_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c) {
+    const WatertightRay wr(ray);
+    return visit_bvh_report(bvh, ray, c,
+                            [&](const BvhNode& leaf) { return occluded_bvh_leaf(bvh, leaf, wr, ray.tmin, ray.tmax, c); });
+}
+
+// Dispatch by the structure's `traversal` parameter (one predictable branch per ray).
+template <class C>
+inline void intersect_bvh(BvhTraversal traversal, const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+    if (traversal == BvhTraversal::ordered)
+        intersect_bvh_ordered(bvh, ray, hit, c);
+    else
+        intersect_bvh_report(bvh, ray, hit, c);
+}
+
+template <class C>
+inline bool occluded_bvh(BvhTraversal traversal, const FlatBvh& bvh, const Ray& ray, C& c) {
+    return traversal == BvhTraversal::ordered ? occluded_bvh_ordered(bvh, ray, c) : occluded_bvh_report(bvh, ray, c);
+}
+
+}  // namespace accelbench

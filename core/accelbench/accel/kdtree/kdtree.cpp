@@ -1,0 +1,645 @@
+#include "accelbench/accel/kdtree/kdtree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "accelbench/base/triangle.h"
+
+namespace accelbench {
+
+AcceleratorInfo KdTree::info() {
+    return {"kdtree",
+            "SAH kd-tree after pbrt-v3 (report section 4): 8-byte nodes, edge-event SAH, front-to-back traversal",
+            {
+                {"build", ParamType::Enum, "nlogn", {"nlogn", "pbrt"}, 0, 0,
+                 "nlogn: events sorted once, split in linear time (Wald & Havran 2006); pbrt: edges sorted at "
+                 "every node. Both give the same tree"},
+                {"isect_cost", ParamType::Float, "80", {}, 1e-4, 1e4, "SAH cost of one ray/triangle test C_I"},
+                {"traversal_cost", ParamType::Float, "1", {}, 1e-4, 1e4, "SAH cost of one traversal step C_T"},
+                {"empty_bonus", ParamType::Float, "0.5", {}, 0, 1,
+                 "b_e: fraction of the cost forgiven when one child is empty"},
+                {"max_prims", ParamType::Int, "1", {}, 0, KdNode::kMaxIndex,
+                 "nodes with at most this many primitives become leaves"},
+                {"max_depth", ParamType::Int, "auto", {}, 0, kMaxDepthLimit,
+                 "deepest level; auto = round(8 + 1.3 log2 N)", true},
+            },
+            [](const ParamSet& p) { return std::make_unique<KdTree>(p); }};
+}
+
+namespace {
+
+KdTree::Settings settings_from(const ParamSet& p) {
+    KdTree::Settings s;
+    s.build = p.get_enum("build") == "pbrt" ? KdTree::BuildAlgorithm::Pbrt : KdTree::BuildAlgorithm::NLogN;
+    s.isect_cost = float(p.get_float("isect_cost"));
+    s.traversal_cost = float(p.get_float("traversal_cost"));
+    s.empty_bonus = float(p.get_float("empty_bonus"));
+    s.max_prims = int(p.get_int("max_prims"));
+    if (p.given("max_depth")) s.max_depth = int(p.get_int("max_depth"));
+    return s;
+}
+
+}  // namespace
+
+KdTree::KdTree(const ParamSet& params) : KdTree(settings_from(params)) {}
+
+KdTree::KdTree(const Settings& settings) : settings_(settings) {
+    if (settings_.max_depth && (*settings_.max_depth < 0 || *settings_.max_depth > kMaxDepthLimit))
+        throw std::invalid_argument("kdtree: max_depth " + std::to_string(*settings_.max_depth) +
+                                    " is outside [0, " + std::to_string(kMaxDepthLimit) + "]");
+    if (settings_.max_prims < 0) throw std::invalid_argument("kdtree: max_prims must be >= 0");
+    if (!(settings_.isect_cost > 0) || !(settings_.traversal_cost > 0) || !(settings_.empty_bonus >= 0) ||
+        !(settings_.empty_bonus <= 1))
+        throw std::invalid_argument("kdtree: costs must be > 0 and empty_bonus in [0, 1]");
+}
+
+int KdTree::default_max_depth(size_t prim_count) {
+    if (prim_count <= 1) return 8;
+    return int(std::lround(8.0 + 1.3 * std::log2(double(prim_count))));
+}
+
+// ---- build ------------------------------------------------------------------------
+//
+// Candidate planes are the faces of the primitives' bounding boxes (report Figure 14),
+// as events along each axis. A primitive with extent on the axis has a start event at
+// its lower face and an end event at its upper face; a primitive flat on the axis has a
+// single planar event (Wald & Havran 2006, section 4.2). At one plane position t:
+//   - a primitive ending at t (upper == t, lower < t) lies below the plane only;
+//   - a primitive starting at t (lower == t, upper > t) lies above only;
+//   - a primitive lying IN the plane (lower == upper == t) goes to the side whose SAH
+//     cost is lower (ties: below). Either side is correct for traversal: the plane is a
+//     face of both children, and a ray hitting the primitive there crosses that face,
+//     so it visits whichever child holds the primitive (unless a closer hit ends it).
+//   - everything with lower < t < upper goes to both children.
+// pbrt instead evaluates one candidate per edge with starts sorted before ends, which
+// sends primitives merely touching the plane to both sides; grouping all events at one
+// position makes the counts exact and the choice independent of how equal positions
+// happened to be ordered, which is what lets both builders agree bit for bit.
+
+namespace {
+
+// Event order at one position: ends, then planar, then starts, so a sweep sees at t
+// first what leaves the above side, then what lies in the plane, then what enters.
+enum EventType : uint32_t { kEnd = 0, kPlanar = 1, kStart = 2 };
+
+// An event is one 64-bit key that sorts by (position, type, primitive): the position's
+// bits mapped so that unsigned order is float order, then 2 type bits, then 30 bits of
+// primitive index. Sorting plain integers is fast and makes the order total.
+using EventKey = uint64_t;
+constexpr uint32_t kPrimBits = 30;
+constexpr uint32_t kPrimMask = (1u << kPrimBits) - 1;
+
+uint32_t ordered_bits(float f) {
+    // +0.0f turns -0.0f into +0.0f, so equal positions have equal keys.
+    const uint32_t b = std::bit_cast<uint32_t>(f + 0.0f);
+    return (b & 0x80000000u) ? ~b : (b | 0x80000000u);
+}
+float position_of_bits(uint32_t k) {
+    return std::bit_cast<float>((k & 0x80000000u) ? (k & 0x7fffffffu) : ~k);
+}
+EventKey make_event(float t, EventType type, uint32_t prim) {
+    return (EventKey(ordered_bits(t)) << 32) | (uint32_t(type) << kPrimBits) | prim;
+}
+uint32_t position_bits(EventKey e) { return uint32_t(e >> 32); }
+EventType type_of(EventKey e) { return EventType((uint32_t(e) >> kPrimBits) & 3u); }
+uint32_t prim_of(EventKey e) { return uint32_t(e) & kPrimMask; }
+
+// Appends the one or two events of primitive `prim` on `axis` at out[n...]; returns the new n.
+size_t put_events(EventKey* out, size_t n, const Bounds3& b, int axis, uint32_t prim) {
+    if (b.lower[axis] == b.upper[axis]) {
+        out[n++] = make_event(b.lower[axis], kPlanar, prim);
+    } else {
+        out[n++] = make_event(b.lower[axis], kStart, prim);
+        out[n++] = make_event(b.upper[axis], kEnd, prim);
+    }
+    return n;
+}
+
+// Which children a primitive goes to: bit 0 below, bit 1 above.
+constexpr uint8_t kBelow = 1, kAbove = 2, kBoth = 3;
+
+uint8_t classify(const Bounds3& b, int axis, float t, bool planar_below) {
+    const float lo = b.lower[axis], hi = b.upper[axis];
+    if (lo == t && hi == t) return planar_below ? kBelow : kAbove;
+    if (hi <= t) return kBelow;
+    if (lo >= t) return kAbove;
+    return kBoth;
+}
+
+struct Split {
+    int axis = -1;
+    float position = 0.0f;
+    bool planar_below = true;
+    float cost = kInfinity;
+};
+
+struct SahConstants {
+    float traversal, isect, empty_bonus;
+
+    // pbrt-v3: C_T + C_I (1 - b_e) (p_B N_B + p_A N_A), b_e only when a side is empty.
+    float split_cost(float p_below, float p_above, uint32_t n_below, uint32_t n_above) const {
+        const float bonus = (n_below == 0 || n_above == 0) ? empty_bonus : 0.0f;
+        return traversal + isect * (1.0f - bonus) * (p_below * float(n_below) + p_above * float(n_above));
+    }
+};
+
+// The SAH sweep over one axis: `events` are the sorted events of the node's n primitives
+// (including parts outside the node, which only shift the counts); every distinct
+// position strictly inside the node is a candidate. Updates `best` when a candidate is
+// strictly cheaper, so among equal costs the first axis tried and the lowest position win.
+void sweep_axis(std::span<const EventKey> events, int axis, const Bounds3& node, uint32_t n,
+                const SahConstants& k, Split& best) {
+    const float lo = node.lower[axis], hi = node.upper[axis];
+    if (!(lo < hi)) return;
+    const Vec3 d = node.diagonal();
+    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    const float cap = d[a1] * d[a2], rim = d[a1] + d[a2];
+    const float inv_area = 1.0f / node.area();
+    uint32_t n_below = 0, n_above = n;
+    size_t i = 0;
+    while (i < events.size()) {
+        const uint32_t key = position_bits(events[i]);
+        uint32_t counts[3] = {0, 0, 0};  // by EventType
+        for (; i < events.size() && position_bits(events[i]) == key; ++i) ++counts[type_of(events[i])];
+        const uint32_t planar = counts[kPlanar];
+        n_above -= counts[kEnd] + planar;
+        const float t = position_of_bits(key);
+        if (t > lo && t < hi) {
+            const float p_below = 2.0f * (cap + (t - lo) * rim) * inv_area;
+            const float p_above = 2.0f * (cap + (hi - t) * rim) * inv_area;
+            const float c_below = k.split_cost(p_below, p_above, n_below + planar, n_above);
+            const float c_above = planar ? k.split_cost(p_below, p_above, n_below, n_above + planar) : c_below;
+            const bool planar_below = c_below <= c_above;
+            const float c = planar_below ? c_below : c_above;
+            if (c < best.cost) best = {axis, t, planar_below, c};
+        }
+        n_below += counts[kStart] + planar;
+    }
+}
+
+struct BuildCounters {
+    uint64_t bad_refines = 0;  // splits made although they cost more than a leaf
+};
+
+// A stack of lists that grows without initialising what it hands out (the builder
+// writes every element it claims) and is cut back with truncate().
+template <class T>
+class ListStack {
+public:
+    size_t size() const { return size_; }
+    T* data() { return data_.get(); }
+    const T* data() const { return data_.get(); }
+    T* grow(size_t n) {  // n more elements at the top
+        if (size_ + n > capacity_) {
+            const size_t cap = std::max(size_ + n, 2 * capacity_);
+            auto bigger = std::make_unique_for_overwrite<T[]>(cap);
+            std::copy(data_.get(), data_.get() + size_, bigger.get());
+            data_ = std::move(bigger);
+            capacity_ = cap;
+        }
+        size_ += n;
+        return data_.get() + size_ - n;
+    }
+    void truncate(size_t n) { size_ = n; }
+
+private:
+    std::unique_ptr<T[]> data_;
+    size_t size_ = 0, capacity_ = 0;
+};
+
+// The top-down recursion shared by both algorithms. A node's lists live in stacks: its
+// primitive list (ascending indices, in both builds) and, for nlogn, its three sorted
+// event lists. Splitting a node appends the above child's lists on top of each stack and
+// compacts the below child's lists in place over the parent's (a stable filter, so
+// order is kept); the below subtree is built, the stacks are cut back, then the above
+// subtree is built. Memory is the current path plus the pending above-siblings.
+class Builder {
+public:
+    Builder(const Scene& scene, const KdTree::Settings& s, int max_depth, std::vector<KdNode>& nodes,
+            std::vector<uint32_t>& prim_indices)
+        : bounds_(scene.prim_bounds),
+          sah_{s.traversal_cost, s.isect_cost, s.empty_bonus},
+          max_prims_(uint32_t(s.max_prims)),
+          max_depth_(max_depth),
+          presorted_(s.build == KdTree::BuildAlgorithm::NLogN),
+          ref_budget_(s.max_refs ? *s.max_refs
+                                 : std::max<uint64_t>(KdTree::kMinRefBudget,
+                                                      KdTree::kMaxRefsPerPrim * scene.triangle_count())),
+          nodes_(nodes),
+          prim_indices_(prim_indices),
+          side_(scene.triangle_count()) {}
+
+    void run(const Bounds3& root) {
+        const uint32_t n = uint32_t(bounds_.size());
+        Lists lists;
+        uint32_t* prims = prims_.grow(n);
+        for (uint32_t i = 0; i < n; ++i) prims[i] = i;
+        lists.prims = {0, n};
+        live_refs_ = n;
+        if (presorted_) {
+            for (int axis = 0; axis < 3; ++axis) {
+                EventKey* ev = events_[axis].grow(2 * size_t(n));
+                size_t m = 0;
+                for (uint32_t p = 0; p < n; ++p) m = put_events(ev, m, bounds_[p], axis, p);
+                events_[axis].truncate(m);
+                sort_events(ev, m);
+                lists.events[axis] = {0, m};
+            }
+        }
+        build_node(root, lists, 0, 0);
+    }
+
+    const BuildCounters& counters() const { return counters_; }
+    int deepest_leaf() const { return deepest_leaf_; }
+
+private:
+    struct Range {
+        size_t begin = 0, end = 0;
+        size_t size() const { return end - begin; }
+    };
+    struct Lists {
+        Range prims;
+        Range events[3];  // nlogn only
+    };
+
+    static void sort_events(EventKey* ev, size_t m) { std::sort(ev, ev + m); }
+
+    // The node's sorted events on `axis`: a slice of the presorted lists (nlogn), or
+    // generated from the primitive list and sorted here (pbrt).
+    std::span<const EventKey> events_of(const Lists& lists, int axis) {
+        if (presorted_) return {events_[axis].data() + lists.events[axis].begin, lists.events[axis].size()};
+        scratch_.resize(2 * lists.prims.size());
+        EventKey* ev = scratch_.data();
+        const uint32_t* prims = prims_.data();
+        size_t m = 0;
+        for (size_t i = lists.prims.begin; i < lists.prims.end; ++i)
+            m = put_events(ev, m, bounds_[prims[i]], axis, prims[i]);
+        sort_events(ev, m);
+        return {ev, m};
+    }
+
+    // Longest axis first; the other axes only when it offers no split cheaper than a
+    // leaf (the report's "try other axes instead"), keeping the cheapest seen. pbrt-v3
+    // retries only when an axis has no candidate at all; retrying also after a bad
+    // candidate turns some of its bad refines into good splits.
+    Split choose_split(const Bounds3& node, const Lists& lists, float leaf_cost) {
+        Split best;
+        if (!(node.area() > 0.0f)) return best;
+        const int first = node.largest_axis();
+        for (int k = 0; k < 3; ++k) {
+            const int axis = (first + k) % 3;
+            sweep_axis(events_of(lists, axis), axis, node, uint32_t(lists.prims.size()), sah_, best);
+            if (best.axis >= 0 && best.cost < leaf_cost) break;
+        }
+        return best;
+    }
+
+    void make_leaf(uint32_t index, Range prims, int depth) {
+        const uint32_t count = uint32_t(prims.size());
+        const uint32_t* p = prims_.data() + prims.begin;
+        if (count == 1) {
+            nodes_[index] = KdNode::leaf(1, p[0]);
+        } else {
+            check_limit(prim_indices_.size() + count, KdNode::kMaxIndex, "primitive references");
+            nodes_[index] = KdNode::leaf(count, uint32_t(prim_indices_.size()));
+            prim_indices_.insert(prim_indices_.end(), p, p + count);
+        }
+        live_refs_ -= count;
+        leaf_refs_ += count;
+        deepest_leaf_ = std::max(deepest_leaf_, depth);
+    }
+
+    void check_limit(uint64_t value, uint64_t limit, const char* what) const {
+        if (value > limit)
+            throw std::runtime_error("kdtree: build exceeds its limit of " + std::to_string(limit) + " " + what +
+                                     " (references: " + std::to_string(KdTree::kMaxRefsPerPrim) +
+                                     " per triangle, at least " + std::to_string(KdTree::kMinRefBudget) +
+                                     "; nodes and references: 2^30 - 1); lower max_depth or raise "
+                                     "max_prims or traversal_cost");
+    }
+
+    // Splits one list (a range of `stack`) by side_: the above part is appended at the
+    // top, the below part compacted in place. Returns {below, above}. Written without
+    // branches on the side, which is as unpredictable as the scene.
+    template <class T, class PrimOf>
+    std::pair<Range, Range> split_list(ListStack<T>& stack, Range r, PrimOf prim) {
+        const size_t above_begin = stack.size();
+        T* above = stack.grow(r.size());
+        T* list = stack.data() + r.begin;  // after grow(): it may move the stack
+        const uint8_t* side = side_.data();
+        size_t n_above = 0, n_below = 0;
+        for (size_t i = 0; i < r.size(); ++i) {
+            const T e = list[i];
+            above[n_above] = e;
+            n_above += side[prim(e)] >> 1;
+        }
+        for (size_t i = 0; i < r.size(); ++i) {
+            const T e = list[i];
+            list[n_below] = e;
+            n_below += side[prim(e)] & kBelow;
+        }
+        stack.truncate(above_begin + n_above);
+        return {{r.begin, r.begin + n_below}, {above_begin, above_begin + n_above}};
+    }
+
+    void build_node(const Bounds3& node, const Lists& lists, int depth, int bad_refines) {
+        check_limit(nodes_.size() + 1, KdNode::kMaxIndex, "nodes");
+        const uint32_t index = uint32_t(nodes_.size());
+        nodes_.emplace_back();
+        const uint32_t n = uint32_t(lists.prims.size());
+        if (n <= max_prims_ || depth == max_depth_) return make_leaf(index, lists.prims, depth);
+
+        const float leaf_cost = sah_.isect * float(n);
+        const Split split = choose_split(node, lists, leaf_cost);
+        // pbrt's termination: a split dearer than the leaf is tolerated three times on a
+        // path (it may enable cheap splits below), one much dearer only for big nodes.
+        const bool bad = split.axis >= 0 && split.cost > leaf_cost;
+        if (bad) ++bad_refines;
+        if (split.axis < 0 || (split.cost > 4.0f * leaf_cost && n < 16) || bad_refines == 3)
+            return make_leaf(index, lists.prims, depth);
+        counters_.bad_refines += bad;
+
+        const uint32_t* prims = prims_.data();
+        for (size_t i = lists.prims.begin; i < lists.prims.end; ++i)
+            side_[prims[i]] = classify(bounds_[prims[i]], split.axis, split.position, split.planar_below);
+        Lists below, above;
+        std::tie(below.prims, above.prims) = split_list(prims_, lists.prims, [](uint32_t p) { return p; });
+        if (presorted_)
+            for (int axis = 0; axis < 3; ++axis)
+                std::tie(below.events[axis], above.events[axis]) =
+                    split_list(events_[axis], lists.events[axis], [](EventKey e) { return prim_of(e); });
+        live_refs_ += below.prims.size() + above.prims.size() - n;
+        check_limit(leaf_refs_ + live_refs_, ref_budget_, "primitive references");
+
+        Bounds3 below_bounds = node, above_bounds = node;
+        below_bounds.upper[split.axis] = above_bounds.lower[split.axis] = split.position;
+        const size_t saved_prims = prims_.size();
+        size_t saved_events[3];
+        for (int axis = 0; axis < 3; ++axis) saved_events[axis] = events_[axis].size();
+
+        build_node(below_bounds, below, depth + 1, bad_refines);
+        prims_.truncate(saved_prims);
+        for (int axis = 0; axis < 3; ++axis) events_[axis].truncate(saved_events[axis]);
+        nodes_[index] = KdNode::interior(split.axis, split.position, uint32_t(nodes_.size()));
+        build_node(above_bounds, above, depth + 1, bad_refines);
+    }
+
+    const std::vector<Bounds3>& bounds_;
+    SahConstants sah_;
+    uint32_t max_prims_;
+    int max_depth_;
+    bool presorted_;
+    uint64_t ref_budget_;
+    std::vector<KdNode>& nodes_;
+    std::vector<uint32_t>& prim_indices_;
+    std::vector<uint8_t> side_;        // per primitive, set for the node being split
+    ListStack<uint32_t> prims_;        // primitive lists
+    ListStack<EventKey> events_[3];    // nlogn: sorted event lists per axis
+    std::vector<EventKey> scratch_;    // one node's events on one axis, sorted on the spot
+    BuildCounters counters_;
+    uint64_t leaf_refs_ = 0;  // references held by the leaves made so far
+    uint64_t live_refs_ = 0;  // references in the lists still to be split
+    int deepest_leaf_ = 0;
+};
+
+}  // namespace
+
+void KdTree::build(const Scene& scene) {
+    const size_t n = scene.triangle_count();
+    if (n > kPrimMask)
+        throw std::runtime_error("kdtree: scene '" + scene.name + "' has " + std::to_string(n) +
+                                 " triangles; at most 2^30 - 1 are supported");
+    if (scene.prim_bounds.size() != n) throw std::runtime_error("kdtree: scene '" + scene.name + "' is not finalized");
+    corners_.resize(n);
+    for (uint32_t i = 0; i < n; ++i) corners_[i] = {scene.vertex(i, 0), scene.vertex(i, 1), scene.vertex(i, 2)};
+    bounds_ = scene.bounds;
+    nodes_.clear();
+    prim_indices_.clear();
+    stats_ = BuildStats{};
+    max_depth_used_ = settings_.max_depth ? *settings_.max_depth : default_max_depth(n);
+    // Only a scene of more than 2^92 triangles would get a default above the limit.
+    max_depth_used_ = std::min(max_depth_used_, kMaxDepthLimit);
+
+    BuildCounters counters;
+    int deepest = 0;
+    if (n > 0) {
+        Builder builder(scene, settings_, max_depth_used_, nodes_, prim_indices_);
+        try {
+            builder.run(bounds_);
+        } catch (...) {
+            // A build that stopped at a limit leaves no half tree behind: an empty tree
+            // answers every ray with a miss, never with a wrong hit.
+            nodes_ = {};
+            prim_indices_ = {};
+            throw;
+        }
+        counters = builder.counters();
+        deepest = builder.deepest_leaf();
+    }
+    nodes_.shrink_to_fit();
+    prim_indices_.shrink_to_fit();
+
+    // Statistics of the finished tree, walking it with each node's box. The SAH cost is
+    // the expected cost of a ray through the root box (pbrt's model): every interior
+    // node costs C_T and every leaf C_I per primitive reference, each weighted by its
+    // surface area relative to the root's, with this build's C_T and C_I and no empty
+    // bonus. Its unit is therefore "C_T units" only when C_T = 1.
+    uint64_t leaves = 0, empty_leaves = 0, refs = 0;
+    double sah = 0.0;
+    const double root_area = bounds_.area();
+    struct Item {
+        uint32_t node;
+        Bounds3 box;
+    };
+    std::vector<Item> todo;
+    if (!nodes_.empty()) todo.push_back({0, bounds_});
+    while (!todo.empty()) {
+        const Item it = todo.back();
+        todo.pop_back();
+        const KdNode& node = nodes_[it.node];
+        const double rel = root_area > 0 ? it.box.area() / root_area : 1.0;
+        if (node.is_leaf()) {
+            ++leaves;
+            refs += node.prim_count();
+            empty_leaves += node.prim_count() == 0;
+            sah += rel * settings_.isect_cost * node.prim_count();
+        } else {
+            sah += rel * settings_.traversal_cost;
+            Bounds3 below = it.box, above = it.box;
+            below.upper[node.axis()] = above.lower[node.axis()] = node.split();
+            todo.push_back({node.above_child(), above});
+            todo.push_back({it.node + 1, below});
+        }
+    }
+    stats_.nodes = nodes_.size();
+    stats_.leaves = leaves;
+    stats_.max_depth = uint64_t(deepest);
+    stats_.memory_bytes = nodes_.size() * sizeof(KdNode) + prim_indices_.size() * sizeof(uint32_t) +
+                          corners_.size() * sizeof(corners_[0]);
+    stats_.avg_leaf_size = leaves ? double(refs) / double(leaves) : 0.0;
+    if (n > 0) stats_.sah_cost = sah;
+    stats_.extra["prim_refs"] = double(refs);
+    stats_.extra["empty_leaves"] = double(empty_leaves);
+    stats_.extra["bad_refines"] = double(counters.bad_refines);
+    stats_.extra["max_depth_limit"] = double(max_depth_used_);
+}
+
+BuildStats KdTree::build_stats() const { return stats_; }
+
+// ---- traversal (report 4.2.2, Figures 15-16; pbrt's KdTreeAccel::Intersect) ------------
+//
+// The ray is clipped to the root box, giving [t_min, t_max]. At an interior node the
+// plane is crossed at t_split; the child on the side the ray comes from ("first": below
+// when the direction component is positive, by its sign bit so -0.0 counts as negative)
+// covers [t_min, t_split], the other [t_split, t_max]. If t_split > t_max the ray leaves
+// the node before the plane (first child only); if t_split < t_min it crossed before
+// entering (second only); otherwise both, first now, second pushed. A ray with a zero
+// direction component gets t_split = +-inf and one child; one lying IN the plane gets
+// NaN, fails both tests and visits both children over the whole range (the min/max below
+// are written so that NaN yields the other argument). Choosing "first" by direction, not
+// by which side the origin lies on, keeps this right for any ray.tmin.
+//
+// Leaves test their triangles over the whole remaining ray interval [ray.tmin, best), not
+// just the leaf's [t_min, t_max]: a primitive can stick out of the leaf and be hit
+// beyond it. Such a hit is kept but does not end the traversal; only a hit closer than
+// the next node's t_min does (nodes leave the stack in front-to-back order).
+//
+// Conservative in float (Ize 2013, as intersect_box): t_split is rounded up to three
+// times, so each comparison uses the interval [slack_below, slack_above](t_split) that
+// holds its true value, and the ranges handed to the children are widened the same way
+// (they overlap by the slack), so a node's [t_min, t_max] always contains its true range
+// and a child is culled only when the ray certainly misses it. Without this the tree
+// leaked rays aimed exactly at a vertex lying on two split planes (robustness case 1:
+// origin (-0.5, 0.25, 0.125), direction (0.33937797, 0.443780482, 0.577046454), vertex
+// at t = 1): the x-plane through the vertex gave t = 1 exactly and the y-plane through
+// it t_split = 0.99999994, so the node entered at t_min = 1 beyond the x-plane dropped
+// its below-y child as "crossed before entering" — the only child holding a triangle
+// that contains the vertex (its y range ends on the plane, so it is classified below).
+
+namespace {
+
+struct StackEntry {
+    uint32_t node;
+    float t_min, t_max;
+};
+
+// Visits the leaves a ray passes, front to back, over [t_min, t_max] clipped to the root
+// box. visit_leaf(node) returns false to stop. keep_going(t_min) is asked before each
+// popped node: closest-hit stops once its best hit lies before that node.
+template <class C, class VisitLeaf, class KeepGoing>
+void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& ray, C& counters,
+              VisitLeaf&& visit_leaf, KeepGoing&& keep_going) {
+    if (nodes.empty()) return;
+    const RayPrecomp rp(ray);
+    counters.box();
+    const BoxHit clip = intersect_box(bounds, rp, ray.tmin, ray.tmax);
+    if (!clip.hit()) return;
+    // tfar is already widened by intersect_box; tnear is widened here the same way.
+    float t_min = slack_below(clip.tnear), t_max = clip.tfar;
+    // Per-axis ray data as plain arrays: indexing a Vec3 by a run-time axis is a chain
+    // of selects, and this loop indexes by the node's axis at every step.
+    const float org[3] = {rp.org.x, rp.org.y, rp.org.z};
+    const float inv_dir[3] = {rp.inv_dir.x, rp.inv_dir.y, rp.inv_dir.z};
+    // Bit a set: the ray meets the above child first on axis a. A register, not an
+    // array, because the next node's index depends on it.
+    const uint32_t above_first = uint32_t(rp.near_is_upper[0]) | uint32_t(rp.near_is_upper[1]) << 1 |
+                                 uint32_t(rp.near_is_upper[2]) << 2;
+    StackEntry stack[KdTree::kMaxDepthLimit];
+    int top = 0;
+    uint32_t index = 0;
+    for (;;) {
+        counters.node();
+        const KdNode node = nodes[index];
+        if (!node.is_leaf()) {
+            const int axis = node.axis();
+            const float t_split = (node.split() - org[axis]) * inv_dir[axis];
+            const float split_lo = slack_below(t_split), split_hi = slack_above(t_split);
+            const uint32_t below = index + 1, above = node.above_child();
+            const uint32_t swap = (below ^ above) & (0u - ((above_first >> axis) & 1u));
+            const uint32_t first = below ^ swap, second = above ^ swap;
+            if (split_lo > t_max) {
+                index = first;
+            } else if (split_hi < t_min) {
+                index = second;
+            } else {
+                stack[top++] = {second, split_lo > t_min ? split_lo : t_min, t_max};
+                t_max = split_hi < t_max ? split_hi : t_max;
+                index = first;
+            }
+            continue;
+        }
+        if (!visit_leaf(node) || top == 0) return;
+        --top;
+        index = stack[top].node;
+        t_min = stack[top].t_min;
+        t_max = stack[top].t_max;
+        if (!keep_going(t_min)) return;
+    }
+}
+
+}  // namespace
+
+// Calls f(prim) for each primitive of a leaf until f returns true; returns whether it did.
+template <class F>
+bool KdTree::any_leaf_prim(const KdNode& leaf, F&& f) const {
+    const uint32_t count = leaf.prim_count();
+    if (count == 1) return f(leaf.single_prim());
+    const uint32_t* p = prim_indices_.data() + leaf.prim_offset();
+    for (uint32_t i = 0; i < count; ++i)
+        if (f(p[i])) return true;
+    return false;
+}
+
+bool KdTree::hit_triangle(const WatertightRay& wr, uint32_t prim, float tmin, float tmax, Hit& hit) const {
+    const std::array<Vec3, 3>& tri = corners_[prim];
+    if (!intersect_triangle(wr, tri[0], tri[1], tri[2], tmin, tmax, hit.t, hit.u, hit.v))
+        return false;
+    hit.prim = prim;
+    return true;
+}
+
+template <class C>
+void KdTree::intersect(const Ray& ray, Hit& hit, C& counters) const {
+    const WatertightRay wr(ray);
+    float best = ray.tmax;
+    traverse(
+        nodes_, bounds_, ray, counters,
+        [&](const KdNode& leaf) {
+            any_leaf_prim(leaf, [&](uint32_t prim) {
+                counters.prim();
+                if (hit_triangle(wr, prim, ray.tmin, best, hit)) best = hit.t;
+                return false;
+            });
+            return true;
+        },
+        // next_t_min is a lower bound of the node's true entry distance, but a hit in it
+        // is a computed t that may round below its true value: stop only when the best
+        // hit lies before that node by more than the slack, so a hit at the node's
+        // boundary (a vertex on its plane) is never skipped for a farther one.
+        [&](float next_t_min) { return !(best < slack_below(next_t_min)); });
+}
+
+template <class C>
+bool KdTree::occluded(const Ray& ray, C& counters) const {
+    const WatertightRay wr(ray);
+    bool found = false;
+    traverse(
+        nodes_, bounds_, ray, counters,
+        [&](const KdNode& leaf) {
+            Hit scratch;
+            found = any_leaf_prim(leaf, [&](uint32_t prim) {
+                counters.prim();
+                return hit_triangle(wr, prim, ray.tmin, ray.tmax, scratch);
+            });
+            return !found;
+        },
+        [](float) { return true; });
+    return found;
+}
+
+ACCELBENCH_INSTANTIATE_RAY_QUERIES(KdTree);
+
+}  // namespace accelbench

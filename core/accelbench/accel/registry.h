@@ -1,0 +1,31 @@
+// The factory: accelerators by name, each with its declared parameters. The CLI
+// (`accelbench list`) and the YAML harness validate parameters through it.
+//
+// Adding an accelerator = its file pair, with a static `info()` returning an
+// AcceleratorInfo (accelerator.h), and one line in registry.cpp.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "accelbench/accel/accelerator.h"
+#include "accelbench/base/params.h"
+
+namespace accelbench {
+
+const std::vector<AcceleratorInfo>& accelerator_registry();
+
+// nullptr if there is no accelerator of that name.
+const AcceleratorInfo* find_accelerator(std::string_view name);
+
+// Looks the name up, validates the parameters and creates the (unbuilt) accelerator.
+// Throws ParamError naming what is wrong (unknown accelerator: lists the known ones).
+std::unique_ptr<Accelerator> make_accelerator(const std::string& name,
+                                              const std::map<std::string, std::string>& params,
+                                              ParamSet* resolved = nullptr);
+
+}  // namespace accelbench

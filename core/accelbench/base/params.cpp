@@ -1,0 +1,132 @@
+#include "accelbench/base/params.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace accelbench {
+
+const char* to_string(ParamType t) {
+    switch (t) {
+        case ParamType::Int: return "int";
+        case ParamType::Float: return "float";
+        case ParamType::Enum: return "enum";
+        case ParamType::Bool: return "bool";
+    }
+    return "?";
+}
+
+namespace {
+
+std::string join(const std::vector<std::string>& v) {
+    std::string s;
+    for (size_t i = 0; i < v.size(); ++i) s += (i ? ", " : "") + v[i];
+    return s;
+}
+
+std::string range_text(const ParamSpec& s) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "[%g, %g]", s.min, s.max);
+    return buf;
+}
+
+}  // namespace
+
+std::string format_param(const ParamValue& v) {
+    if (auto* i = std::get_if<int64_t>(&v)) return std::to_string(*i);
+    if (auto* d = std::get_if<double>(&v)) {
+        // The shortest text that reads back to the same double, without an exponent
+        // where plain notation is as short ("80", "0.5", "1e-05" stays as is).
+        char buf[64];
+        auto [end, ec] = std::to_chars(buf, buf + sizeof buf, *d);
+        return ec == std::errc() ? std::string(buf, end) : std::to_string(*d);
+    }
+    if (auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+    return std::get<std::string>(v);
+}
+
+ParamValue parse_param(const std::string& owner, const ParamSpec& spec, const std::string& text,
+                       const char* owner_kind) {
+    const std::string where = std::string(owner_kind) + " '" + owner + "', parameter '" + spec.name + "': ";
+    switch (spec.type) {
+        case ParamType::Int: {
+            int64_t v = 0;
+            auto [p, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+            if (ec != std::errc() || p != text.data() + text.size())
+                throw ParamError(where + "expected an integer, got '" + text + "'");
+            if (double(v) < spec.min || double(v) > spec.max)
+                throw ParamError(where + "value " + text + " is out of range " + range_text(spec));
+            return v;
+        }
+        case ParamType::Float: {
+            char* end = nullptr;
+            double v = std::strtod(text.c_str(), &end);
+            if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v))
+                throw ParamError(where + "expected a finite number, got '" + text + "'");
+            if (v < spec.min || v > spec.max)
+                throw ParamError(where + "value " + text + " is out of range " + range_text(spec));
+            return v;
+        }
+        case ParamType::Enum:
+            for (const auto& c : spec.choices)
+                if (c == text) return text;
+            throw ParamError(where + "'" + text + "' is not one of {" + join(spec.choices) + "}");
+        case ParamType::Bool:
+            if (text == "true" || text == "1" || text == "on" || text == "yes") return true;
+            if (text == "false" || text == "0" || text == "off" || text == "no") return false;
+            throw ParamError(where + "expected true or false, got '" + text + "'");
+    }
+    throw ParamError(where + "unknown type");
+}
+
+ParamSet resolve_params(const std::string& owner, const std::vector<ParamSpec>& specs,
+                        const std::map<std::string, std::string>& given, const char* owner_kind) {
+    for (const auto& [name, value] : given) {
+        bool known = false;
+        for (const auto& s : specs) known |= s.name == name;
+        if (!known) {
+            std::vector<std::string> names;
+            for (const auto& s : specs) names.push_back(s.name);
+            throw ParamError(std::string(owner_kind) + " '" + owner + "' has no parameter '" + name + "'" +
+                             (names.empty() ? std::string(" (it takes none)")
+                                            : " (it has: " + join(names) + ")"));
+        }
+    }
+    ParamSet set;
+    for (const auto& s : specs) {
+        auto it = given.find(s.name);
+        const bool user = it != given.end();
+        set.given_[s.name] = user;
+        if (!user && s.scene_dependent_default) {
+            set.text_.emplace_back(s.name, s.default_value);
+            continue;
+        }
+        ParamValue v = parse_param(owner, s, user ? it->second : s.default_value, owner_kind);
+        set.text_.emplace_back(s.name, format_param(v));
+        set.values_.emplace(s.name, std::move(v));
+    }
+    return set;
+}
+
+const ParamValue& ParamSet::at(const std::string& name) const {
+    auto it = values_.find(name);
+    if (it == values_.end()) throw ParamError("parameter '" + name + "' has no value (not declared, or its default depends on the scene)");
+    return it->second;
+}
+int64_t ParamSet::get_int(const std::string& name) const { return std::get<int64_t>(at(name)); }
+double ParamSet::get_float(const std::string& name) const { return std::get<double>(at(name)); }
+const std::string& ParamSet::get_enum(const std::string& name) const { return std::get<std::string>(at(name)); }
+bool ParamSet::get_bool(const std::string& name) const { return std::get<bool>(at(name)); }
+bool ParamSet::given(const std::string& name) const {
+    auto it = given_.find(name);
+    return it != given_.end() && it->second;
+}
+
+std::string ParamSet::canonical() const {
+    std::string s;
+    for (const auto& [k, v] : text_) s += (s.empty() ? "" : ";") + k + "=" + v;
+    return s;
+}
+
+}  // namespace accelbench

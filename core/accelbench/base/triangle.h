@@ -1,0 +1,115 @@
+// The one ray/triangle test every structure of ours uses: watertight intersection
+// (Woop, Benthin, Wald 2013, "Watertight Ray/Triangle Intersection", JCGT 2(1)).
+//
+// Why this test: a ray through an edge shared by two triangles must hit at least one of
+// them. Moeller-Trumbore can miss both because each triangle's edge test rounds on its
+// own; the watertight test shears the triangle into ray space once per ray, evaluates the
+// three 2D edge functions from the same sheared vertices, and falls back to double
+// precision when an edge function is exactly zero, so neighbours agree on the shared edge.
+#pragma once
+
+#include <cmath>
+#include <limits>
+
+#include "accelbench/base/geometry.h"
+
+namespace accelbench {
+
+// Per-ray shear constants (section 3 of the paper). Computed once per ray, reused for
+// every triangle the traversal tests.
+struct WatertightRay {
+    Vec3 org;
+    int kx = 0, ky = 1, kz = 2;  // permutation: kz is the dominant direction axis
+    float sx = 0, sy = 0, sz = 0;
+    bool valid = false;          // is_valid_ray(): invalid rays hit nothing
+
+    explicit WatertightRay(const Ray& r) : org(r.org) {
+        Vec3 ad{std::fabs(r.dir.x), std::fabs(r.dir.y), std::fabs(r.dir.z)};
+        valid = is_valid_ray(r);
+        if (!valid) return;
+        kz = max_axis(ad);
+        kx = kz == 2 ? 0 : kz + 1;
+        ky = kx == 2 ? 0 : kx + 1;
+        // Keep the winding: swapping kx and ky when the dominant component is negative
+        // keeps the sign convention of the edge functions independent of direction.
+        if (r.dir[kz] < 0.0f) std::swap(kx, ky);
+        sx = r.dir[kx] / r.dir[kz];
+        sy = r.dir[ky] / r.dir[kz];
+        sz = 1.0f / r.dir[kz];
+    }
+};
+
+namespace detail {
+
+// The end of the test in double, from the sheared float coordinates. Used where float
+// loses the answer: an edge function that is exactly zero (the edge case of the paper),
+// and results that underflow or overflow float (scenes scaled near the denormal range,
+// where 1 / det overflows and t_scaled underflows to zero, which gave NaN or t = 0).
+// The products of two floats are exact in double, so each edge function is rounded once
+// and has the exact sign of the 2D determinant; a non-zero float edge function has that
+// same sign (rounding is monotonic), so switching precision for one triangle never
+// changes a sign its neighbour computed: the test stays watertight.
+inline bool finish_in_double(float ax, float ay, float bx, float by, float cx, float cy, float az, float bz, float cz,
+                             float tmin, float tmax, float& t_out, float& u_out, float& v_out) {
+    const double e0 = double(cx) * double(by) - double(cy) * double(bx);
+    const double e1 = double(ax) * double(cy) - double(ay) * double(cx);
+    const double e2 = double(bx) * double(ay) - double(by) * double(ax);
+    if ((e0 < 0 || e1 < 0 || e2 < 0) && (e0 > 0 || e1 > 0 || e2 > 0)) return false;
+    const double det = e0 + e1 + e2;
+    if (det == 0.0) return false;
+    const double t = (e0 * double(az) + e1 * double(bz) + e2 * double(cz)) / det;
+    if (!(t >= double(tmin) && t < double(tmax))) return false;
+    t_out = float(t);
+    u_out = float(e1 / det);
+    v_out = float(e2 / det);
+    return true;
+}
+
+}  // namespace detail
+
+// Tests one triangle. On a hit with tmin <= t < tmax, writes t and barycentrics (u for p1,
+// v for p2) and returns true. Degenerate triangles (zero determinant) never hit, and no
+// path divides by zero or produces NaN from valid inputs (finite vertices below
+// kMaxCoordinate, is_valid_ray rays).
+inline bool intersect_triangle(const WatertightRay& r, Vec3 p0, Vec3 p1, Vec3 p2, float tmin,
+                               float tmax, float& t_out, float& u_out, float& v_out) {
+    if (!r.valid) return false;
+    const Vec3 a = p0 - r.org, b = p1 - r.org, c = p2 - r.org;
+    const float ax = a[r.kx] - r.sx * a[r.kz], ay = a[r.ky] - r.sy * a[r.kz];
+    const float bx = b[r.kx] - r.sx * b[r.kz], by = b[r.ky] - r.sy * b[r.kz];
+    const float cx = c[r.kx] - r.sx * c[r.kz], cy = c[r.ky] - r.sy * c[r.kz];
+    const float az = r.sz * a[r.kz], bz = r.sz * b[r.kz], cz = r.sz * c[r.kz];
+
+    // Scaled barycentrics: 2D edge functions of the sheared triangle.
+    const float e0 = cx * by - cy * bx;
+    const float e1 = ax * cy - ay * cx;
+    const float e2 = bx * ay - by * ax;
+    // An edge function of exactly zero is where float rounding decides which neighbour
+    // owns an edge: decide it in double, where both neighbours see the same sign.
+    if (e0 == 0.0f || e1 == 0.0f || e2 == 0.0f)
+        return detail::finish_in_double(ax, ay, bx, by, cx, cy, az, bz, cz, tmin, tmax, t_out, u_out, v_out);
+    if ((e0 < 0.0f || e1 < 0.0f || e2 < 0.0f) && (e0 > 0.0f || e1 > 0.0f || e2 > 0.0f)) return false;
+    const float det = e0 + e1 + e2;
+    const float t_scaled = e0 * az + e1 * bz + e2 * cz;
+    // A denormal determinant (1 / det would overflow) or a t_scaled that underflowed or
+    // overflowed: float cannot give t here, double can.
+    if (!(std::fabs(det) >= std::numeric_limits<float>::min()) ||
+        !(std::fabs(t_scaled) >= std::numeric_limits<float>::min() &&
+          std::fabs(t_scaled) <= std::numeric_limits<float>::max()))
+        return detail::finish_in_double(ax, ay, bx, by, cx, cy, az, bz, cz, tmin, tmax, t_out, u_out, v_out);
+
+    // t = t_scaled / det must lie in [tmin, tmax); compare before dividing, flipping the
+    // inequalities with the sign of det.
+    if (det > 0.0f) {
+        if (t_scaled < tmin * det || !(t_scaled < tmax * det)) return false;
+    } else {
+        if (t_scaled > tmin * det || !(t_scaled > tmax * det)) return false;
+    }
+    const float inv_det = 1.0f / det;
+    t_out = t_scaled * inv_det;
+    u_out = e1 * inv_det;
+    v_out = e2 * inv_det;
+    return true;
+}
+
+}  // namespace accelbench

@@ -1,0 +1,77 @@
+// The report's ray tracer setup (section 5, Table 1): one primary ray per pixel sample,
+// a point light, Phong shading and one shadow ray per hit toward the light.
+//
+// It computes only what is asked: no shadow rays without a light, no shading without an
+// image (counting runs still trace exactly the same primary and shadow rays), no counters
+// unless counting is on. Rays are traced in tiles, one batch call to the accelerator per
+// tile, tiles spread over threads (1 thread by default, for measurements).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "accelbench/accel/accelerator.h"
+#include "accelbench/scene/camera.h"
+#include "accelbench/scene/light.h"
+#include "accelbench/base/image.h"
+
+namespace accelbench {
+
+struct RenderSettings {
+    int width = 640;
+    int height = 480;
+    int spp = 1;          // samples per pixel (stratified jitter, fixed seed, when > 1)
+    bool light = true;    // trace shadow rays toward the light
+    bool shading = true;  // compute an image (Phong); off: trace only
+    int threads = 1;
+};
+
+enum class CountMode {
+    Off,       // timed runs: no counters at all
+    Totals,    // sums over all rays
+    PerPixel,  // sums plus one RayStats per pixel (cost images), primary + shadow rays
+};
+
+struct TraceOutput {
+    uint64_t rays = 0;          // primary (or ray-file) rays
+    uint64_t hits = 0;          // of those, how many hit something
+    uint64_t shadow_rays = 0;
+    uint64_t shadow_hits = 0;   // shadow rays that found an occluder
+    RayStats primary_stats;     // CountMode != Off
+    RayStats shadow_stats;
+    std::vector<RayStats> per_pixel;  // CountMode::PerPixel, width*height, row-major
+    // Only when keep_hits: one per primary ray, in ray order. For render() that is
+    // row-major over pixels (top row first) and, within a pixel, sample after sample:
+    // index (y * width + x) * spp + s. For trace_rays() it is the order of the input.
+    std::vector<Hit> primary_hits;
+    std::optional<Image> image;       // only when shading
+};
+
+struct TraceRequest {
+    RenderSettings settings;
+    std::optional<Light> light;  // used only when settings.light
+    CountMode counts = CountMode::Off;
+    bool keep_hits = false;      // keep every primary hit (error measurement)
+    // Base colour per triangle (linear RGB) for shading, e.g. a procedural scene's
+    // materials; empty: one light grey for everything. Must outlive the call.
+    std::span<const Vec3> albedo;
+};
+
+// Renders (or only traces) a width x height image through the camera. The light is
+// request.light, or default_light(scene.bounds, camera) when absent. With settings.light
+// off and shading on, the image is lit by a headlight at the eye (which casts no visible
+// shadows, so none are traced). Results do not depend on settings.threads.
+TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera,
+                   const TraceRequest& request);
+
+// Traces a given ray set (a ray file) instead of camera rays: the same primary / shadow /
+// counting logic; no image (settings.shading is ignored, per_pixel is per ray). Without
+// request.light the light is the default one of the default view,
+// default_light(bounds, Camera::fit(bounds, 4/3)). Shadow rays start at each hit point.
+TraceOutput trace_rays(const Accelerator& accel, const Scene& scene, std::span<const Ray> rays,
+                       const TraceRequest& request);
+
+}  // namespace accelbench

@@ -1,0 +1,886 @@
+#include "accelbench/verify/robustness_cases.h"
+#include "accelbench/base/unknown_name.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+#include <utility>
+
+#include "accelbench/base/random.h"
+#include "accelbench/accel/baseline/reference.h"
+#include "accelbench/accel/registry.h"
+
+namespace accelbench {
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Builds a triangle mesh whose vertices are shared by exact position, so neighbouring
+// triangles reference the same vertex indices (what makes a mesh closed).
+class MeshBuilder {
+public:
+    uint32_t vertex(Vec3 p) {
+        auto key = std::make_tuple(bits(p.x), bits(p.y), bits(p.z));
+        auto [it, inserted] = index_.try_emplace(key, uint32_t(scene_.vertices.size()));
+        if (inserted) scene_.vertices.push_back(p);
+        return it->second;
+    }
+    uint32_t triangle(Vec3 a, Vec3 b, Vec3 c) { return triangle(vertex(a), vertex(b), vertex(c)); }
+    uint32_t triangle(uint32_t a, uint32_t b, uint32_t c) {
+        scene_.triangles.push_back({a, b, c});
+        return uint32_t(scene_.triangles.size() - 1);
+    }
+    // A triangle with its own vertex copies (not shared with anything).
+    uint32_t unshared_triangle(Vec3 a, Vec3 b, Vec3 c) {
+        const uint32_t i = uint32_t(scene_.vertices.size());
+        scene_.vertices.insert(scene_.vertices.end(), {a, b, c});
+        return triangle(i, i + 1, i + 2);
+    }
+    uint32_t count() const { return uint32_t(scene_.triangles.size()); }
+    Scene& scene() { return scene_; }
+
+private:
+    static uint32_t bits(float f) {
+        if (f == 0.0f) f = 0.0f;  // +0 and -0 are one position
+        uint32_t u;
+        std::memcpy(&u, &f, sizeof u);
+        return u;
+    }
+    Scene scene_;
+    std::map<std::tuple<uint32_t, uint32_t, uint32_t>, uint32_t> index_;
+};
+
+// Point on an axis-aligned plane: coordinate `axis` fixed at `level`, (u, v) the other
+// two in increasing axis order.
+Vec3 on_plane(int axis, float level, float u, float v) {
+    if (axis == 0) return {level, u, v};
+    if (axis == 1) return {u, level, v};
+    return {u, v, level};
+}
+
+// An n x n grid of unit cells on an axis-aligned plane, origin at (0, 0), each cell split
+// along its diagonal into triangle 0 (below the diagonal, fu > fv) and 1 (above). Returns
+// the id of the first triangle; cell (i, j) holds first + 2 (j n + i) + {0, 1}.
+uint32_t add_grid(MeshBuilder& m, int axis, float level, int n, float cell = 1.0f, Vec3 offset = {}) {
+    const uint32_t first = m.count();
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            auto p = [&](int di, int dj) { return on_plane(axis, level, (i + di) * cell, (j + dj) * cell) + offset; };
+            m.triangle(p(0, 0), p(1, 0), p(1, 1));
+            m.triangle(p(0, 0), p(1, 1), p(0, 1));
+        }
+    return first;
+}
+
+// The grid triangle containing plane point (u, v) (not on a cell edge or diagonal).
+uint32_t grid_prim_at(uint32_t first, int n, float u, float v, float cell = 1.0f) {
+    const int i = int(std::floor(u / cell)), j = int(std::floor(v / cell));
+    const float fu = u / cell - float(i), fv = v / cell - float(j);
+    return first + 2 * uint32_t(j * n + i) + (fu > fv ? 0 : 1);
+}
+
+Vec3 centroid(const Scene& s, uint32_t prim) { return (s.vertex(prim, 0) + s.vertex(prim, 1) + s.vertex(prim, 2)) / 3.0f; }
+
+// Icosahedron subdivided `levels` times, vertices on the unit sphere, faces outward.
+Scene icosphere(int levels) {
+    const float g = (1.0f + std::sqrt(5.0f)) / 2.0f;
+    std::vector<Vec3> v = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
+                           {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+    for (auto& p : v) p = normalize(p);
+    std::vector<std::array<uint32_t, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                              {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                              {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                              {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+    for (int l = 0; l < levels; ++l) {
+        std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+        auto midpoint = [&](uint32_t a, uint32_t b) {
+            auto key = std::minmax(a, b);
+            auto [it, inserted] = mid.try_emplace({key.first, key.second}, uint32_t(v.size()));
+            if (inserted) v.push_back(normalize(v[a] + v[b]));
+            return it->second;
+        };
+        std::vector<std::array<uint32_t, 3>> next;
+        for (auto [a, b, c] : f) {
+            const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+            next.insert(next.end(), {{a, ab, ca}, {b, bc, ab}, {c, ca, bc}, {ab, bc, ca}});
+        }
+        f = std::move(next);
+    }
+    Scene s;
+    s.vertices = std::move(v);
+    s.triangles = std::move(f);
+    return s;
+}
+
+// The surface of the cube [0, n]^3 as a closed mesh of integer-coordinate unit squares.
+Scene grid_box(int n) {
+    MeshBuilder m;
+    const float fn = float(n);
+    for (int axis = 0; axis < 3; ++axis)
+        for (float level : {0.0f, fn}) add_grid(m, axis, level, n);
+    // Orient every face outward (the box is convex), so the winding number is defined.
+    Scene& s = m.scene();
+    const Vec3 centre{fn / 2, fn / 2, fn / 2};
+    for (auto& t : s.triangles) {
+        const Vec3 a = s.vertices[t[0]], b = s.vertices[t[1]], c = s.vertices[t[2]];
+        if (dot(cross(b - a, c - a), a - centre) < 0) std::swap(t[1], t[2]);
+    }
+    return std::move(s);
+}
+
+// Unique undirected edges of a mesh.
+std::vector<std::pair<uint32_t, uint32_t>> edges(const Scene& s) {
+    std::vector<std::pair<uint32_t, uint32_t>> e;
+    for (const auto& t : s.triangles)
+        for (int k = 0; k < 3; ++k) e.push_back(std::minmax(t[k], t[(k + 1) % 3]));
+    std::sort(e.begin(), e.end());
+    e.erase(std::unique(e.begin(), e.end()), e.end());
+    return e;
+}
+
+// Whether p lies strictly inside a closed mesh: its winding number, the sum of the solid
+// angles of the triangles seen from p over 4 pi (Van Oosterom and Strackee 1983), is a
+// non-zero integer. A point on the surface gets a half-integer (the triangle it lies on
+// subtends 2 pi or 0), so "within 1e-3 of a non-zero integer" excludes it. Evaluated in
+// double with coordinates relative to p.
+bool strictly_inside(const Scene& mesh, Vec3 p) {
+    double total = 0.0;
+    for (const auto& t : mesh.triangles) {
+        double q[3][3], len[3];
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 v = mesh.vertices[t[k]];
+            q[k][0] = double(v.x) - p.x;
+            q[k][1] = double(v.y) - p.y;
+            q[k][2] = double(v.z) - p.z;
+            len[k] = std::sqrt(q[k][0] * q[k][0] + q[k][1] * q[k][1] + q[k][2] * q[k][2]);
+        }
+        auto dot3 = [&](int i, int j) { return q[i][0] * q[j][0] + q[i][1] * q[j][1] + q[i][2] * q[j][2]; };
+        const double det = q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) -
+                           q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
+                           q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
+        const double den = len[0] * len[1] * len[2] + dot3(0, 1) * len[2] + dot3(0, 2) * len[1] + dot3(1, 2) * len[0];
+        total += 2.0 * std::atan2(det, den);
+    }
+    const double w = total / (4.0 * std::numbers::pi);
+    return std::fabs(w - std::round(w)) < 1e-3 && std::round(w) != 0.0;
+}
+
+Vec3 transform(Vec3 p, float scale, float offset) { return p * scale + Vec3{offset, offset, offset}; }
+
+void add_ray(RobustnessCase& c, Ray r, RayExpectation e) {
+    c.rays.push_back(r);
+    c.expect.push_back(e);
+}
+
+RayExpectation prim_range(uint32_t lo, uint32_t hi) { return {Expect::Prim, lo, hi, false}; }
+RayExpectation prim_is(uint32_t p) { return prim_range(p, p); }
+constexpr RayExpectation kAny{Expect::Any, 0, 0, false};
+constexpr RayExpectation kMiss{Expect::Miss, 0, 0, false};
+constexpr RayExpectation kHit{Expect::Hit, 0, 0, false};
+constexpr RayExpectation kHitIfWatertight{Expect::Hit, 0, 0, true};
+
+// Cases 1-3: a unit icosphere and the integer box [0, 4]^3, scaled then translated, with
+// rays from interior points aimed exactly at every vertex and at points on every edge
+// (its midpoint and quarter points as float computes them: exact for the box's integer
+// coordinates, within rounding of the edge for the sphere). A closed mesh seen from
+// inside has no gap: every such ray must hit. The two meshes are far apart so an inside
+// ray of one cannot be caught by the other.
+RobustnessCase closed_meshes(std::string id, std::string name, float scale, float offset) {
+    RobustnessCase c;
+    c.id = std::move(id);
+    c.name = std::move(name);
+    c.requirement =
+        "closed meshes seen from inside: every ray aimed at a vertex or at a point on an edge hits (zero leaks "
+        "for watertight structures; counted for the others); no NaN";
+    MeshBuilder m;
+    struct Part {
+        Scene mesh;
+        Vec3 shift;
+        std::vector<Vec3> inside;
+    };
+    std::vector<Part> parts;
+    parts.push_back({icosphere(2), {0, 0, 0}, {{0, 0, 0}, {0.25f, -0.125f, 0.375f}, {-0.5f, 0.25f, 0.125f}}});
+    parts.push_back({grid_box(4), {4, 0, 0}, {{2, 2, 2}, {1.25f, 2.5f, 3.75f}, {0.5f, 0.5f, 0.5f}}});
+    for (const Part& part : parts) {
+        auto place = [&](Vec3 p) { return transform(p + part.shift, scale, offset); };
+        for (const auto& t : part.mesh.triangles)
+            m.triangle(place(part.mesh.vertices[t[0]]), place(part.mesh.vertices[t[1]]), place(part.mesh.vertices[t[2]]));
+    }
+    c.scene = std::move(m.scene());
+    // At large offsets rounding merges origins and targets (the sphere at 1e7 falls onto a
+    // lattice): each distinct ray is traced once.
+    std::set<std::tuple<float, float, float, float, float, float>> seen;
+    for (const Part& part : parts) {
+        auto place = [&](Vec3 p) { return transform(p + part.shift, scale, offset); };
+        std::vector<Vec3> targets = part.mesh.vertices;
+        for (auto [a, b] : edges(part.mesh)) {
+            const Vec3 pa = part.mesh.vertices[a], pb = part.mesh.vertices[b];
+            for (float f : {0.25f, 0.5f, 0.75f}) targets.push_back(pa + (pb - pa) * f);
+        }
+        for (Vec3 o : part.inside) {
+            // Rounding at large offsets moves vertices (the sphere at 1e7, where the float
+            // spacing is 1, collapses onto a lattice) and may leave an origin on the surface
+            // or outside: only origins still strictly inside the rounded mesh count.
+            const Vec3 org = place(o);
+            if (!strictly_inside(c.scene, org)) continue;
+            for (Vec3 t : targets) {
+                const Vec3 dir = place(t) - org;
+                if (dir == Vec3{0, 0, 0}) continue;  // the target rounded onto the origin
+                if (!seen.insert({org.x, org.y, org.z, dir.x, dir.y, dir.z}).second) continue;
+                add_ray(c, {org, 0.0f, dir, kInfinity}, kHitIfWatertight);
+            }
+        }
+    }
+    return c;
+}
+
+// A floor grid (z = 0) and a roof grid (z = 2), n x n unit cells each: the scene of cases
+// 4-7 and 15. Floor triangles are [0, 2n^2), the roof's the same cells plus 2n^2.
+struct FloorRoof {
+    RobustnessCase c;
+    int n;
+    uint32_t floor_first, roof_first;
+};
+
+FloorRoof floor_and_roof(std::string id, std::string name, std::string requirement, int n = 4) {
+    FloorRoof f;
+    f.c.id = std::move(id);
+    f.c.name = std::move(name);
+    f.c.requirement = std::move(requirement);
+    f.n = n;
+    MeshBuilder m;
+    f.floor_first = add_grid(m, 2, 0.0f, n);
+    f.roof_first = add_grid(m, 2, 2.0f, n);
+    f.c.scene = std::move(m.scene());
+    return f;
+}
+
+// From height 1, between floor and roof, through every cell's centroid: for each (down,
+// up) direction pair one ray that must hit the floor triangle there and one the roof's.
+void add_centroid_rays(FloorRoof& f, const std::vector<std::pair<Vec3, Vec3>>& down_up) {
+    const uint32_t cells = 2 * uint32_t(f.n * f.n);
+    for (uint32_t p = 0; p < cells; ++p) {
+        const Vec3 c = centroid(f.c.scene, p);
+        for (auto [down, up] : down_up) {
+            add_ray(f.c, {{c.x, c.y, 1.0f}, 0.0f, down, kInfinity}, prim_is(f.floor_first + p));
+            add_ray(f.c, {{c.x, c.y, 1.0f}, 0.0f, up, kInfinity}, prim_is(f.roof_first + p));
+        }
+    }
+}
+
+RobustnessCase origins_on_box_faces() {
+    FloorRoof f = floor_and_roof(
+        "4", "origins-on-box-faces",
+        "axis-aligned rays whose origins lie exactly on bounding-box planes (the 0 * inf slab case) and which pass "
+        "through the edge shared by two triangles hit one of them (watertight structures); rays along the outer "
+        "boundary: no NaN");
+    for (int line = 0; line <= f.n; ++line) {
+        const bool inner = line > 0 && line < f.n;
+        for (int j = 0; j < f.n; ++j) {
+            const float along = float(j) + 0.5f, at = float(line);
+            for (int axis = 0; axis < 2; ++axis) {
+                const float x = axis == 0 ? at : along, y = axis == 0 ? along : at;
+                const RayExpectation e = inner ? kHitIfWatertight : kAny;
+                add_ray(f.c, {{x, y, 1.0f}, 0.0f, {0, 0, -1}, kInfinity}, e);  // to the floor
+                add_ray(f.c, {{x, y, 1.0f}, 0.0f, {0, 0, 1}, kInfinity}, e);   // to the roof
+                add_ray(f.c, {{x, y, -1.0f}, 0.0f, {0, 0, 1}, kInfinity}, e);  // floor from below
+            }
+        }
+    }
+    return f.c;
+}
+
+RobustnessCase signed_zero_directions() {
+    FloorRoof f = floor_and_roof(
+        "5", "signed-zero-directions",
+        "rays whose zero direction components are +0.0 or -0.0 give the same answers: the triangle under/over a "
+        "centroid (all structures), a hit through shared edges (watertight structures)");
+    std::vector<std::pair<Vec3, Vec3>> down_up;
+    for (float zx : {0.0f, -0.0f})
+        for (float zy : {0.0f, -0.0f}) down_up.push_back({{zx, zy, -1}, {zx, zy, 1}});
+    add_centroid_rays(f, down_up);
+    for (int line = 1; line < f.n; ++line)
+        for (float zx : {0.0f, -0.0f})
+            for (float zy : {0.0f, -0.0f}) {
+                add_ray(f.c, {{float(line), 1.5f, 1.0f}, 0.0f, {zx, zy, -1}, kInfinity}, kHitIfWatertight);
+                add_ray(f.c, {{1.5f, float(line), 1.0f}, 0.0f, {zx, zy, 1}, kInfinity}, kHitIfWatertight);
+            }
+    return f.c;
+}
+
+RobustnessCase tiny_direction_components() {
+    FloorRoof f = floor_and_roof(
+        "6", "tiny-direction-components",
+        "rays with tiny non-zero direction components (1e-40 denormal, 1e-20, 1e-15, 1e-11) aimed at a triangle's "
+        "centroid hit that triangle: huge reciprocals must not become NaN or cull boxes");
+    std::vector<std::pair<Vec3, Vec3>> down_up;
+    for (float eps : {1e-40f, 1e-20f, 1e-15f, 1e-11f}) down_up.push_back({{eps, -eps, -1}, {-eps, 0.0f, 1}});
+    add_centroid_rays(f, down_up);
+    return f.c;
+}
+
+RobustnessCase grazing_rays() {
+    FloorRoof f = floor_and_roof(
+        "7", "grazing-rays",
+        "rays parallel to a triangle's plane and 1 ulp off it miss; grazing rays crossing the plane at a centroid "
+        "(slopes 1e-3, 1e-6) hit that triangle; rays inside the plane: no NaN (a zero determinant is a miss)");
+    const float denorm = std::numeric_limits<float>::denorm_min();
+    const float n = float(f.n);
+    for (int j = 0; j < f.n; ++j) {
+        const float y = float(j) + 0.375f;
+        // Parallel, 1 ulp above and below the floor (z = 0) and the roof (z = 2).
+        for (float z : {denorm, -denorm, std::nextafter(2.0f, 3.0f), std::nextafter(2.0f, 1.0f)}) {
+            add_ray(f.c, {{-1.0f, y, z}, 0.0f, {1, 0, 0}, kInfinity}, kMiss);
+            add_ray(f.c, {{n + 1, y, z}, 0.0f, {-1, 0.25f, 0}, kInfinity}, kMiss);
+        }
+        // In the planes.
+        for (float z : {0.0f, 2.0f}) add_ray(f.c, {{-1.0f, y, z}, 0.0f, {1, 0, 0}, kInfinity}, kAny);
+    }
+    const uint32_t cells = 2 * uint32_t(f.n * f.n);
+    for (uint32_t p = 0; p < cells; ++p) {
+        const Vec3 c = centroid(f.c.scene, p);
+        for (float slope : {1e-3f, 1e-6f}) {
+            // From (c.x - 1, c.y, slope) along (1, 0, -slope): z reaches 0 exactly at c.
+            add_ray(f.c, {{c.x - 1.0f, c.y, slope}, 0.0f, {1, 0, -slope}, kInfinity}, prim_is(f.floor_first + p));
+            add_ray(f.c, {{c.x + 1.0f, c.y, 2.0f - slope}, 0.0f, {-1, 0, slope}, kInfinity}, prim_is(f.roof_first + p));
+        }
+    }
+    return f.c;
+}
+
+RobustnessCase degenerate_triangles() {
+    RobustnessCase c;
+    c.id = "8";
+    c.name = "degenerate-triangles";
+    c.requirement =
+        "zero-area triangles (collinear, coincident vertices, a single point) are never hit: axis-aligned rays "
+        "through them reach the floor triangle below; needles (valid, 1e-6 wide) and oblique rays: no NaN";
+    const int n = 4;
+    MeshBuilder m;
+    const uint32_t floor_first = add_grid(m, 2, 0.0f, n);
+    std::vector<std::pair<float, float>> through;  // (dx, dy) inside a cell, on a degenerate triangle
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const float x = float(i), y = float(j), z = 1.0f;
+            // Collinear (exact dyadic points on one line), off the floor's cell diagonals.
+            m.unshared_triangle({x + 0.125f, y + 0.5f, z}, {x + 0.375f, y + 0.625f, z}, {x + 0.625f, y + 0.75f, z});
+            // Two coincident vertices.
+            m.unshared_triangle({x + 0.75f, y + 0.25f, z}, {x + 0.75f, y + 0.25f, z}, {x + 0.875f, y + 0.75f, z});
+            // All three coincident.
+            m.unshared_triangle({x + 0.5f, y + 0.125f, z}, {x + 0.5f, y + 0.125f, z}, {x + 0.5f, y + 0.125f, z});
+            // Needle: valid, 1e-6 wide.
+            m.unshared_triangle({x + 0.0625f, y + 0.9375f, z}, {x + 0.5625f, y + 0.9375f, z},
+                                {x + 0.3125f, y + 0.9375f + 1e-6f, z});
+        }
+    through = {{0.375f, 0.625f}, {0.25f, 0.5625f}, {0.75f, 0.25f}, {0.8125f, 0.5f}, {0.5f, 0.125f}};
+    c.scene = std::move(m.scene());
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            for (auto [dx, dy] : through) {
+                const float x = float(i) + dx, y = float(j) + dy;
+                add_ray(c, {{x, y, 2.0f}, 0.0f, {0, 0, -1}, kInfinity}, prim_is(grid_prim_at(floor_first, n, x, y)));
+                add_ray(c, {{x - 0.5f, y + 0.25f, 2.0f}, 0.0f, {0.5f, -0.25f, -1}, kInfinity}, kAny);
+            }
+            add_ray(c, {{float(i) + 0.3125f, float(j) + 0.9375f + 2.5e-7f, 2.0f}, 0.0f, {0, 0, -1}, kInfinity}, kAny);
+        }
+    return c;
+}
+
+RobustnessCase copies_and_equal_centroids() {
+    RobustnessCase c;
+    c.id = "9";
+    c.name = "copies-equal-centroids";
+    c.requirement =
+        "64 copies of one triangle (32 sharing vertices, 32 with their own) and 48 triangles whose bounds are all "
+        "the same box (equal centroids): builders terminate with bounded depth; a ray at the copies hits one of "
+        "them; rays through the box agree with the reference (informational), no NaN";
+    MeshBuilder m;
+    const Vec3 a{5, 0, 0}, b{6, 0, 0}, d{5, 1, 0};
+    for (int i = 0; i < 32; ++i) m.triangle(a, b, d);
+    for (int i = 0; i < 32; ++i) m.unshared_triangle(a, b, d);
+    const uint32_t copies_last = m.count() - 1;
+    // Triples of corners of [-1, 1]^3 whose bounds are the whole cube.
+    std::vector<Vec3> corners;
+    for (int k = 0; k < 8; ++k) corners.push_back({k & 1 ? 1.0f : -1.0f, k & 2 ? 1.0f : -1.0f, k & 4 ? 1.0f : -1.0f});
+    for (int i = 0; i < 8; ++i)
+        for (int j = i + 1; j < 8; ++j)
+            for (int k = j + 1; k < 8; ++k) {
+                Bounds3 bb(corners[i]);
+                bb.extend(corners[j]);
+                bb.extend(corners[k]);
+                if (bb == Bounds3({-1, -1, -1}, {1, 1, 1})) m.triangle(corners[i], corners[j], corners[k]);
+            }
+    c.scene = std::move(m.scene());
+    SplitMix64 draw(9);
+    for (int i = 0; i < 64; ++i) {
+        const float u = 0.05f + 0.4f * draw.uniform(), v = 0.05f + 0.4f * draw.uniform();
+        add_ray(c, {{5 + u, v, 1}, 0.0f, {0, 0, -1}, kInfinity}, prim_range(0, copies_last));
+        add_ray(c, {{5 + u, v, -1}, 0.0f, {0.01f, 0.02f, 1}, kInfinity}, prim_range(0, copies_last));
+    }
+    for (int i = 0; i < 256; ++i) {
+        const Vec3 from = draw.unit_vector() * 4.0f;
+        const Vec3 to = Vec3{draw.uniform(), draw.uniform(), draw.uniform()} * 1.6f - Vec3{0.8f, 0.8f, 0.8f};
+        add_ray(c, {from, 0.0f, to - from, kInfinity}, kAny);
+    }
+    return c;
+}
+
+RobustnessCase flat_scene() {
+    RobustnessCase c;
+    c.id = "10";
+    c.name = "flat-scene";
+    c.requirement =
+        "every vertex has x = 2 (the scene's bounds have zero width): builders must not divide by the zero "
+        "extent; rays along +-x at a centroid, and oblique rays through it, hit that triangle; in-plane rays: "
+        "no NaN";
+    const int n = 8;
+    MeshBuilder m;
+    add_grid(m, 0, 2.0f, n);
+    c.scene = std::move(m.scene());
+    const uint32_t count = 2 * uint32_t(n * n);
+    for (uint32_t p = 0; p < count; ++p) {
+        const Vec3 ct = centroid(c.scene, p);
+        add_ray(c, {{1.0f, ct.y, ct.z}, 0.0f, {1, 0, 0}, kInfinity}, prim_is(p));
+        add_ray(c, {{3.0f, ct.y, ct.z}, 0.0f, {-1, 0, 0}, kInfinity}, prim_is(p));
+        const Vec3 o{0.0f, ct.y + 0.3f, ct.z - 0.2f};
+        add_ray(c, {o, 0.0f, ct - o, kInfinity}, prim_is(p));
+    }
+    for (int j = 0; j < n; ++j) add_ray(c, {{2.0f, -1.0f, float(j) + 0.3f}, 0.0f, {0, 1, 0}, kInfinity}, kAny);
+    return c;
+}
+
+RobustnessCase cluster_and_outlier() {
+    RobustnessCase c;
+    c.id = "11";
+    c.name = "cluster-and-outlier";
+    c.requirement =
+        "three layers of 512 triangles within 1e-3 plus one triangle at 1e6 (the cluster falls into one Morton "
+        "cell): builders terminate with bounded depth; rays at the centroids of the bottom and top layers and at "
+        "the outlier hit those triangles";
+    const int n = 16;
+    const float cell = 1e-3f / float(n);
+    MeshBuilder m;
+    uint32_t layer_first[3];
+    for (int l = 0; l < 3; ++l) layer_first[l] = add_grid(m, 2, float(l) * 1e-3f, n, cell);
+    const uint32_t outlier = m.triangle(Vec3{1e6f, 1e6f, 1e6f}, Vec3{1e6f + 1, 1e6f, 1e6f}, Vec3{1e6f, 1e6f + 1, 1e6f});
+    c.scene = std::move(m.scene());
+    const uint32_t per_layer = 2 * uint32_t(n * n);
+    for (uint32_t p = 0; p < per_layer; ++p) {
+        const Vec3 bottom = centroid(c.scene, layer_first[0] + p), top = centroid(c.scene, layer_first[2] + p);
+        add_ray(c, {{bottom.x, bottom.y, -1e-3f}, 0.0f, {0, 0, 1}, kInfinity}, prim_is(layer_first[0] + p));
+        add_ray(c, {{top.x, top.y, 3e-3f}, 0.0f, {0, 0, -1}, kInfinity}, prim_is(layer_first[2] + p));
+    }
+    const Vec3 o = centroid(c.scene, outlier);
+    add_ray(c, {{o.x, o.y, o.z + 10}, 0.0f, {0, 0, -1}, kInfinity}, prim_is(outlier));
+    add_ray(c, {{0.5e-3f, 0.5e-3f, -1}, 0.0f, o - Vec3{0.5e-3f, 0.5e-3f, -1}, kInfinity}, kAny);
+    return c;
+}
+
+RobustnessCase coplanar_split_planes() {
+    RobustnessCase c;
+    c.id = "12";
+    c.name = "coplanar-split-planes";
+    c.requirement =
+        "grids of triangles lying in the planes x, y, z = 0..3 (every candidate split plane holds flat "
+        "triangles): a ray perpendicular to a triangle at its centroid, from either side, returns that triangle";
+    const int n = 4;
+    MeshBuilder m;
+    std::vector<std::pair<uint32_t, int>> planes;  // first triangle, axis
+    for (int axis = 0; axis < 3; ++axis)
+        for (int level = 0; level < 4; ++level) planes.push_back({add_grid(m, axis, float(level), n), axis});
+    c.scene = std::move(m.scene());
+    const uint32_t per_plane = 2 * uint32_t(n * n);
+    for (auto [first, axis] : planes)
+        for (uint32_t p = first; p < first + per_plane; ++p) {
+            const Vec3 ct = centroid(c.scene, p);
+            Vec3 dir{0, 0, 0};
+            dir[axis] = 1;
+            add_ray(c, {ct - dir * 0.5f, 0.0f, dir, kInfinity}, prim_is(p));
+            add_ray(c, {ct + dir * 0.5f, 0.0f, -dir, kInfinity}, prim_is(p));
+        }
+    return c;
+}
+
+RobustnessCase overlapping_coplanar() {
+    RobustnessCase c;
+    c.id = "13";
+    c.name = "overlapping-coplanar";
+    c.requirement =
+        "32 coplanar triangles (z = 1) that all cover the unit disk: every ray into the disk hits one of them at "
+        "t = 1, the same one on every trace and every rebuild (the reference returns the smallest id)";
+    MeshBuilder m;
+    for (int k = 0; k < 32; ++k) {
+        const float phase = float(k) * 0.0654f, radius = 2.5f + 0.01f * float(k);
+        Vec3 p[3];
+        for (int i = 0; i < 3; ++i) {
+            const float a = phase + float(i) * 2.0f * std::numbers::pi_v<float> / 3.0f;
+            p[i] = {radius * std::cos(a), radius * std::sin(a), 1.0f};
+        }
+        m.unshared_triangle(p[0], p[1], p[2]);
+    }
+    c.scene = std::move(m.scene());
+    for (float x = -0.875f; x <= 0.875f; x += 0.125f)
+        for (float y = -0.875f; y <= 0.875f; y += 0.125f) {
+            if (x * x + y * y >= 1.0f) continue;
+            add_ray(c, {{x, y, 2.0f}, 0.0f, {0, 0, -1}, kInfinity}, prim_range(0, 31));
+            add_ray(c, {{x - 0.25f, y, 0.0f}, 0.0f, {0.25f, 0, 1}, kInfinity}, prim_range(0, 31));
+        }
+    return c;
+}
+
+// Case 14: a valid 4 x 4 floor plus one bad face with id 5 (or an unused bad vertex).
+RobustnessCase bad_input(std::string id, std::string name, std::string requirement, int variant) {
+    RobustnessCase c;
+    c.id = std::move(id);
+    c.name = std::move(name);
+    c.requirement = std::move(requirement);
+    const int n = 4;
+    MeshBuilder m;
+    const uint32_t first = add_grid(m, 2, 0.0f, n);
+    Scene& s = m.scene();
+    const uint32_t bad = 5;
+    const uint32_t v = uint32_t(s.vertices.size());
+    switch (variant) {
+        case 0: s.vertices.push_back({kNaN, 0, 0}); break;
+        case 1: s.vertices.push_back({0, kInfinity, 0}); break;
+        case 2: s.vertices.push_back({0, 0, 2e19f}); break;
+        default: s.vertices.push_back({1, 1, 1}); break;
+    }
+    if (variant <= 2) s.triangles[bad][1] = v;                  // a face uses the bad vertex
+    if (variant == 3) s.triangles[bad][2] = v + 7;              // an index past the end
+    if (variant == 4) s.vertices.back() = {kNaN, kNaN, kNaN};  // unused by any face
+    c.scene = std::move(s);
+    if (variant <= 3) {
+        c.rejection_mentions = "face 5";
+        return c;
+    }
+    c.scene.finalize();
+    for (uint32_t p = 0; p < 2 * uint32_t(n * n); ++p) {
+        const Vec3 ct = centroid(c.scene, first + p);
+        add_ray(c, {{ct.x, ct.y, 1}, 0.0f, {0, 0, -1}, kInfinity}, prim_is(first + p));
+    }
+    return c;
+}
+
+RobustnessCase invalid_rays() {
+    FloorRoof f = floor_and_roof(
+        "15", "invalid-rays",
+        "rays with a NaN or infinite origin or direction component, a zero direction, a NaN tmin or tmax or an "
+        "empty interval (tmin > tmax, tmin = +inf, tmax = -inf) hit nothing (any-hit included); tmin = -0 and "
+        "tmax = inf are ordinary; an origin on a triangle (t = tmin): no NaN");
+    const Vec3 c = centroid(f.c.scene, f.floor_first + 5);
+    const uint32_t below = f.floor_first + 5;
+    const Vec3 o{c.x, c.y, 1.0f}, down{0, 0, -1};
+    // Ordinary.
+    add_ray(f.c, {o, -0.0f, down, kInfinity}, prim_is(below));
+    add_ray(f.c, {o, 0.0f, down, kInfinity}, prim_is(below));
+    add_ray(f.c, {o, -0.0f, down, 1.5f}, prim_is(below));
+    // Origin on the floor: a hit at t = tmin = 0. Ours count it (the interval is [tmin,
+    // tmax)), Embree does not (its interval is (tnear, tfar]): a convention, not an error.
+    add_ray(f.c, {{c.x, c.y, 0.0f}, -0.0f, {0, 0, 1}, kInfinity}, kAny);
+    add_ray(f.c, {{c.x, c.y, 0.0f}, 0.0f, {0, 0, 1}, kInfinity}, kAny);
+    // Invalid.
+    const float inf = kInfinity;
+    for (Vec3 bad_o : {Vec3{kNaN, c.y, 1}, Vec3{c.x, kNaN, 1}, Vec3{c.x, c.y, kNaN}, Vec3{inf, c.y, 1},
+                       Vec3{c.x, -inf, 1}, Vec3{c.x, c.y, inf}})
+        add_ray(f.c, {bad_o, 0.0f, down, kInfinity}, kMiss);
+    for (Vec3 bad_d : {Vec3{kNaN, 0, -1}, Vec3{0, kNaN, -1}, Vec3{0, 0, kNaN}, Vec3{inf, 0, -1}, Vec3{0, 0, -inf},
+                       Vec3{0, 0, 0}, Vec3{-0.0f, 0, -0.0f}, Vec3{kNaN, kNaN, kNaN}})
+        add_ray(f.c, {o, 0.0f, bad_d, kInfinity}, kMiss);
+    add_ray(f.c, {o, kNaN, down, kInfinity}, kMiss);
+    add_ray(f.c, {o, 0.0f, down, kNaN}, kMiss);
+    add_ray(f.c, {o, 2.0f, down, 1.0f}, kMiss);
+    add_ray(f.c, {o, inf, down, inf}, kMiss);
+    add_ray(f.c, {o, 0.0f, down, -inf}, kMiss);
+    return f.c;
+}
+
+RobustnessCase nested_shells() {
+    RobustnessCase c;
+    c.id = "16";
+    c.name = "nested-shells";
+    c.requirement =
+        "three concentric spheres 4e-5 apart (about 670 float ulps): rays from the centre hit the innermost "
+        "shell, rays from outside the outermost";
+    const Scene sphere = icosphere(2);
+    MeshBuilder m;
+    const uint32_t per_shell = uint32_t(sphere.triangle_count());
+    for (int s = 0; s < 3; ++s) {
+        const float r = 1.0f + 4e-5f * float(s);
+        for (const auto& t : sphere.triangles)
+            m.unshared_triangle(sphere.vertices[t[0]] * r, sphere.vertices[t[1]] * r, sphere.vertices[t[2]] * r);
+    }
+    c.scene = std::move(m.scene());
+    SplitMix64 draw(16);
+    for (int i = 0; i < 400; ++i) add_ray(c, {{0, 0, 0}, 0.0f, draw.unit_vector(), kInfinity}, prim_range(0, per_shell - 1));
+    for (int i = 0; i < 400; ++i) {
+        const Vec3 from = draw.unit_vector() * 3.0f, to = draw.unit_vector() * 0.3f;
+        add_ray(c, {from, 0.0f, to - from, kInfinity}, prim_range(2 * per_shell, 3 * per_shell - 1));
+    }
+    return c;
+}
+
+RobustnessCase distant_camera() {
+    RobustnessCase c;
+    c.id = "17";
+    c.name = "distant-camera";
+    c.requirement =
+        "a closed unit sphere seen from 1e6 away: rays aimed within 0.5 of its centre hit it (the float direction "
+        "is off by ~0.1 there, and a non-watertight test leaks through edges within ~0.1: required of watertight "
+        "structures); t error against the reference is reported; no NaN";
+    c.scene = icosphere(3);
+    const Vec3 eye{6e5f, 3e5f, 7e5f};
+    for (float u = -0.5f; u <= 0.5f; u += 0.0625f)
+        for (float v = -0.5f; v <= 0.5f; v += 0.0625f) {
+            if (u * u + v * v > 0.25f) continue;
+            add_ray(c, {eye, 0.0f, normalize(Vec3{u, v, 0} - eye), kInfinity}, kHitIfWatertight);
+        }
+    for (int k = 0; k < 64; ++k) {  // around the silhouette: informational
+        const float a = float(k) * 0.0981f;
+        add_ray(c, {eye, 0.0f, normalize(Vec3{std::cos(a), std::sin(a), 0} - eye), kInfinity}, kAny);
+    }
+    return c;
+}
+
+RobustnessCase deep_tree() {
+    RobustnessCase c;
+    c.id = "18";
+    c.name = "deep-tree";
+    c.requirement =
+        "300 triangles in a geometric progression (position and size 0.9^i, down to 2e-15): a builder that "
+        "splits off one triangle per level would make a 300-deep tree; depth must stay within the structure's "
+        "limit and traversal must not overflow its stack; a ray at each centroid hits that triangle";
+    MeshBuilder m;
+    float x = 1.0f;
+    for (int i = 0; i < 300; ++i, x *= 0.9f) {
+        const float s = 0.1f * x;
+        m.unshared_triangle({x, x, x}, {x + s, x, x}, {x, x + s, x});
+    }
+    c.scene = std::move(m.scene());
+    for (uint32_t p = 0; p < c.scene.triangle_count(); ++p) {
+        const Vec3 ct = centroid(c.scene, p);
+        add_ray(c, {{ct.x, ct.y, 2.0f}, 0.0f, {0, 0, -1}, kInfinity}, prim_is(p));
+    }
+    return c;
+}
+
+}  // namespace
+
+namespace {
+
+// Finalizes a valid case's scene and records the reference's answers.
+RobustnessCase with_reference(RobustnessCase c) {
+    if (c.expects_rejection()) return c;
+    if (c.scene.prim_bounds.size() != c.scene.triangle_count()) c.scene.finalize();
+    ReferenceAccel reference(resolve_params("reference", ReferenceAccel::info().params, {}));
+    reference.build(c.scene);
+    c.reference_hits.resize(c.rays.size());
+    reference.closest_hits(c.rays, c.reference_hits);
+    return c;
+}
+
+const std::string kRejected = "rejected by Scene::finalize() with a message naming face 5, whatever the accelerator";
+
+}  // namespace
+
+const std::vector<RobustnessCaseEntry>& robustness_case_list() {
+    static const std::vector<RobustnessCaseEntry> list = {
+        {"1", [] { return closed_meshes("1", "closed-meshes", 1.0f, 0.0f); }},
+        {"2a", [] { return closed_meshes("2a", "closed-meshes-at-1.5e5", 1.0f, 1.5e5f); }},
+        {"2b", [] { return closed_meshes("2b", "closed-meshes-at-1e6", 1.0f, 1e6f); }},
+        {"2c", [] { return closed_meshes("2c", "closed-meshes-at-1e7", 1.0f, 1e7f); }},
+        {"3a", [] { return closed_meshes("3a", "closed-meshes-scaled-1e-6", 1e-6f, 0.0f); }},
+        // 2^-64: coordinates ~1e-19, so the edge functions (products of two coordinates)
+        // are float denormals; 2^-90: they underflow to zero.
+        {"3b", [] { return closed_meshes("3b", "closed-meshes-scaled-2^-64", std::ldexp(1.0f, -64), 0.0f); }},
+        {"3c", [] { return closed_meshes("3c", "closed-meshes-scaled-2^-90", std::ldexp(1.0f, -90), 0.0f); }},
+        {"4", origins_on_box_faces},
+        {"5", signed_zero_directions},
+        {"6", tiny_direction_components},
+        {"7", grazing_rays},
+        {"8", degenerate_triangles},
+        {"9", copies_and_equal_centroids},
+        {"10", flat_scene},
+        {"11", cluster_and_outlier},
+        {"12", coplanar_split_planes},
+        {"13", overlapping_coplanar},
+        {"14a", [] { return bad_input("14a", "nan-vertex", "a face using a NaN vertex is " + kRejected, 0); }},
+        {"14b", [] { return bad_input("14b", "inf-vertex", "a face using an infinite vertex is " + kRejected, 1); }},
+        {"14c",
+         [] {
+             return bad_input("14c", "huge-vertex",
+                              "a face using a vertex with a coordinate of 2e19 (>= kMaxCoordinate = 1.844e18, "
+                              "Embree's limit) is " + kRejected, 2);
+         }},
+        {"14d",
+         [] { return bad_input("14d", "index-out-of-range", "a face with an index past the vertex array is " + kRejected, 3); }},
+        {"14e",
+         [] {
+             return bad_input("14e", "unused-nan-vertex",
+                              "a NaN vertex that no face uses is accepted and harmless: every floor triangle is hit "
+                              "at its centroid", 4);
+         }},
+        {"15", invalid_rays},
+        {"16", nested_shells},
+        {"17", distant_camera},
+        {"18", deep_tree},
+    };
+    return list;
+}
+
+namespace {
+
+const RobustnessCaseEntry& find_case(const std::string& id) {
+    for (const auto& entry : robustness_case_list())
+        if (entry.id == id) return entry;
+    throw std::invalid_argument(
+        unknown_name("robustness case", id, names_of(robustness_case_list(), &RobustnessCaseEntry::id)));
+}
+
+}  // namespace
+
+std::string robustness_case_name(const std::string& id) { return find_case(id).make().name; }
+
+RobustnessCase make_robustness_case(const std::string& id) { return with_reference(find_case(id).make()); }
+
+std::vector<RobustnessCase> robustness_catalogue() {
+    std::vector<RobustnessCase> cases;
+    for (const auto& entry : robustness_case_list()) cases.push_back(with_reference(entry.make()));
+    return cases;
+}
+
+JudgeOptions judge_options(const std::string& accelerator, const ParamSet& params) {
+    JudgeOptions o;
+    for (const auto& [name, value] : params.items()) {
+        if (accelerator == "embree" && name == "robust") o.watertight = value == "true";
+        if (name == "max_depth") {
+            uint64_t depth = 0;
+            auto [p, ec] = std::from_chars(value.data(), value.data() + value.size(), depth);
+            if (ec == std::errc() && p == value.data() + value.size()) o.depth_limit = depth;
+        }
+    }
+    return o;
+}
+
+uint64_t case_memory_limit(const Scene& scene) { return 4096 * uint64_t(scene.triangle_count()) + (1u << 20); }
+
+std::string CaseVerdict::counts() const {
+    std::string s = "leaks=" + std::to_string(leaks) + " false_hits=" + std::to_string(false_hits) +
+                    " wrong_prims=" + std::to_string(wrong_prims) + " nan=" + std::to_string(nan_results) +
+                    " occlusion_mismatches=" + std::to_string(occlusion_mismatches) +
+                    " nondeterministic=" + std::to_string(nondeterministic);
+    if (leaks_tolerated) s += " leaks_tolerated=" + std::to_string(leaks_tolerated);
+    if (max_depth) s += " depth=" + std::to_string(*max_depth) + "/" + (depth_limit ? std::to_string(*depth_limit) : "-");
+    s += " rays=" + std::to_string(rays);
+    return s;
+}
+
+namespace {
+
+bool same_hit(const Hit& a, const Hit& b) {
+    return a.prim == b.prim && std::memcmp(&a.t, &b.t, sizeof a.t) == 0 && std::memcmp(&a.u, &b.u, sizeof a.u) == 0 &&
+           std::memcmp(&a.v, &b.v, sizeof a.v) == 0;
+}
+
+}  // namespace
+
+CaseVerdict judge_case(const RobustnessCase& c, const AcceleratorFactory& make, const JudgeOptions& options) {
+    CaseVerdict v;
+    v.case_id = c.id;
+    v.rays = c.rays.size();
+    if (c.expects_rejection()) {
+        Scene copy = c.scene;
+        try {
+            copy.finalize();
+            v.detail = "Scene::finalize() accepted the bad input";
+        } catch (const std::exception& e) {
+            const std::string message = e.what();
+            v.pass = message.find(c.rejection_mentions) != std::string::npos;
+            v.detail = (v.pass ? "rejected at load: " : "rejected without naming '" + c.rejection_mentions + "': ") + message;
+        }
+        return v;
+    }
+    std::unique_ptr<Accelerator> accel, rebuilt;
+    try {
+        accel = make();
+        accel->build(c.scene);
+        rebuilt = make();
+        rebuilt->build(c.scene);
+    } catch (const std::exception& e) {
+        v.detail = std::string("build failed: ") + e.what();
+        return v;
+    }
+    v.built = true;
+    const BuildStats stats = accel->build_stats();
+    v.max_depth = stats.max_depth;
+    v.depth_limit = options.depth_limit.value_or(uint64_t(c.scene.triangle_count()) + 64);
+    v.memory_bytes = stats.memory_bytes;
+    v.memory_limit = case_memory_limit(c.scene);
+
+    const size_t n = c.rays.size();
+    std::vector<Hit> hits(n), again(n), other(n);
+    std::vector<uint8_t> occluded(n);
+    accel->closest_hits(c.rays, hits);
+    accel->closest_hits(c.rays, again);
+    rebuilt->closest_hits(c.rays, other);
+    accel->any_hits(c.rays, occluded);
+    for (size_t i = 0; i < n; ++i) {
+        const Hit& h = hits[i];
+        const RayExpectation& e = c.expect[i];
+        const bool tolerated = e.watertight_only && !options.watertight;
+        if (std::isnan(h.t) || std::isnan(h.u) || std::isnan(h.v)) ++v.nan_results;
+        if (!same_hit(h, again[i]) || !same_hit(h, other[i])) ++v.nondeterministic;
+        if (bool(occluded[i]) != h.found() && !tolerated) ++v.occlusion_mismatches;
+        switch (e.kind) {
+            case Expect::Any: break;
+            case Expect::Miss:
+                if (h.found()) ++v.false_hits;
+                break;
+            case Expect::Hit:
+            case Expect::Prim:
+                if (!h.found())
+                    ++(tolerated ? v.leaks_tolerated : v.leaks);
+                else if (e.kind == Expect::Prim && (h.prim < e.prim_lo || h.prim > e.prim_hi))
+                    ++v.wrong_prims;
+                break;
+        }
+    }
+    if (!c.reference_hits.empty()) v.vs_reference = compare_hits(hits, c.reference_hits);
+
+    std::vector<std::string> failures;
+    auto require = [&](bool ok, const std::string& what) {
+        if (!ok) failures.push_back(what);
+    };
+    require(v.leaks == 0, std::to_string(v.leaks) + " leaks");
+    require(v.false_hits == 0, std::to_string(v.false_hits) + " false hits");
+    require(v.wrong_prims == 0, std::to_string(v.wrong_prims) + " wrong primitives");
+    require(v.nan_results == 0, std::to_string(v.nan_results) + " NaN results");
+    require(v.occlusion_mismatches == 0, std::to_string(v.occlusion_mismatches) + " any-hit/closest-hit disagreements");
+    require(v.nondeterministic == 0, std::to_string(v.nondeterministic) + " answers differing between runs");
+    if (v.max_depth)
+        require(*v.max_depth <= *v.depth_limit,
+                "depth " + std::to_string(*v.max_depth) + " above the limit " + std::to_string(*v.depth_limit));
+    if (v.memory_bytes)
+        require(*v.memory_bytes <= *v.memory_limit,
+                "memory " + std::to_string(*v.memory_bytes) + " bytes above " + std::to_string(*v.memory_limit));
+    v.pass = failures.empty();
+    for (const auto& f : failures) v.detail += (v.detail.empty() ? "" : ", ") + f;
+    return v;
+}
+
+CaseVerdict judge_case(const RobustnessCase& c, const std::string& accelerator,
+                       const std::map<std::string, std::string>& params) {
+    ParamSet resolved;
+    make_accelerator(accelerator, params, &resolved);  // validates now, so errors are not taken for build failures
+    return judge_case(c, [&] { return make_accelerator(accelerator, params); }, judge_options(accelerator, resolved));
+}
+
+}  // namespace accelbench

