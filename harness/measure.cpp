@@ -43,11 +43,7 @@ double seconds_between(Clock::time_point a, Clock::time_point b) {
 }
 
 // A time limit as the config wrote it (0.1, not 0.10000000000000001).
-std::string limit_text(double s) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", s);
-    return buf;
-}
+std::string limit_text(double s) { return number_text(s, 6); }
 
 // ---- deterministic values: every run that produces them must agree ------------------
 
@@ -487,11 +483,7 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
 }
 
 std::map<std::string, std::string> error_columns(const HitErrors& hits, const std::optional<ImageErrors>& image) {
-    auto real = [](double v) {
-        char buf[40];
-        std::snprintf(buf, sizeof buf, "%.9g", v);
-        return std::string(buf);
-    };
+    auto real = [](double v) { return number_text(v); };
     std::map<std::string, std::string> c = {{"false_misses", std::to_string(hits.false_misses)},
                                             {"false_hits", std::to_string(hits.false_hits)},
                                             {"prim_mismatches", std::to_string(hits.prim_mismatches)},
@@ -532,11 +524,8 @@ std::string unescape(const std::string& s) {
     return out;
 }
 
-std::string real_text(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
+// Exact: 17 significant digits give back the same double.
+std::string real_text(double v) { return number_text(v, 17); }
 
 std::string list_text(const std::vector<double>& v) {
     std::string s;
