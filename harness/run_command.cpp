@@ -19,6 +19,7 @@
 #include "accelbench/accel/registry.h"
 #include "combinations.h"
 #include "config.h"
+#include "csv.h"
 #include "instructions.h"
 #include "loaded_model.h"
 #include "measure.h"
@@ -543,20 +544,89 @@ int run_command(int argc, char** argv) {
     return run(opt);
 }
 
+namespace {
+
+// `merge --config CONFIG --shards N`: a merge of shards is the whole config or nothing.
+// A task that failed, was cancelled or never started leaves its combinations in no input;
+// they are named with their shard (to resubmit with sbatch --array=<shards>). Returns 0
+// when every combination of the config is in an input, 3 when some are missing, 2 for
+// bad input (an unreadable config or CSV, a row that is not of this config).
+int check_complete(const std::string& config_path, uint64_t shards, const std::vector<std::string>& inputs) {
+    std::vector<Combination> all;
+    std::set<std::string> present;
+    try {
+        all = expand(load_config(config_path, ModelRegistry::load_default()));
+        std::set<std::string> expected;
+        for (const auto& c : all) expected.insert(c.id);
+        for (const auto& in : inputs) {
+            const CsvData d = read_csv(in);
+            const auto col = std::find(d.header.begin(), d.header.end(), "combo_id");
+            if (col == d.header.end()) throw std::runtime_error(in + ": no combo_id column");
+            for (const auto& r : d.rows) {
+                const std::string& id = r[size_t(col - d.header.begin())];
+                if (!expected.count(id))
+                    throw std::runtime_error(in + ": combination " + id + " is not in " + config_path +
+                                             " (a shard of another config, or of another build?)");
+                present.insert(id);
+            }
+        }
+    } catch (const ConfigError& e) {
+        for (const auto& issue : e.issues()) std::fprintf(stderr, "%s\n", format_issue(issue).c_str());
+        return 2;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "accelbench merge: %s\n", e.what());
+        return 2;
+    }
+    const auto missing = missing_by_shard(all, present, shards);
+    if (missing.empty()) return 0;
+    size_t n = 0;
+    std::string ids;
+    for (const auto& [shard, combos] : missing) {
+        n += combos.size();
+        append_item(ids, ",", std::to_string(shard));
+    }
+    std::fprintf(stderr, "accelbench merge: incomplete: %zu of the %zu combinations of %s are in no input; nothing "
+                         "written. Missing, by shard of %llu:\n", n, all.size(), config_path.c_str(),
+                 (unsigned long long)shards);
+    for (const auto& [shard, combos] : missing) {
+        std::fprintf(stderr, "  shard %llu: %zu missing:", (unsigned long long)shard, combos.size());
+        for (size_t i = 0; i < combos.size() && i < 3; ++i) std::fprintf(stderr, " %s", combos[i]->name.c_str());
+        std::fprintf(stderr, "%s\n", combos.size() > 3 ? " ..." : "");
+    }
+    std::fprintf(stderr, "accelbench merge: run shards %s again (--shard I/%llu --resume; under Slurm "
+                         "--array=%s) and merge again\n", ids.c_str(), (unsigned long long)shards, ids.c_str());
+    return 3;
+}
+
+}  // namespace
+
 int merge_command(int argc, char** argv) {
     bool allow_mixed = false;
-    std::string take;
+    std::string take, config_path;
+    uint64_t shards = 1;
     std::vector<std::string> files;
     for (int i = 0; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--allow-mixed") allow_mixed = true;
         else if (a == "--take-column" && i + 1 < argc) take = argv[++i];
+        else if (a == "--config" && i + 1 < argc) config_path = argv[++i];
+        else if (a == "--shards" && i + 1 < argc) {
+            try {
+                shards = parse_shard("0/" + std::string(argv[++i])).count;
+            } catch (const std::invalid_argument&) {
+                std::fprintf(stderr, "accelbench merge: --shards expects a count > 0, got '%s'\n", argv[i]);
+                return 2;
+            }
+        }
         else if (a == "-h" || a == "--help") {
-            std::printf("usage: accelbench merge [--allow-mixed] OUT.csv IN.csv...\n"
+            std::printf("usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
                         "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
                         "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
                         "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version) differs\n"
                         "  unless --allow-mixed, and a combination present in two inputs.\n"
+                        "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
+                        "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"
+                        "  and refuses rows that are not of CONFIG\n"
                         "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
                         "  instructions of a callgrind run added to a timed run of the same config)\n");
             return 0;
@@ -584,6 +654,8 @@ int merge_command(int argc, char** argv) {
         }
         return 0;
     }
+    if (!config_path.empty())
+        if (int rc = check_complete(config_path, shards, {files.begin() + 1, files.end()}); rc != 0) return rc;
     try {
         const size_t rows = merge_results(files[0], {files.begin() + 1, files.end()}, allow_mixed);
         std::fprintf(stderr, "accelbench merge: %zu rows from %zu files written to %s\n", rows, files.size() - 1,
