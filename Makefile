@@ -223,7 +223,7 @@ robustness: build models venv
 CONFIG           ?=
 SHARDS           ?= 4
 ARRAY            ?=
-SLURM_OUT        ?= results/slurm/$(basename $(notdir $(CONFIG)))
+SLURM_OUT        ?= results/runs/slurm-$(basename $(notdir $(CONFIG)))
 PARTITION        ?=
 TIME_LIMIT       ?= 4:00:00
 MERGE_TIME_LIMIT ?= 1:00:00
