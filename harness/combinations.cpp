@@ -160,13 +160,4 @@ std::optional<Shard> shard_from_slurm() {
     return s;
 }
 
-std::map<uint64_t, std::vector<const Combination*>> missing_by_shard(const std::vector<Combination>& all,
-                                                                    const std::set<std::string>& present,
-                                                                    uint64_t count) {
-    std::map<uint64_t, std::vector<const Combination*>> missing;
-    for (const auto& c : all)
-        if (!present.count(c.id)) missing[c.hash % count].push_back(&c);
-    return missing;
-}
-
 }  // namespace accelbench

@@ -68,10 +68,4 @@ Shard parse_shard(const std::string& text);
 // std::invalid_argument on malformed values.
 std::optional<Shard> shard_from_slurm();
 
-// The combinations of `all` whose combo_id is not in `present`, by the shard of `count`
-// each belongs to: what `accelbench merge --config` names as the shards to run again.
-std::map<uint64_t, std::vector<const Combination*>> missing_by_shard(const std::vector<Combination>& all,
-                                                                    const std::set<std::string>& present,
-                                                                    uint64_t count);
-
 }  // namespace accelbench
