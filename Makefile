@@ -23,19 +23,25 @@ DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: deps venv build models test test-cpp test-python reproduce-tables \
-        test-sanitize regress update-baseline grid-search robustness clean
+        test-sanitize regress update-baseline grid-search robustness clean \
+        slurm-deps slurm-submit test-slurm
 
 # ---- set-up -----------------------------------------------------------------------
 # Installs only what is missing; `apt-get update` runs once, and only if something is.
-deps:
-	@missing=""; \
-	for p in $(DEB_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
-	command -v npm >/dev/null 2>&1 || missing="$$missing npm"; \
-	if [ -n "$$missing" ]; then \
-	  echo "deps: installing$$missing"; \
+# $(call apt_missing,PACKAGES) adds the PACKAGES dpkg does not know to $$missing;
+# $(call apt_install,TARGET) installs $$missing (waiting for another apt's lock).
+apt_missing = for p in $(1); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done
+apt_install = if [ -n "$$missing" ]; then \
+	  echo "$(1): installing$$missing"; \
 	  $(SUDO) apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
-	else echo "deps: all Debian packages present"; fi
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -o DPkg::Lock::Timeout=300 -y -qq \
+	    --no-install-recommends $$missing; \
+	else echo "$(1): all Debian packages present"; fi
+
+deps:
+	@missing=""; $(call apt_missing,$(DEB_PACKAGES)); \
+	command -v npm >/dev/null 2>&1 || missing="$$missing npm"; \
+	$(call apt_install,deps)
 
 # The venv is rebuilt when the pinned requirements change.
 $(VENV)/.installed: analysis/requirements.txt | deps
@@ -204,6 +210,48 @@ robustness: build models venv
 	set -o pipefail; $(ACCELBENCH) run --out $(ROBUSTNESS_DIR)/robustness.csv configs/robustness.yaml \
 	  | tee $(ROBUSTNESS_DIR)/robustness.log | sed -n '/^Robustness verdicts/,$$p'
 	$(ANALYSIS) robustness --csv $(ROBUSTNESS_DIR)/robustness.csv --out $(ROBUSTNESS_DIR)
+
+# ---- Slurm (issue 16) ------------------------------------------------------------------
+# `make slurm-submit CONFIG=configs/NAME.yaml SHARDS=N`: an array job of N tasks, task i
+# running `accelbench run --shard i/N` into $(SLURM_OUT)/shard-<i>ofN.csv, and a merge job
+# (--dependency=afterok on the array) that joins them into $(SLURM_OUT)/NAME.csv, refusing
+# a partial result, and runs the analysis into $(SLURM_OUT)/analysis/ (`grid` for a grid
+# config, `all` otherwise). Prints both job ids. After a failed or cancelled task, ARRAY=<ids>
+# (e.g. ARRAY=3 or ARRAY=1,3) resubmits only those shards (their CSVs are resumed) and a
+# new merge job. The checkout (build/, .venv/, models) must be on a filesystem the nodes
+# share. harness/slurm/ holds the scripts. Site settings (empty: the site's default):
+CONFIG           ?=
+SHARDS           ?= 4
+ARRAY            ?=
+SLURM_OUT        ?= results/runs/slurm-$(basename $(notdir $(CONFIG)))
+PARTITION        ?=
+TIME_LIMIT       ?= 4:00:00
+MERGE_TIME_LIMIT ?= 1:00:00
+CPUS_PER_TASK    ?= 1
+MEM_PER_TASK     ?=
+ACCOUNT          ?=
+SBATCH_ARGS      ?=
+SLURM_PACKAGES   := slurm-wlm munge
+
+slurm-submit: build venv
+	@[ -n "$(CONFIG)" ] || { echo "slurm-submit: give CONFIG=configs/NAME.yaml (and SHARDS=N)" >&2; exit 2; }
+	@PARTITION='$(PARTITION)' TIME_LIMIT='$(TIME_LIMIT)' MERGE_TIME_LIMIT='$(MERGE_TIME_LIMIT)' \
+	  CPUS_PER_TASK='$(CPUS_PER_TASK)' MEM_PER_TASK='$(MEM_PER_TASK)' ACCOUNT='$(ACCOUNT)' \
+	  SBATCH_ARGS='$(SBATCH_ARGS)' harness/slurm/submit.sh $(abspath $(ACCELBENCH)) $(abspath $(PYTHON)) \
+	  $(CONFIG) $(SHARDS) $(SLURM_OUT) $(ARRAY)
+
+# Debian 12's Slurm (slurmctld, slurmd, the client commands) and munge, for test-slurm.
+slurm-deps:
+	@missing=""; $(call apt_missing,$(SLURM_PACKAGES)); $(call apt_install,slurm-deps)
+
+# A real single-node Slurm cluster on 127.0.0.1 in a temporary directory (stopped and
+# removed on exit, failure included): SLURM_TEST_CONFIG as 4 tasks with one cancelled,
+# the merge refusing the partial result, the missing shard resubmitted, the merge checked
+# against a single-process run; no daemon left. About a minute on 2 cores. As root.
+SLURM_TEST_CONFIG ?= configs/grid-kdtree-ci.yaml
+
+test-slurm: build venv slurm-deps
+	harness/slurm/test_slurm.sh $(abspath $(ACCELBENCH)) $(abspath $(PYTHON)) $(SLURM_TEST_CONFIG)
 
 clean:
 	rm -rf $(BUILD_DIR) $(SAN_DIR)

@@ -278,6 +278,47 @@ TEST_F(RunTest, ShardsTogetherGiveTheWholeRunAndMergeBack) {
     EXPECT_EQ(d.rows.size(), 6u);
 }
 
+int merge(std::vector<std::string> args) {
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    return merge_command(int(argv.size()), argv.data());
+}
+
+TEST_F(RunTest, MergeWithTheConfigNamesTheMissingShardsAndWritesNothing) {
+    std::vector<std::string> parts;
+    for (int i = 0; i < 3; ++i) {
+        parts.push_back((dir.path() / ("shard" + std::to_string(i) + ".csv")).string());
+        ASSERT_EQ(run({config, "--out", parts.back(), "--shard", std::to_string(i) + "/3"}), 0);
+    }
+    // Which shard holds what, from the combinations themselves (not from the files).
+    std::map<uint64_t, size_t> per_shard;
+    for (const auto& c : expand(load_config(config, ModelRegistry::load_default()))) ++per_shard[c.hash % 3];
+    const uint64_t lost = per_shard.begin()->first;  // a non-empty shard
+    std::vector<std::string> rest;
+    for (uint64_t i = 0; i < 3; ++i)
+        if (i != lost) rest.push_back(parts[i]);
+
+    const std::string merged = (dir.path() / "merged.csv").string();
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(merge({"--config", config, "--shards", "3", merged, rest[0], rest[1]}), 3);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find(std::to_string(per_shard.begin()->second) + " of the 6 combinations"), std::string::npos) << err;
+    EXPECT_NE(err.find("shard " + std::to_string(lost) + ": "), std::string::npos) << err;
+    EXPECT_NE(err.find("--array=" + std::to_string(lost) + ")"), std::string::npos) << err;
+    EXPECT_FALSE(std::filesystem::exists(merged));
+
+    // A row of another config is refused too; all shards of this one merge.
+    const std::string other = write_file(dir.path(), "other.yaml", R"(name: other
+render: {width: 24, height: 16}
+models: [{procedural: soup, triangles: 500, seed: 3}]
+accelerators: [{name: brute_force}]
+)");
+    EXPECT_EQ(merge({"--config", other, merged, parts[0], parts[1], parts[2]}), 2);
+    EXPECT_FALSE(std::filesystem::exists(merged));
+    EXPECT_EQ(merge({"--config", config, "--shards", "3", merged, parts[0], parts[1], parts[2]}), 0);
+    EXPECT_EQ(read_csv(merged).rows.size(), 6u);
+}
+
 TEST_F(RunTest, TimeoutsAreRowsAndTheRunGoesOn) {
     // Far too short a limit for anything: the parent stops each child (or the child sees
     // the limit passed at a stage boundary), records a timeout and goes on to the next.
