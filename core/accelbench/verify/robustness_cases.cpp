@@ -680,7 +680,8 @@ namespace {
 RobustnessCase with_reference(RobustnessCase c) {
     if (c.expects_rejection()) return c;
     if (c.scene.prim_bounds.size() != c.scene.triangle_count()) c.scene.finalize();
-    ReferenceAccel reference(resolve_params("reference", ReferenceAccel::info().params, {}));
+    const ParamSet defaults = resolve_params("reference", ReferenceAccel::info().params, {});
+    ReferenceAccel reference(ReferenceAccel::Config::from(defaults));
     reference.build(c.scene);
     c.reference_hits.resize(c.rays.size());
     reference.closest_hits(c.rays, c.reference_hits);
@@ -757,10 +758,10 @@ std::vector<RobustnessCase> robustness_catalogue() {
     return cases;
 }
 
-JudgeOptions judge_options(const std::string& accelerator, const ParamSet& params) {
+JudgeOptions judge_options(const AcceleratorInfo& accelerator, const ParamSet& params) {
     JudgeOptions o;
+    o.watertight = accelerator.watertight(params);
     for (const auto& [name, value] : params.items()) {
-        if (accelerator == "embree" && name == "robust") o.watertight = value == "true";
         if (name == "max_depth") {
             uint64_t depth = 0;
             auto [p, ec] = std::from_chars(value.data(), value.data() + value.size(), depth);
@@ -880,7 +881,8 @@ CaseVerdict judge_case(const RobustnessCase& c, const std::string& accelerator,
                        const std::map<std::string, std::string>& params) {
     ParamSet resolved;
     make_accelerator(accelerator, params, &resolved);  // validates now, so errors are not taken for build failures
-    return judge_case(c, [&] { return make_accelerator(accelerator, params); }, judge_options(accelerator, resolved));
+    return judge_case(c, [&] { return make_accelerator(accelerator, params); },
+                      judge_options(*find_accelerator(accelerator), resolved));
 }
 
 }  // namespace accelbench

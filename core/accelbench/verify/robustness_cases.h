@@ -103,10 +103,10 @@ struct JudgeOptions {
     std::optional<uint64_t> depth_limit;
 };
 
-// Every structure of ours uses triangle.h's watertight test; Embree is watertight only
-// with robust=true. The depth limit is the structure's own `max_depth` parameter when it
-// has a numeric one.
-JudgeOptions judge_options(const std::string& accelerator, const ParamSet& params);
+// Watertight as the structure's info says for these parameters (every structure of ours
+// uses triangle.h's watertight test; Embree only with robust=true). The depth limit is
+// the structure's own `max_depth` parameter when it has a numeric one.
+JudgeOptions judge_options(const AcceleratorInfo& accelerator, const ParamSet& params);
 
 // BuildStats.memory_bytes must stay below this for a case's scene: 4 KiB per triangle
 // plus 1 MiB, far above any sane structure (a node or a reference costs tens of bytes).
