@@ -115,7 +115,7 @@ reproduce-tables: build models venv
 	  --out $(ANALYSIS_OUT) --reference results/report/report-tables.csv; \
 	echo "reproduce-tables: done in $$(( $$(date +%s) - start )) s; see $(ANALYSIS_OUT)/REPORT.md"
 
-# ---- regression check (issue 7) -----------------------------------------------------
+# ---- regression check against the committed baseline -------------------------------
 # `make regress`: configs/ci.yaml measured twice — a timed run (counts and times) and a
 # run under callgrind (the `instructions` of one render per combination) — joined by
 # combo_id and compared with the committed baseline by the analysis (three tiers, exit
@@ -165,7 +165,7 @@ update-baseline: build
 	$(call ci_join,$(BASELINE),$(REGRESS_DIR)/baseline/timed.csv,$(REGRESS_DIR)/baseline/callgrind.csv)
 	@echo "update-baseline: wrote $(BASELINE); commit it saying why the baseline changed"
 
-# ---- parameter grid search (issue 7) ------------------------------------------------
+# ---- parameter grid search ----------------------------------------------------------
 # `make grid-search [GRID_CONFIG=configs/grid-NAME.yaml]`: runs the grid through the
 # harness (resumable: rerunning continues an interrupted run) and ranks it into
 # results/grid/NAME/. A config with `grid.mode: successive_halving` runs the cheap pass,
@@ -191,7 +191,7 @@ grid-search: build venv
 	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
 	fi
 
-# ---- robustness (issue 6) ----------------------------------------------------------------
+# ---- robustness: extreme cases and stiff parameters -----------------------------------
 # configs/robustness.yaml: every case of the extreme-case catalogue judged by every
 # accelerator setting (the verdict table ends the log), the stiff parameters timed on a
 # dense cluster and the 871k dragon; then the analysis's robustness report. Always a fresh

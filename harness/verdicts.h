@@ -1,4 +1,4 @@
-// Robustness cases in a benchmark run (issue 6): a combination whose model is a case of
+// Robustness cases in a benchmark run: a combination whose model is a case of
 // the extreme-case catalogue is judged against the case's requirements instead of timed,
 // and `accelbench run` ends with a table of every case's verdict per accelerator.
 #pragma once

@@ -14,7 +14,7 @@ namespace accelbench {
 AcceleratorInfo ReferenceAccel::info() {
     return {"reference",
             "ground truth for the error columns: object-median BVH, double precision, exact hit/miss decision, "
-            "conservative box tests (issue 6); never timed",
+            "conservative box tests; never timed",
             {
                 {"leaf_size", ParamType::Int, "4", {}, 1, 64, "largest number of triangles in a leaf"},
             },

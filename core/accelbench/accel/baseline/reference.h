@@ -1,4 +1,4 @@
-// The reference: the ground truth every structure's error is measured against (issue 6).
+// The reference: the ground truth every structure's error columns are measured against.
 //
 // What makes it a reference rather than one more structure:
 // - Everything is computed in double from the float inputs, which convert exactly: the
