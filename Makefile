@@ -17,7 +17,7 @@ FRESH       ?=
 # Debian packages the build, tests and analysis need (checked with dpkg first).
 DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
   libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
-  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev valgrind \
+  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev valgrind \
   python3 python3-venv python3-pip
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
