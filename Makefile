@@ -17,7 +17,7 @@ FRESH       ?=
 # Debian packages the build, tests and analysis need (checked with dpkg first).
 DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
   libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
-  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev valgrind \
+  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev valgrind \
   python3 python3-venv python3-pip
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
@@ -121,7 +121,7 @@ reproduce-tables: build models venv
 	  --out $(ANALYSIS_OUT) --reference results/report/report-tables.csv; \
 	echo "reproduce-tables: done in $$(( $$(date +%s) - start )) s; see $(ANALYSIS_OUT)/REPORT.md"
 
-# ---- regression check (issue 7) -----------------------------------------------------
+# ---- regression check against the committed baseline -------------------------------
 # `make regress`: configs/ci.yaml measured twice — a timed run (counts and times) and a
 # run under callgrind (the `instructions` of one render per combination) — joined by
 # combo_id and compared with the committed baseline by the analysis (three tiers, exit
@@ -171,7 +171,7 @@ update-baseline: build
 	$(call ci_join,$(BASELINE),$(REGRESS_DIR)/baseline/timed.csv,$(REGRESS_DIR)/baseline/callgrind.csv)
 	@echo "update-baseline: wrote $(BASELINE); commit it saying why the baseline changed"
 
-# ---- parameter grid search (issue 7) ------------------------------------------------
+# ---- parameter grid search ----------------------------------------------------------
 # `make grid-search [GRID_CONFIG=configs/grid-NAME.yaml]`: runs the grid through the
 # harness (resumable: rerunning continues an interrupted run) and ranks it into
 # results/grid/NAME/. A config with `grid.mode: successive_halving` runs the cheap pass,
@@ -197,7 +197,7 @@ grid-search: build venv
 	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
 	fi
 
-# ---- robustness (issue 6) ----------------------------------------------------------------
+# ---- robustness: extreme cases and stiff parameters -----------------------------------
 # configs/robustness.yaml: every case of the extreme-case catalogue judged by every
 # accelerator setting (the verdict table ends the log), the stiff parameters timed on a
 # dense cluster and the 871k dragon; then the analysis's robustness report. Always a fresh

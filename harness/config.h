@@ -39,7 +39,7 @@ struct ModelTransformSpec {
 };
 
 struct ModelSpec {
-    // Case: a scene of the extreme-case catalogue (core/accelbench/robustness_cases.h),
+    // Case: a scene of the extreme-case catalogue (core/accelbench/verify/robustness_cases.h),
     // judged rather than timed.
     enum class Kind { Registry, Path, Procedural, Case };
     Kind kind = Kind::Registry;
@@ -92,7 +92,7 @@ struct Config {
     int warmup = 1;
     double timeout_s = 300;
     // Trace every combination's rays through the `reference` accelerator too and write the
-    // error columns (issue 6); `errors: false` turns it off.
+    // error columns; `errors: false` turns it off.
     bool errors = true;
     RenderSettings render;  // shading defaults to off in configs (see docs/configs.md)
     std::vector<ModelSpec> models;

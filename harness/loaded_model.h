@@ -17,7 +17,7 @@ class ModelRegistry;
 
 struct RobustnessCase;
 
-// What the `reference` accelerator answers for a model's rays (issue 6): the error columns
+// What the `reference` accelerator answers for a model's rays: the error columns
 // of every combination on the model are measured against it. Traced once per model, in
 // the parent process, before any combination's measurement.
 struct ReferenceAnswers {

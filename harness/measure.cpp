@@ -107,12 +107,12 @@ std::string counter_difference(const TraceOutput& a, const TraceOutput& b) {
     return "";
 }
 
-// Primary plus shadow totals; nullopt when the structure counted nothing at all (Embree
-// cannot count), so that no zero is ever written for a count that was not made.
-std::optional<RayStats> reported_counts(const TraceOutput& out) {
+// Primary plus shadow totals; nullopt when the structure does not count its traversal
+// (Embree), so that no zero is ever written for a count that was not made.
+std::optional<RayStats> reported_counts(const AcceleratorInfo& info, const TraceOutput& out) {
+    if (!info.counts_traversal) return std::nullopt;
     RayStats total = out.primary_stats;
     total += out.shadow_stats;
-    if (total.node_visits + total.box_tests + total.prim_tests == 0) return std::nullopt;
     return total;
 }
 
@@ -274,7 +274,7 @@ public:
         m.hits = first_count_->hits;
         m.shadow_rays = first_count_->shadow_rays;
         m.shadow_hits = first_count_->shadow_hits;
-        m.counts = reported_counts(*first_count_);
+        m.counts = reported_counts(info_, *first_count_);
         m.instructions = instructions_;
         return m;
     }
@@ -381,7 +381,7 @@ private:
         st.counters["hits"] = double(out.hits);
         st.counters["shadow_rays"] = double(out.shadow_rays);
         st.counters["shadow_hits"] = double(out.shadow_hits);
-        if (auto total = reported_counts(*first_count_)) {
+        if (auto total = reported_counts(info_, *first_count_)) {
             st.counters["prim_tests"] = double(total->prim_tests);
             st.counters["node_visits"] = double(total->node_visits);
         }

@@ -48,8 +48,9 @@ struct Measurement {
     std::vector<double> build_s, render_s;  // one per counted repetition, seconds
     BuildStats build;
     uint64_t rays = 0, hits = 0, shadow_rays = 0, shadow_hits = 0;
-    // Totals over primary and shadow rays; nullopt when the structure reports no counts
-    // at all (Embree), so that they are written as missing, never as zero.
+    // Totals over primary and shadow rays; nullopt when the structure does not count its
+    // traversal (AcceleratorInfo::counts_traversal: Embree), so that they are written as
+    // missing, never as zero.
     std::optional<RayStats> counts;
     std::optional<uint64_t> instructions;  // callgrind's Ir of one render (MeasureSettings::callgrind_out)
     // Result columns beyond timing and counts, as CSV text by column name: the error

@@ -109,7 +109,7 @@ TEST_F(RunTest, WritesOneRowPerCombination) {
     EXPECT_EQ(reps.rows.size(), 5u * 2u);
 }
 
-// Every row says how wrong it is: the error columns against the reference (issue 6).
+// Every row says how wrong it is: the error columns against the reference.
 TEST_F(RunTest, ErrorColumnsCompareEachCombinationWithTheReference) {
     ASSERT_EQ(run({config, "--out", out}), 0);
     const CsvData d = read_csv(out);

@@ -442,6 +442,8 @@ Scene load_mesh(const std::string& path, MeshLoadInfo* info_out) {
     return scene;
 }
 
+// Written by hand: OpenMesh's PLY writer takes a half-edge mesh, which would drop the faces
+// our importer keeps (see mesh_io.h), and writes no header comments.
 void write_ply(const Scene& scene, const std::string& path, const std::vector<std::string>& comments) {
     static_assert(std::endian::native == std::endian::little, "write_ply writes the host's bytes as little-endian");
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
@@ -470,6 +472,7 @@ void write_ply(const Scene& scene, const std::string& path, const std::vector<st
     if (!out) throw std::runtime_error("writing " + path + " failed");
 }
 
+// The header is plain text lines; OpenMesh's PLY reader skips its comments.
 std::vector<std::string> read_ply_comments(const std::string& path) {
     std::vector<std::string> comments;
     std::ifstream in(path, std::ios::binary);
