@@ -112,7 +112,7 @@ reproduce-tables: build models venv
 	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis scaling $(RUN_DIR)/$(SCALING_CONFIG).csv --out $(ANALYSIS_OUT); \
 	if [ -z "$(QUICK)" ]; then echo "== cost images"; harness/cost_images.sh $(BUILD_DIR) $(PYTHON) $(ANALYSIS_OUT); fi; \
 	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis all $(addprefix $(RUN_DIR)/,$(addsuffix .csv,$(RUN_CONFIGS))) \
-	  --out $(ANALYSIS_OUT) --reference results/report/report-tables.csv; \
+	  --out $(ANALYSIS_OUT) --report-numbers results/report/report-tables.csv; \
 	echo "reproduce-tables: done in $$(( $$(date +%s) - start )) s; see $(ANALYSIS_OUT)/REPORT.md"
 
 # ---- regression check (issue 7) -----------------------------------------------------

@@ -18,8 +18,8 @@ from typing import Callable
 
 import pandas as pd
 
-from .reference import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, reference_value
-from .render import fmt_sig, md_escape
+from .report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
+from .formatting import fmt_sig, md_escape
 from .schema import Results
 from .selection import Picker, setting_spec
 from .tables import METRIC, preferred_variant
@@ -56,8 +56,8 @@ class Missing(Exception):
 class ReportSource:
     name = "report"
 
-    def __init__(self, ref: pd.DataFrame):
-        self.ref = ref
+    def __init__(self, report_nums: pd.DataFrame):
+        self.report_nums = report_nums
 
     def begin(self) -> None:
         pass
@@ -66,7 +66,7 @@ class ReportSource:
         return set()
 
     def primitives(self, model: str) -> float:
-        v = self.ref.loc[self.ref["model"] == model, "primitives"]
+        v = self.report_nums.loc[self.report_nums["model"] == model, "primitives"]
         if v.empty:
             raise Missing(f"#Primitives of {model}")
         return float(v.iloc[0])
@@ -74,7 +74,7 @@ class ReportSource:
     def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
         if metric == "total":
             return self.get(model, structure, "build", setting) + self.get(model, structure, "render", setting)
-        v = reference_value(self.ref, model, structure, setting, METRIC[metric].report)
+        v = report_value(self.report_nums, model, structure, setting, METRIC[metric].report)
         if v is None or math.isnan(v):
             raise Missing(f"report has no {metric} for {structure} {setting} on {model}")
         return v
@@ -83,10 +83,10 @@ class ReportSource:
 class OurSource:
     name = "ours"
 
-    def __init__(self, results: Results, ref: pd.DataFrame):
+    def __init__(self, results: Results, report_nums: pd.DataFrame):
         self.results = results
         self.picker = Picker(results)
-        self.depths = [s.split("=")[1] for s in ref.loc[ref["table"] == 2, "setting"]
+        self.depths = [s.split("=")[1] for s in report_nums.loc[report_nums["table"] == 2, "setting"]
                        if s.startswith("maxDepth=")]
         self._groups: set[str] = set()
         self.variants_used: set[str] = set()
@@ -443,8 +443,8 @@ class ClaimRow:
     ours: Finding
 
 
-def evaluate_all(results: Results, ref: pd.DataFrame) -> tuple[list[ClaimRow], OurSource]:
-    rsrc, osrc = ReportSource(ref), OurSource(results, ref)
+def evaluate_all(results: Results, report_nums: pd.DataFrame) -> tuple[list[ClaimRow], OurSource]:
+    rsrc, osrc = ReportSource(report_nums), OurSource(results, report_nums)
     return [ClaimRow(c, evaluate(c, rsrc), evaluate(c, osrc)) for c in CLAIMS], osrc
 
 
@@ -491,9 +491,9 @@ def claims_markdown(rows: list[ClaimRow], results: Results, osrc: OurSource) -> 
     return "\n".join(out) + "\n"
 
 
-def write_claims(results: Results, ref: pd.DataFrame, out_dir: Path) -> tuple[Path, list[ClaimRow]]:
+def write_claims(results: Results, report_nums: pd.DataFrame, out_dir: Path) -> tuple[Path, list[ClaimRow]]:
     out_dir.mkdir(parents=True, exist_ok=True)
-    rows, osrc = evaluate_all(results, ref)
+    rows, osrc = evaluate_all(results, report_nums)
     path = out_dir / "claims.md"
     path.write_text(claims_markdown(rows, results, osrc))
     return path, rows

@@ -1,6 +1,6 @@
 """Command line: python -m accelbench_analysis {check,tables,claims,figures,report,all} CSV...
-[--out DIR], plus `regress` (the CI regression check) and `grid` / `grid-halve` (parameter
-grid search), both from issue 7, and `robustness` (issue 6's catalogue verdicts)."""
+[--out DIR], plus `regress` (the CI regression check), `grid` / `grid-halve` (parameter
+grid search), `scaling`, `cost-images` and `robustness` (the extreme-case catalogue's verdicts)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import shutil
 import sys
 from pathlib import Path
 
-from .reference import DEFAULT_REFERENCE, load_reference
+from .report_numbers import DEFAULT_REPORT_NUMBERS, load_report_numbers
 from .schema import ContractError, load_results
 
 EXIT_BAD_INPUT = 2
@@ -36,7 +36,7 @@ def parser() -> argparse.ArgumentParser:
                        help="harness CSV(s); a NAME.reps.csv beside NAME.csv is read too")
         s.add_argument("--out", type=Path, default=Path("results"),
                        help="output directory (default: results/)")
-        s.add_argument("--reference", type=Path, default=DEFAULT_REFERENCE,
+        s.add_argument("--report-numbers", type=Path, default=DEFAULT_REPORT_NUMBERS,
                        help="the report's numbers (default: results/report/report-tables.csv)")
     add_regress(sub)
     add_grid(sub)
@@ -161,14 +161,14 @@ def run_cost_images(args: argparse.Namespace) -> int:
     return 0
 
 
-def copy_reference(reference: Path, out: Path) -> None:
+def copy_report_numbers(report_numbers: Path, out: Path) -> None:
     """Keep OUT/report/ (the report's numbers and their README) beside the outputs that cite it."""
     target = out / "report"
-    src_dir = reference.parent
+    src_dir = report_numbers.parent
     if target.resolve() == src_dir.resolve():
         return
     target.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(reference, target / "report-tables.csv")
+    shutil.copyfile(report_numbers, target / "report-tables.csv")
     if (src_dir / "README.md").is_file():
         shutil.copyfile(src_dir / "README.md", target / "README.md")
 
@@ -181,7 +181,7 @@ def run(args: argparse.Namespace) -> list[Path]:
     from .tables import write_tables
 
     results = load_results(args.csv)
-    ref = load_reference(args.reference)
+    report_nums = load_report_numbers(args.report_numbers)
     for w in results.warnings:
         print(f"warning: {w}", file=sys.stderr)
     if args.command == "check":
@@ -194,23 +194,23 @@ def run(args: argparse.Namespace) -> list[Path]:
     written: list[Path] = []
     claims = figures = None
     if args.command in ("tables", "all"):
-        written += write_tables(results, ref, out / "tables")
+        written += write_tables(results, report_nums, out / "tables")
         if not results.case_rows().empty:
             from .robustness import write_robustness
             written.append(write_robustness(results, out / "tables"))
     if args.command in ("claims", "all", "report"):
-        path, claims = write_claims(results, ref, out / "tables")
+        path, claims = write_claims(results, report_nums, out / "tables")
         if args.command != "report":
             written.append(path)
     if args.command in ("figures", "all"):
-        figures = write_figures(results, ref, out / "figures")
+        figures = write_figures(results, report_nums, out / "figures")
         for name, f in figures.items():
             if isinstance(f, Path):
                 written.append(f)
             else:
                 print(f"figure {name} skipped: {f.reason}", file=sys.stderr)
     if args.command in ("report", "all"):
-        copy_reference(args.reference, out)
+        copy_report_numbers(args.report_numbers, out)
         written.append(write_report(results, out, claims, figures))
     return written
 

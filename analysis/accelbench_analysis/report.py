@@ -7,8 +7,8 @@ from pathlib import Path
 
 from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow
 from .figures import FIGURES, Skipped
-from .reference import REPORT_MACHINE, REPORT_MODELS
-from .render import md_escape
+from .report_numbers import REPORT_MACHINE, REPORT_MODELS
+from .formatting import md_escape
 from .schema import Results
 
 TABLE_CAPTIONS = {

@@ -1,4 +1,4 @@
-"""Issue 5, beyond the report: how time grows with the triangle count (configs/scaling.yaml)
+"""Beyond the report: how time grows with the triangle count (configs/scaling.yaml)
 and where in the image a structure spends its work (cost images from `accelbench render
 --cost-out`)."""
 
