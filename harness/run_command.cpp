@@ -136,7 +136,6 @@ private:
 Row base_row(const Config& config, const Combination& c, std::optional<uint64_t> triangles,
              std::optional<uint64_t> vertices) {
     const ModelSpec& model = config.models[c.model];
-    const Provenance& p = provenance();
     Row r;
     r["config"] = config.name;
     r["combo_id"] = c.id;
@@ -157,13 +156,8 @@ Row base_row(const Config& config, const Combination& c, std::optional<uint64_t>
         r["light"] = config.render.light ? "true" : "false";
         r["shading"] = config.render.shading ? "true" : "false";
     }
-    r["git_sha"] = p.git_sha;
-    r["git_dirty"] = p.git_dirty ? "true" : "false";
-    r["compiler"] = p.compiler;
-    r["build_type"] = p.build_type;
-    r["cpu"] = p.cpu;
+    for (const auto& [name, value] : provenance_values()) r[name] = value;
     r["threads"] = std::to_string(config.render.threads);
-    r["embree_version"] = p.embree_version;
     r["timestamp"] = utc_now("%Y-%m-%dT%H:%M:%SZ");
     return r;
 }
