@@ -117,7 +117,7 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
 
 
 def slopes_markdown(slopes: pd.DataFrame, files: list[str]) -> str:
-    """results/tables/scaling.md: one row per structure, build and render slopes per model."""
+    """OUT/tables/scaling.md: one row per structure, build and render slopes per model."""
     families = sorted(slopes["family"].unique())
     head = ["structure"] + [f"{what} slope, {fam}" for fam in families for what in TIMES.values()]
     lines = ["# Scaling: time ~ triangles^slope", "",
