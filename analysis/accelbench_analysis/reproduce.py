@@ -396,5 +396,11 @@ def run_reproduce(args: argparse.Namespace) -> int:
               reference_run=args.reference_run, report_numbers=args.report_numbers,
               cost_images=args.cost_images.split() if args.cost_images else None,
               fresh=args.fresh, require_clean_tree=args.require_clean_tree)
-    rc, _ = reproduce(job)
+    try:
+        rc, _ = reproduce(job)
+    except KeyboardInterrupt:
+        # The harness got the same signal; what it finished is in the CSVs.
+        print("\nreproduce: interrupted; run the job again with the same build to continue it",
+              file=sys.stderr)
+        return 130
     return rc
