@@ -22,7 +22,7 @@ DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: deps venv build models test test-cpp test-python reproduce-tables \
+.PHONY: deps venv build models test test-cpp test-python reproduce-tables reference-run \
         test-sanitize regress update-baseline grid-search robustness clean \
         slurm-deps slurm-submit test-slurm
 
@@ -88,38 +88,35 @@ test-sanitize: deps
 	UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(SAN_DIR) --output-on-failure -j $(JOBS)
 
 # ---- the main job ----------------------------------------------------------------------
-# Runs the report's tables through the harness and the analysis over their CSVs.
-# Finished CSVs are reused (the harness resumes: combinations already measured are
-# skipped) unless FRESH=1. QUICK=1 runs reduced configs into results/quick/ and leaves
-# the committed reference run in results/ alone.
-ifeq ($(QUICK),)
-RUN_CONFIGS    := table2 table4 table5
-SCALING_CONFIG := scaling
-RUN_DIR        := results/csv
-ANALYSIS_OUT   := results
-else
-RUN_CONFIGS    := quick-table2 quick-tables
-SCALING_CONFIG := scaling-quick
-RUN_DIR        := results/quick/csv
-ANALYSIS_OUT   := results/quick
+# `make reproduce-tables` measures on this machine every time, into a run directory of its
+# own, results/runs/<UTC time>-<short sha>[-quick]/ (csv/, tables/, figures/, REPORT.md,
+# run.json), then points results/latest at it. It continues a run only when the newest run
+# of the same configs is unfinished and was measured by a build with the same provenance
+# (`accelbench provenance`); otherwise it starts afresh and says why; FRESH=1 never
+# continues. The driver: analysis/accelbench_analysis/reproduce.py. REPORT.md compares
+# the run with the report and the committed reference run (results/reference/).
+# The configs of the job, in order (add one here):
+REPRODUCE_CONFIGS := table2 table4 table5 scaling
+SCALING_CONFIG    := scaling
+ifneq ($(QUICK),)
+# QUICK=1: reduced configs (smaller models and images, one repetition), no cost images.
+REPRODUCE_CONFIGS := quick-table2 quick-tables scaling-quick
+SCALING_CONFIG    := scaling-quick
 endif
+REFERENCE_RUN := results/reference
+COST_IMAGES    = harness/cost_images.sh $(BUILD_DIR) $(PYTHON)
+REPRODUCE      = $(ANALYSIS) reproduce $(foreach c,$(REPRODUCE_CONFIGS),configs/$(c).yaml) \
+  --scaling configs/$(SCALING_CONFIG).yaml --accelbench $(ACCELBENCH) \
+  --report-numbers results/report/report-tables.csv --reference-run $(REFERENCE_RUN)
 
 reproduce-tables: build models venv
-	@mkdir -p $(RUN_DIR)
-	@set -e; start=$$(date +%s); \
-	for c in $(RUN_CONFIGS) $(SCALING_CONFIG); do \
-	  csv=$(RUN_DIR)/$$c.csv; \
-	  if [ -n "$(FRESH)" ]; then rm -f "$$csv" "$${csv%.csv}.reps.csv"; fi; \
-	  if [ -f "$$csv" ]; then resume=--resume; else resume=; fi; \
-	  echo "== $$c -> $$csv $$resume"; \
-	  $(ACCELBENCH) run configs/$$c.yaml --out "$$csv" $$resume; \
-	done; \
-	echo "== analysis -> $(ANALYSIS_OUT)"; \
-	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis scaling $(RUN_DIR)/$(SCALING_CONFIG).csv --out $(ANALYSIS_OUT); \
-	if [ -z "$(QUICK)" ]; then echo "== cost images"; harness/cost_images.sh $(BUILD_DIR) $(PYTHON) $(ANALYSIS_OUT); fi; \
-	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis all $(addprefix $(RUN_DIR)/,$(addsuffix .csv,$(RUN_CONFIGS))) \
-	  --out $(ANALYSIS_OUT) --reference results/report/report-tables.csv; \
-	echo "reproduce-tables: done in $$(( $$(date +%s) - start )) s; see $(ANALYSIS_OUT)/REPORT.md"
+	$(REPRODUCE) $(if $(QUICK),--tag quick,--cost-images "$(COST_IMAGES)") $(if $(FRESH),--fresh)
+
+# The committed reference run: the full job measured from scratch into results/reference/
+# from a clean work tree only (refused otherwise: its rows must name the code that ran);
+# its REPORT.md names the commit and machine. Commit the result.
+reference-run: build models venv
+	$(REPRODUCE) --into $(REFERENCE_RUN) --require-clean-tree --cost-images "$(COST_IMAGES)"
 
 # ---- regression check against the committed baseline -------------------------------
 # `make regress`: configs/ci.yaml measured twice — a timed run (counts and times) and a

@@ -1,4 +1,4 @@
-"""Issue 5, beyond the report: how time grows with the triangle count (configs/scaling.yaml)
+"""Beyond the report: how time grows with the triangle count (configs/scaling.yaml)
 and where in the image a structure spends its work (cost images from `accelbench render
 --cost-out`)."""
 
@@ -117,7 +117,7 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
 
 
 def slopes_markdown(slopes: pd.DataFrame, files: list[str]) -> str:
-    """results/tables/scaling.md: one row per structure, build and render slopes per model."""
+    """OUT/tables/scaling.md: one row per structure, build and render slopes per model."""
     families = sorted(slopes["family"].unique())
     head = ["structure"] + [f"{what} slope, {fam}" for fam in families for what in TIMES.values()]
     lines = ["# Scaling: time ~ triangles^slope", "",

@@ -44,8 +44,8 @@ PROVENANCE_COLUMNS = [
 REQUIRED_COLUMNS = (IDENTITY_COLUMNS + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
                     + PROVENANCE_COLUMNS)
 
-# Written by the harness once the reference comparison exists (issue 6); every consumer
-# must cope with their absence (has_error_columns()). Counts are over the primary rays
+# Written by the harness when it compares with the `reference` accelerator; every consumer
+# must cope with their absence (older CSVs; has_error_columns()). Counts are over the primary rays
 # (`rays`) against the double-precision `reference` accelerator; empty = not measured.
 ERROR_COLUMNS = [
     "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max",
@@ -59,8 +59,8 @@ VERDICT_COLUMNS = ["verdict", "verdict_counts"]
 VERDICTS = ("pass", "fail")
 # The model label of a catalogue case's rows: `case-<id>:<name>` (e.g. case-2a:closed-...).
 CASE_PREFIX = "case-"
-# Every optional column of issue 6, in the harness's order (after `instructions`).
-ISSUE6_COLUMNS = ERROR_COLUMNS + [PEAK_RSS_COLUMN] + VERDICT_COLUMNS
+# The optional columns after `instructions` in the harness's order: errors, memory, verdicts.
+ERROR_MEMORY_VERDICT_COLUMNS = ERROR_COLUMNS + [PEAK_RSS_COLUMN] + VERDICT_COLUMNS
 
 # Written by the harness for the CI regression runs (tier 2 of `regress`): callgrind's
 # instruction count (Ir) of the measured render, empty where it was not measured.
