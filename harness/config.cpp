@@ -271,8 +271,13 @@ private:
         } else if (has_path) {
             m.kind = ModelSpec::Kind::Path;
             m.resolved_path = resolve(m.name);
-            if (!fs::is_regular_file(m.resolved_path)) {
+            std::error_code ec;
+            if (!fs::exists(m.resolved_path, ec)) {
                 c_.error(given->value, f.child(form), "no such mesh file: " + m.resolved_path);
+                ok = false;
+            } else if (!fs::is_regular_file(m.resolved_path, ec)) {
+                // a directory or a FIFO: there, but not something a mesh can be read from
+                c_.error(given->value, f.child(form), "not a regular file (a mesh file is needed): " + m.resolved_path);
                 ok = false;
             }
             m.label = m.name;

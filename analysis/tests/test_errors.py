@@ -75,7 +75,7 @@ def test_verdict_rows_need_no_timings_and_unknown_verdicts_are_rejected(tmp_path
     assert df["build_s_median"].isna().all() and df["repetitions"].isna().all()
     text = path.read_text().replace(",pass,", ",maybe,")
     path.write_text(text)
-    with pytest.raises(ContractError, match=r"'verdict' must be pass, fail or empty; found \['maybe'\] on lines \[3\]"):
+    with pytest.raises(ContractError, match=r"'verdict' must be pass, fail or empty; found \['maybe'\] on line 3 \(row 2\)"):
         read_csv(path)
 
 
