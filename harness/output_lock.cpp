@@ -29,7 +29,12 @@ void require_regular_file_or_absent(const std::string& path, const std::string& 
 }
 
 OutputLock::OutputLock(const std::vector<std::string>& paths) {
-    for (const auto& p : paths) add(p);
+    try {
+        for (const auto& p : paths) add(p);
+    } catch (...) {
+        release();  // a constructor that throws runs no destructor: the locks taken so far end here
+        throw;
+    }
 }
 
 OutputLock& OutputLock::operator=(OutputLock&& other) noexcept {

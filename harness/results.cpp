@@ -1,6 +1,7 @@
 #include "results.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -237,7 +238,7 @@ void check_result_rows(const CsvData& d, const std::string& path) {
             if (v.empty()) continue;
             char* end = nullptr;
             const double x = std::strtod(v.c_str(), &end);
-            if (end != v.c_str() + v.size() || !std::isfinite(x))
+            if (std::isspace(static_cast<unsigned char>(v.front())) || end != v.c_str() + v.size() || !std::isfinite(x))
                 throw std::runtime_error(where + ", column " + d.header[c] + ": '" + v + "' is not a finite number");
         }
     }
