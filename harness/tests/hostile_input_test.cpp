@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -230,6 +231,29 @@ accelerators: [{name: bvh}]
     EXPECT_TRUE(has_issue(load_error(large), 2, 10, "models[0]", "width x height x spp = 67108864 primary rays"));
     // Without error columns nothing keeps a hit per ray: accepted.
     EXPECT_NO_THROW(load_config(write_file(dir.path(), "noerr.yaml", read_file(large) + "errors: false\n"), registry()));
+}
+
+TEST_F(HostileInputTest, TimeoutBoundsTheReferencePassToo) {
+    // The reference pass (once per model, in a child process like a measurement) gets the
+    // same limit: rows with status timeout naming it, not an unbounded wait in the parent.
+    const std::string slow = write_file(dir.path(), "slow.yaml", R"(name: slow
+timeout_s: 0.001
+render: {width: 320, height: 240}
+models: [{procedural: soup, triangles: 20000, seed: 1}]
+accelerators: [{name: bvh}, {name: embree}]
+)");
+    const Outcome o = run({slow, "--out", path("slow.csv")});
+    EXPECT_EQ(o.code, 0) << o.err;  // timeouts are rows; the run goes on
+    const CsvData d = read_csv(path("slow.csv"));
+    ASSERT_EQ(d.rows.size(), 2u);
+    const size_t status = size_t(std::find(d.header.begin(), d.header.end(), "status") - d.header.begin());
+    for (const auto& r : d.rows) {
+        EXPECT_EQ(r[status], "timeout");
+        EXPECT_NE(r[status + 1].find("exceeded the time limit (timeout_s = 0.001 s) during the reference pass"),
+                  std::string::npos)
+            << r[status + 1];
+    }
+    EXPECT_EQ(data_rows(repetitions_path(path("slow.csv"))), 0u);
 }
 
 }  // namespace
