@@ -100,6 +100,11 @@ struct Config {
     std::vector<SkipRule> skip;
 };
 
+// Limits that load_config enforces (docs/configs.md "Limits"): the combinations of one
+// config, and the primary rays of a model when error columns are measured.
+inline constexpr uint64_t kMaxCombinations = 100000;
+inline constexpr uint64_t kMaxReferenceRays = uint64_t(1) << 25;  // 33,554,432: 512 MiB of hits
+
 // Reads and validates the config at `path` against the accelerator registry, the
 // procedural scene registry and the model registry. Throws ConfigError listing every
 // problem found.

@@ -49,6 +49,11 @@ TraceOutput trace_model(const Accelerator& accel, const LoadedModel& model, cons
 // counting render with these (measure.h).
 void add_reference_answers(LoadedModel& model, const RenderSettings& render);
 
+// The answers as bytes and back, to bring them from the child process that traces them
+// under the time limit (runner.cpp) to the parent.
+std::string reference_bytes(const ReferenceAnswers& answers);
+std::shared_ptr<const ReferenceAnswers> reference_from_bytes(const std::string& bytes);
+
 // The view: the config's camera, else the registry's or procedural scene's own, else
 // Camera::fit for the image's aspect. The light: the registry's or procedural scene's,
 // else default_light for that view. Throws std::runtime_error (file missing, checksum

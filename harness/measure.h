@@ -100,6 +100,22 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
 // not end the run. The parent must not have started threads (fork copies one thread).
 Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s);
 
+// What a forked child gave back (run_in_child): its result, or why there is none.
+struct ChildOutcome {
+    std::optional<std::string> result;  // the work's return value, when it finished in time
+    bool timed_out = false;             // killed at the deadline
+    std::string failure;                // no result otherwise: "died from signal 11 (...)", "exited with status 3 ..."
+    std::string stage;                  // the last stage the child began
+};
+
+// Runs `work` in a forked child with the deadline `timeout_s` and brings its return value
+// (any bytes) back through a pipe; the child reports each stage it begins. `work` must
+// not throw. The parent must not have started threads (fork copies one thread).
+ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s);
+
+// "exceeded the time limit (timeout_s = 2 s) during <stage>"
+std::string time_limit_message(double timeout_s, const std::string& stage);
+
 // The text form that crosses the pipe from child to parent.
 std::string serialize(const Measurement& m);
 Measurement deserialize(const std::string& text);
