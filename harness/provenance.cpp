@@ -39,6 +39,35 @@ std::string cpu_model() {
     return "unknown";
 }
 
+// The extensions the compiler was allowed to use (its predefined macros), the ones that
+// matter for our code's speed; this file is compiled with the same flags as the rest.
+std::string compiled_isa() {
+    std::string s;
+    auto add = [&s](const char* name) { s += (s.empty() ? "" : "+") + std::string(name); };
+#if defined(__SSE2__)
+    add("sse2");
+#endif
+#if defined(__SSE4_2__)
+    add("sse4.2");
+#endif
+#if defined(__AVX__)
+    add("avx");
+#endif
+#if defined(__AVX2__)
+    add("avx2");
+#endif
+#if defined(__FMA__)
+    add("fma");
+#endif
+#if defined(__AVX512F__)
+    add("avx512f");
+#endif
+#if defined(__ARM_NEON)
+    add("neon");
+#endif
+    return s.empty() ? "scalar" : s;
+}
+
 }  // namespace
 
 const Provenance& provenance() {
@@ -58,6 +87,7 @@ const Provenance& provenance() {
         p.build_type = ACCELBENCH_BUILD_TYPE;
         p.cpu = cpu_model();
         p.embree_version = EmbreeAccel::version();
+        p.isa = compiled_isa();
         return p;
     }();
     return p;

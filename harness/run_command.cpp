@@ -165,6 +165,7 @@ Row base_row(const Config& config, const Combination& c, std::optional<uint64_t>
     r["threads"] = std::to_string(config.render.threads);
     r["embree_version"] = p.embree_version;
     r["timestamp"] = utc_now("%Y-%m-%dT%H:%M:%SZ");
+    r["isa"] = p.isa;
     return r;
 }
 
@@ -555,7 +556,7 @@ int merge_command(int argc, char** argv) {
             std::printf("usage: accelbench merge [--allow-mixed] OUT.csv IN.csv...\n"
                         "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
                         "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
-                        "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version) differs\n"
+                        "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa) differs\n"
                         "  unless --allow-mixed, and a combination present in two inputs.\n"
                         "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
                         "  instructions of a callgrind run added to a timed run of the same config)\n");

@@ -45,7 +45,7 @@ TEST(ResultsTest, TheIssueColumnsAndOneColumnPerParameterOfEveryAccelerator) {
           "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi", "rays", "hits", "shadow_rays",
           "shadow_hits", "mrays_per_s", "nodes", "leaves", "max_depth", "memory_bytes", "sah_cost", "prim_tests",
           "node_visits", "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version",
-          "timestamp", "combo_id"})
+          "timestamp", "isa", "combo_id"})
         EXPECT_NE(std::find(cols.begin(), cols.end(), c), cols.end()) << c;
     // One column per parameter name of every accelerator, between `params` and `status`,
     // headed by the bare name.
