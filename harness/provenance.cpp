@@ -43,7 +43,10 @@ std::string cpu_model() {
 // matter for our code's speed; this file is compiled with the same flags as the rest.
 std::string compiled_isa() {
     std::string s;
-    auto add = [&s](const char* name) { s += (s.empty() ? "" : "+") + std::string(name); };
+    auto add = [&s](const char* name) {
+        if (!s.empty()) s += '+';
+        s += name;
+    };
 #if defined(__SSE2__)
     add("sse2");
 #endif

@@ -214,8 +214,8 @@ void bench_trace(benchmark::State& state, const Model& m, const Structure& s) {
     RayReplay embree_side(rays), subject_side(rays);
     const PairedTimes t =
         interleaved(state, [&] { embree_side.trace(*embree); }, [&] { subject_side.trace(*subject); });
-    state.counters["Mrays/s"] = 1e-6 * double(rays.rays()) / t.subject;
-    state.counters["embree_Mrays/s"] = 1e-6 * double(rays.rays()) / t.embree;
+    state.counters["Mrays/s"] = 1e-6 * double(embree_side.rays()) / t.subject;
+    state.counters["embree_Mrays/s"] = 1e-6 * double(embree_side.rays()) / t.embree;
 }
 
 // What a registered benchmark measures, for the table.

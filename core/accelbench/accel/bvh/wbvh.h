@@ -17,8 +17,9 @@
 // children are tested at once, the children hit are sorted by entry distance, the nearest
 // is entered and the others pushed far to near; a popped entry beyond the closest hit is
 // skipped, and every box test is clipped to the closest hit. A leaf's packets are tested in
-// turn, each against the interval shrunk by the packets before it. Any hit: the same, and
-// it returns at the first triangle hit.
+// turn, each against the interval shrunk by the packets before it. Any hit: the same
+// without sorting (the children hit are pushed in slot order, as Embree's any-hit
+// traverser does), returning at the first triangle hit.
 //
 // Guarantees, as the binary BVH's: the box test is intersect_box's (far distance widened by
 // 2 gamma(3), Ize 2013), the triangle test intersect_triangle's (watertight, double
