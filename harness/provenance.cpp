@@ -40,13 +40,46 @@ std::string cpu_model() {
     return "unknown";
 }
 
+// The extensions the compiler was allowed to use (its predefined macros), the ones that
+// matter for our code's speed; this file is compiled with the same flags as the rest.
+std::string compiled_isa() {
+    std::string s;
+    auto add = [&s](const char* name) {
+        if (!s.empty()) s += '+';
+        s += name;
+    };
+#if defined(__SSE2__)
+    add("sse2");
+#endif
+#if defined(__SSE4_2__)
+    add("sse4.2");
+#endif
+#if defined(__AVX__)
+    add("avx");
+#endif
+#if defined(__AVX2__)
+    add("avx2");
+#endif
+#if defined(__FMA__)
+    add("fma");
+#endif
+#if defined(__AVX512F__)
+    add("avx512f");
+#endif
+#if defined(__ARM_NEON)
+    add("neon");
+#endif
+    return s.empty() ? "scalar" : s;
+}
+
 }  // namespace
 
 std::vector<std::pair<std::string, std::string>> provenance_values() {
     const Provenance& p = provenance();
     return {{"git_sha", p.git_sha},   {"git_dirty", p.git_dirty ? "true" : "false"},
             {"compiler", p.compiler}, {"build_type", p.build_type},
-            {"cpu", p.cpu},           {"embree_version", p.embree_version}};
+            {"cpu", p.cpu},           {"embree_version", p.embree_version},
+            {"isa", p.isa}};
 }
 
 int provenance_command(int argc, char** argv) {
@@ -80,6 +113,7 @@ const Provenance& provenance() {
         p.build_type = ACCELBENCH_BUILD_TYPE;
         p.cpu = cpu_model();
         p.embree_version = EmbreeAccel::version();
+        p.isa = compiled_isa();
         return p;
     }();
     return p;

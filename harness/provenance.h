@@ -1,5 +1,5 @@
 // Where a measurement came from: the commit, whether the tree was dirty, the compiler,
-// build type, CPU and Embree version. Every CSV row carries these columns so results
+// build type, CPU, Embree version and the vector ISA compiled in. Every CSV row carries these columns so results
 // from different builds or machines are never silently mixed.
 #pragma once
 
@@ -16,6 +16,9 @@ struct Provenance {
     std::string build_type;
     std::string cpu;
     std::string embree_version;
+    // The vector extensions our code was compiled for (ACCELBENCH_ISA), e.g.
+    // "sse2+sse4.2+avx+avx2+fma" (native on this machine) or "sse2" (portable).
+    std::string isa;
 };
 
 // Gathered once per process (git is asked at run time in the source tree the binary

@@ -52,7 +52,7 @@ std::vector<std::string> result_columns() {
           "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max", "nan_results",
           "image_rmse", "hole_pixels", "peak_rss_bytes", "verdict", "verdict_counts",  //
           "width", "height", "spp", "light", "shading",  //
-          "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version", "timestamp"})
+          "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version", "timestamp", "isa"})
         c.push_back(col);
     return c;
 }
@@ -63,7 +63,7 @@ std::vector<std::string> repetition_columns() {
 
 const std::vector<std::string>& provenance_columns() {
     static const std::vector<std::string> cols = {"git_sha", "git_dirty", "compiler", "build_type", "cpu",
-                                                  "embree_version"};
+                                                  "embree_version", "isa"};
     return cols;
 }
 

@@ -156,7 +156,7 @@ int merge_command(int argc, char** argv) {
             std::printf("usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
                         "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
                         "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
-                        "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version) differs\n"
+                        "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa) differs\n"
                         "  unless --allow-mixed, and a combination present in two inputs.\n"
                         "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
                         "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"

@@ -5,7 +5,7 @@ analysis/README.md for the column list). Loading checks that contract before any
 computed: a file missing required columns, with an unknown status or with text where a
 number belongs is rejected with an error that names the file, the columns and the rows.
 
-Provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version) is grouped: rows
+Provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa) is grouped: rows
 that differ in any of these fields belong to different groups, labelled A, B, ... in file
 order. More than one group is never an error (comparing two machines is legitimate), but
 it is never silent either: every output carries a warning, table cells are tagged with
@@ -74,7 +74,10 @@ STATUSES = ("ok", "skipped", "timeout", "error")
 
 # Rows differing in any of these fields were not measured with the same code on the same
 # machine. `threads` and `timestamp` are per-run facts, not identity.
-PROVENANCE_IDENTITY = ["git_sha", "git_dirty", "compiler", "build_type", "cpu", "embree_version"]
+PROVENANCE_IDENTITY = ["git_sha", "git_dirty", "compiler", "build_type", "cpu", "embree_version", "isa"]
+# The vector extensions compiled in (CMake's ACCELBENCH_ISA), the harness's last column;
+# files written before it existed load with "unknown".
+ISA_COLUMN = "isa"
 
 # Build types whose timings are representative (the Makefile builds RelWithDebInfo).
 OPTIMISED_BUILD_TYPES = {"release", "relwithdebinfo"}
@@ -112,7 +115,7 @@ class ProvenanceGroup:
         sha = self.fields["git_sha"]
         dirty = " (dirty)" if self.fields["git_dirty"] == "true" else ""
         return (f"{self.label}: commit {sha[:12]}{dirty}, cpu {self.fields['cpu']}, "
-                f"{self.fields['compiler']}, {self.fields['build_type']}, "
+                f"{self.fields['compiler']}, {self.fields['build_type']}, isa {self.fields['isa']}, "
                 f"Embree {self.fields['embree_version']} ({self.rows} rows from "
                 f"{', '.join(self.files)})")
 
@@ -344,6 +347,8 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         raise ContractError(f"{path}: the key (config, model, accel, params) must be unique; "
                             f"repeated: {keys}")
     df["source"] = str(path)
+    if ISA_COLUMN not in df.columns:
+        df[ISA_COLUMN] = "unknown"
     for col in PROVENANCE_IDENTITY + ["timestamp"]:
         df[col] = df[col].astype(str).str.strip()
     return df

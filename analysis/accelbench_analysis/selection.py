@@ -87,6 +87,8 @@ STRUCTURES = [
     Structure("kdtree", "kd-tree", Spec("kdtree", (("max_prims", "1"), ("max_depth", AUTO)),
                                         KD_PREFERRED), "kdtree"),
     Structure("bvh-sah", "BVH (binned SAH)", Spec("bvh", (("split", "sah"),)), None),
+    Structure("wbvh8", "wide BVH (8, SIMD)", Spec("wbvh", (("width", "8"),)), None),
+    Structure("wbvh4", "wide BVH (4, SIMD)", Spec("wbvh", (("width", "4"),)), None),
     Structure("embree", "Embree", Spec("embree", (), EMBREE_PREFERRED), None),
 ]
 STRUCTURE = {s.key: s for s in STRUCTURES}

@@ -6,6 +6,7 @@
 #include "accelbench/accel/baseline/embree_accel.h"
 #include "accelbench/accel/kdtree/kdtree.h"
 #include "accelbench/accel/bvh/lbvh.h"
+#include "accelbench/accel/bvh/wbvh.h"
 #include "accelbench/accel/baseline/reference.h"
 
 namespace accelbench {
@@ -18,6 +19,7 @@ const std::vector<AcceleratorInfo>& accelerator_registry() {
         Lbvh::info(),
         KdTree::info(),
         ReferenceAccel::info(),
+        Wbvh::info(),
     };
     return registry;
 }

@@ -240,7 +240,50 @@ void sample_offset(int s, int spp, uint64_t pixel, float& dx, float& dy) {
     dy = (float(s / gx) + rng.uniform()) / float(gy);
 }
 
+// The primary rays of one tile, in the order render() traces them: rows of the tile top to
+// bottom, pixels left to right, a pixel's samples in turn.
+void tile_primary_rays(const CameraRays& cam, const RenderSettings& rs, size_t tile, std::vector<Ray>& rays) {
+    const int tiles_x = (rs.width + kTile - 1) / kTile;
+    const int x0 = int(tile % size_t(tiles_x)) * kTile, y0 = int(tile / size_t(tiles_x)) * kTile;
+    const int x1 = std::min(x0 + kTile, rs.width), y1 = std::min(y0 + kTile, rs.height);
+    rays.clear();
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+            for (int k = 0; k < rs.spp; ++k) {
+                float dx, dy;
+                sample_offset(k, rs.spp, uint64_t(y) * uint64_t(rs.width) + uint64_t(x), dx, dy);
+                rays.push_back(cam.primary(float(x) + dx, float(y) + dy));
+            }
+}
+
+size_t tile_count(const RenderSettings& rs) {
+    return size_t((rs.width + kTile - 1) / kTile) * size_t((rs.height + kTile - 1) / kTile);
+}
+
 }  // namespace
+
+RenderRays render_rays(const Accelerator& accel, const Scene& scene, const Camera& camera,
+                       const TraceRequest& request) {
+    const RenderSettings& rs = request.settings;
+    check_settings(rs, true);
+    const CameraRays cam(camera, rs.width, rs.height);
+    const ShadowSetup shadow = shadow_setup(scene, request, default_light(scene.bounds, camera));
+    RenderRays out;
+    std::vector<Ray> rays;
+    std::vector<Hit> hits;
+    for (size_t tile = 0; tile < tile_count(rs); ++tile) {
+        tile_primary_rays(cam, rs, tile, rays);
+        hits.resize(rays.size());
+        accel.closest_hits(rays, hits);
+        out.primary.insert(out.primary.end(), rays.begin(), rays.end());
+        out.primary_batch_end.push_back(out.primary.size());
+        if (!shadow.on) continue;
+        for (size_t i = 0; i < rays.size(); ++i)
+            if (hits[i].found()) out.shadow.push_back(shadow_ray(rays[i], hits[i], shadow));
+        out.shadow_batch_end.push_back(out.shadow.size());
+    }
+    return out;
+}
 
 TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera,
                    const TraceRequest& request) {
@@ -256,8 +299,8 @@ TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& c
     const Vec3 sky_up = normalize(camera.up);
 
     const int spp = rs.spp;
-    const int tiles_x = (rs.width + kTile - 1) / kTile, tiles_y = (rs.height + kTile - 1) / kTile;
-    const size_t tiles = size_t(tiles_x) * size_t(tiles_y);
+    const int tiles_x = (rs.width + kTile - 1) / kTile;
+    const size_t tiles = tile_count(rs);
     const size_t pixels = size_t(rs.width) * size_t(rs.height);
 
     TraceOutput out;
@@ -270,14 +313,7 @@ TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& c
     for_each_batch(tiles, rs.threads, [&](size_t tile, Scratch& s) {
         const int x0 = int(tile % size_t(tiles_x)) * kTile, y0 = int(tile / size_t(tiles_x)) * kTile;
         const int x1 = std::min(x0 + kTile, rs.width), y1 = std::min(y0 + kTile, rs.height);
-        s.rays.clear();
-        for (int y = y0; y < y1; ++y)
-            for (int x = x0; x < x1; ++x)
-                for (int k = 0; k < spp; ++k) {
-                    float dx, dy;
-                    sample_offset(k, spp, uint64_t(y) * uint64_t(rs.width) + uint64_t(x), dx, dy);
-                    s.rays.push_back(cam.primary(float(x) + dx, float(y) + dy));
-                }
+        tile_primary_rays(cam, rs, tile, s.rays);
         totals[tile] = trace_batch(accel, s.rays, shadow, request.counts, s);
 
         size_t i = 0;  // ray index within the tile, in the order the rays were made

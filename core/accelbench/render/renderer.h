@@ -67,6 +67,18 @@ struct TraceRequest {
 TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera,
                    const TraceRequest& request);
 
+// The rays render() traces, made ahead of time so that their tracing can be timed alone
+// (harness/bench): the primary rays in render()'s order and batches (one batch per tile),
+// and the shadow ray of each primary hit that `accel` finds, batched the same way (empty
+// without settings.light). Replaying them — closest_hits over each primary batch, any_hits
+// over each shadow batch — is the render's tracing without ray generation or shading.
+struct RenderRays {
+    std::vector<Ray> primary, shadow;
+    std::vector<size_t> primary_batch_end, shadow_batch_end;  // one past each batch's last ray
+};
+RenderRays render_rays(const Accelerator& accel, const Scene& scene, const Camera& camera,
+                       const TraceRequest& request);
+
 // Traces a given ray set (a ray file) instead of camera rays: the same primary / shadow /
 // counting logic; no image (settings.shading is ignored, per_pixel is per ray). Without
 // request.light the light is the default one of the default view,

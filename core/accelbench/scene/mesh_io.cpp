@@ -645,9 +645,12 @@ private:
             if (bytes_.size() - pos < size)
                 throw MeshError(byte_at(pos) + "the file ends inside " + instance(el, i) + " (of " + number(el.count) +
                                 " " + plural(el) + " the header declares): it is cut short");
-            unsigned char raw[8];
-            std::memcpy(raw, bytes_.data() + pos, size);
-            if (swap) std::reverse(raw, raw + size);
+            // The value's bytes in host order (ply_size is at most 8). Copied byte by byte
+            // rather than with std::reverse, which GCC 12's -march=native vectoriser warns
+            // about (a -Wstringop-overflow false positive).
+            unsigned char raw[8] = {};
+            const auto* src = reinterpret_cast<const unsigned char*>(bytes_.data() + pos);
+            for (size_t k = 0; k < size && k < sizeof raw; ++k) raw[k] = swap ? src[size - 1 - k] : src[k];
             pos += size;
             PlyValue v;
             switch (t) {

@@ -1,0 +1,108 @@
+// Wide BVH with SIMD traversal (Embree's BVH4/BVH8: Wald et al. 2014, "Embree: a kernel
+// framework for efficient CPU ray tracing"; Ylitie, Karras, Laine 2017, "Efficient
+// incoherent ray traversal on GPUs through compressed wide BVHs", section 3): nodes of 4 or
+// 8 children whose boxes one vector slab test covers, leaves of several triangles one
+// vector watertight test covers (layouts and tests: wbvh_simd.h).
+//
+// Build: the binned-SAH binary BVH (bvh.h with split=sah, the top-down builder of
+// bvh_top_down.h, leaves of up to max_prims triangles) collapsed into a W-wide tree from the
+// root down, as Embree's BVH4/8 builders do: a wide node starts with its binary node's two
+// children and, while it has fewer than W, replaces the child of largest surface area that
+// is not a leaf by that child's two children. The largest box is the one a ray is most
+// likely to enter (the SAH's probability), so opening it removes the most expected node
+// visits. (Ylitie et al.'s optimal collapse by dynamic programming over the SAH is not
+// done.) Each binary leaf becomes one leaf child: its triangles in ceil(n / 4) packets.
+//
+// Traversal (closest hit): an explicit stack of (child, entry distance); at a node all
+// children are tested at once, the children hit are sorted by entry distance, the nearest
+// is entered and the others pushed far to near; a popped entry beyond the closest hit is
+// skipped, and every box test is clipped to the closest hit. A leaf's packets are tested in
+// turn, each against the interval shrunk by the packets before it. Any hit: the same
+// without sorting (the children hit are pushed in slot order, as Embree's any-hit
+// traverser does), returning at the first triangle hit.
+//
+// Guarantees, as the binary BVH's: the box test is intersect_box's (far distance widened by
+// 2 gamma(3), Ize 2013), the triangle test intersect_triangle's (watertight, double
+// precision where float cannot decide), lane for lane — the vector and scalar kernels give
+// identical answers (`kernel=scalar` runs the scalar ones, compiled in every build).
+//
+// Counters: node_visits = wide nodes entered, box_tests = child boxes tested (a node's
+// used slots, not W), prim_tests = triangles tested (a packet's used lanes). Invalid rays
+// (is_valid_ray) are answered "miss" before any count.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "accelbench/accel/accelerator.h"
+#include "accelbench/accel/bvh/bvh.h"
+#include "accelbench/accel/bvh/wbvh_simd.h"
+
+namespace accelbench {
+
+// A finished wide tree: nodes[0] is the root (always an inner node, even over a scene of
+// one leaf), children of a node are stored after it.
+template <int W>
+struct WbvhTree {
+    std::vector<WbvhNode<W>> nodes;
+    std::vector<WbvhTriPacket> packets;
+    uint32_t depth = 0;   // wide levels below the root on the longest path to a leaf child
+    uint64_t leaves = 0;  // leaf children
+    bool empty() const { return nodes.empty(); }
+};
+
+// Statistics of a finished wide tree (measure_wbvh), reported as BuildStats.
+struct WbvhMetrics {
+    uint64_t nodes = 0, leaves = 0, max_depth = 0, memory_bytes = 0, packets = 0;
+    double avg_leaf_size = 0;     // triangles per leaf child
+    double avg_children = 0;      // used child slots per node
+    double packet_fill = 0;       // used lanes / lanes of all packets
+    std::optional<double> sah_cost;  // C_trav = C_isect = 1 (bvh_metrics.h), wide nodes' areas
+};
+
+template <int W>
+WbvhMetrics measure_wbvh(const WbvhTree<W>& tree);
+
+class Wbvh final : public AcceleratorBase<Wbvh> {
+public:
+    enum class Kernel { simd, scalar };
+
+    // The parameters, as declared in info() (defaults there only).
+    struct Config {
+        uint32_t width = 0;         // children per node: 4 or 8
+        uint32_t max_prims = 0;     // leaf cap of the binary build (SAH may stop earlier)
+        uint32_t max_depth = 0;     // binary build's depth limit
+        uint32_t bins = 0;          // binned SAH bins
+        double traversal_cost = 0;  // SAH constants of the binary build
+        double isect_cost = 0;
+        Kernel kernel = Kernel::simd;  // vector tests, or the scalar ones they must equal
+
+        static Config from(const ParamSet& params);
+    };
+
+    static AcceleratorInfo info();
+    explicit Wbvh(const ParamSet& params);
+
+    void build(const Scene& scene) override;
+    BuildStats build_stats() const override;
+
+    template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
+    template <class C> bool occluded(const Ray& ray, C& counters) const;
+
+    const Config& config() const { return config_; }
+    const WbvhTree<4>& tree4() const { return tree4_; }
+    const WbvhTree<8>& tree8() const { return tree8_; }
+
+private:
+    template <int W>
+    void collapse(const FlatBvh& binary, WbvhTree<W>& out);
+
+    Config config_;
+    Bvh binary_;  // the binned-SAH binary BVH collapsed (its buffers reused from build to build)
+    WbvhTree<4> tree4_;
+    WbvhTree<8> tree8_;
+};
+
+}  // namespace accelbench

@@ -1,0 +1,397 @@
+// The wide BVH: agreement with Embree at both widths and several leaf sizes, the vector
+// kernels against the scalar ones (identical answers and counts, bit for bit), the whole
+// extreme-case catalogue at settings the registry-wide robustness test does not run, exact
+// trees and counts on hand-made scenes, and termination on degenerate input.
+#include "accelbench/accel/bvh/wbvh.h"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "accelbench/scene/procedural.h"
+#include "accelbench/verify/robustness_cases.h"
+#include "agreement.h"
+#include "test_scenes.h"
+
+using namespace accelbench;
+using namespace accelbench::test;
+
+namespace {
+
+using Params = std::map<std::string, std::string>;
+
+std::unique_ptr<Wbvh> built(const Scene& scene, const Params& params) {
+    auto accel = make_accelerator("wbvh", params);
+    std::unique_ptr<Wbvh> w(static_cast<Wbvh*>(accel.release()));
+    w->build(scene);
+    return w;
+}
+
+std::string describe(const Params& params) {
+    std::string s = "wbvh";
+    for (const auto& [k, v] : params) s += " " + k + "=" + v;
+    return s;
+}
+
+// Both widths at leaf caps of one triangle, one packet, two packets and more.
+std::vector<Params> variants() {
+    std::vector<Params> out;
+    for (const char* width : {"4", "8"})
+        for (const char* max_prims : {"1", "4", "8", "16"}) out.push_back({{"width", width}, {"max_prims", max_prims}});
+    return out;
+}
+
+// Every tree invariant: each triangle in exactly one leaf lane, every child box holding its
+// subtree's triangles, used slots before unused ones, the depth as stored.
+template <int W>
+void expect_valid_tree(const WbvhTree<W>& tree, const Scene& scene, const std::string& what) {
+    std::vector<int> seen(scene.triangle_count(), 0);
+    struct Item {
+        uint32_t node, depth;
+    };
+    std::vector<Item> todo = {{0, 0}};
+    uint32_t max_depth = 0;
+    size_t nodes_reached = 0;
+    while (!todo.empty()) {
+        const Item it = todo.back();
+        todo.pop_back();
+        ++nodes_reached;
+        max_depth = std::max(max_depth, it.depth);
+        const WbvhNode<W>& node = tree.nodes.at(it.node);
+        const uint32_t n = node.child_count();
+        ASSERT_GE(n, 1u) << what;
+        for (uint32_t k = n; k < uint32_t(W); ++k) EXPECT_EQ(node.child[k], kInvalidId) << what;
+        for (uint32_t k = 0; k < n; ++k) {
+            const Bounds3 box = node.child_bounds(int(k));
+            if (node.count[k] == 0) {
+                ASSERT_GT(node.child[k], it.node) << what << ": children are stored after their parent";
+                todo.push_back({node.child[k], it.depth + 1});
+                continue;
+            }
+            for (uint32_t i = 0; i < node.count[k]; ++i) {
+                const WbvhTriPacket& p = tree.packets.at(node.child[k] + i / 4);
+                const uint32_t prim = p.prim[i % 4];
+                ASSERT_LT(prim, scene.triangle_count()) << what;
+                ++seen[prim];
+                const Bounds3& pb = scene.prim_bounds[prim];
+                EXPECT_TRUE(box.lower.x <= pb.lower.x && box.lower.y <= pb.lower.y && box.lower.z <= pb.lower.z &&
+                            box.upper.x >= pb.upper.x && box.upper.y >= pb.upper.y && box.upper.z >= pb.upper.z)
+                    << what << ": leaf box misses triangle " << prim;
+                for (int v = 0; v < 3; ++v)
+                    EXPECT_EQ((Vec3{p.v[v][0][i % 4], p.v[v][1][i % 4], p.v[v][2][i % 4]}), scene.vertex(prim, v)) << what;
+            }
+            if (node.count[k] % 4) {
+                EXPECT_EQ(tree.packets.at(node.child[k] + node.count[k] / 4).prim[3], kInvalidId) << what;
+            }
+        }
+    }
+    EXPECT_EQ(nodes_reached, tree.nodes.size()) << what;
+    EXPECT_EQ(max_depth, tree.depth) << what;
+    for (size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << what << ": triangle " << i;
+}
+
+void expect_valid(const Wbvh& w, const Scene& scene, const std::string& what) {
+    if (scene.triangle_count() == 0) return;
+    if (w.config().width == 8)
+        expect_valid_tree(w.tree8(), scene, what);
+    else
+        expect_valid_tree(w.tree4(), scene, what);
+}
+
+// The vector kernels against the scalar ones on the same tree: every hit record equal bit
+// for bit, every any-hit answer and every counter equal.
+void expect_kernels_identical(const Scene& scene, const Params& params, const std::vector<Ray>& rays,
+                              const std::string& what) {
+    Params vector_params = params, scalar_params = params;
+    vector_params["kernel"] = "simd";
+    scalar_params["kernel"] = "scalar";
+    auto vec = built(scene, vector_params);
+    auto sca = built(scene, scalar_params);
+    std::vector<Hit> hv(rays.size()), hs(rays.size());
+    std::vector<RayStats> sv(rays.size()), ss(rays.size());
+    vec->closest_hits(rays, hv, sv);
+    sca->closest_hits(rays, hs, ss);
+    size_t differ = 0;
+    for (size_t i = 0; i < rays.size(); ++i) {
+        const bool same = hv[i].prim == hs[i].prim && std::bit_cast<uint32_t>(hv[i].t) == std::bit_cast<uint32_t>(hs[i].t) &&
+                          std::bit_cast<uint32_t>(hv[i].u) == std::bit_cast<uint32_t>(hs[i].u) &&
+                          std::bit_cast<uint32_t>(hv[i].v) == std::bit_cast<uint32_t>(hs[i].v) &&
+                          sv[i].node_visits == ss[i].node_visits && sv[i].box_tests == ss[i].box_tests &&
+                          sv[i].prim_tests == ss[i].prim_tests;
+        differ += !same;
+    }
+    EXPECT_EQ(differ, 0u) << what << ": closest hits or counts differ between the simd and scalar kernels";
+    std::vector<Ray> shadows = shadow_rays(scene, rays, hs);
+    std::vector<uint8_t> ov(shadows.size()), os(shadows.size());
+    std::vector<RayStats> tv(shadows.size()), ts(shadows.size());
+    vec->any_hits(shadows, ov, tv);
+    sca->any_hits(shadows, os, ts);
+    size_t occ_differ = 0;
+    for (size_t i = 0; i < shadows.size(); ++i)
+        occ_differ += ov[i] != os[i] || tv[i].node_visits != ts[i].node_visits || tv[i].box_tests != ts[i].box_tests ||
+                      tv[i].prim_tests != ts[i].prim_tests;
+    EXPECT_EQ(occ_differ, 0u) << what << ": any-hit answers or counts differ between the kernels";
+    std::printf("[kernels] %s: %zu rays + %zu shadow rays, simd (%s) == scalar\n", what.c_str(), rays.size(),
+                shadows.size(), kWbvhHasVector ? kWbvhWide8Isa : "not compiled in");
+}
+
+// A closed height field of shared edges (as the BVH test's grid).
+Scene closed_grid() {
+    Scene scene;
+    scene.name = "test-grid";
+    const int w = 40;
+    for (int j = 0; j <= w; ++j)
+        for (int i = 0; i <= w; ++i) {
+            const float x = float(i) / w, y = float(j) / w;
+            scene.vertices.push_back({x, y, 0.1f * std::sin(6 * x) * std::cos(5 * y)});
+        }
+    for (int j = 0; j < w; ++j)
+        for (int i = 0; i < w; ++i) {
+            const uint32_t a = uint32_t(j * (w + 1) + i), b = a + 1, c = a + uint32_t(w + 1), d = c + 1;
+            scene.triangles.push_back({a, b, d});
+            scene.triangles.push_back({a, d, c});
+        }
+    scene.finalize();
+    return scene;
+}
+
+// ---- agreement ---------------------------------------------------------------------------
+
+TEST(Wbvh, AgreesWithEmbreeOnRandomSoupAndGrid) {
+    const Scene soup = random_soup(3000, 3);
+    const Scene grid = closed_grid();
+    const auto soup_rays = probe_rays(soup, 4000, 3);
+    const auto grid_rays = probe_rays(grid, 3000, 7);
+    for (const Params& p : variants()) {
+        auto a = built(soup, p);
+        expect_valid(*a, soup, describe(p) + " soup");
+        expect_agrees_with_embree(soup, *a, soup_rays, describe(p) + " soup");
+        auto b = built(grid, p);
+        expect_valid(*b, grid, describe(p) + " grid");
+        expect_agrees_with_embree(grid, *b, grid_rays, describe(p) + " grid");
+    }
+}
+
+TEST(Wbvh, AgreesWithEmbreeOnProceduralScenes) {
+    for (const auto& info : procedural_registry()) {
+        const Scene scene = make_procedural(info.name, {});
+        const auto rays = probe_rays(scene, 6000, 13);
+        for (const Params& p : variants()) {
+            auto w = built(scene, p);
+            expect_valid(*w, scene, describe(p) + " " + info.name);
+            expect_agrees_with_embree(scene, *w, rays, describe(p) + " " + info.name);
+        }
+    }
+}
+
+TEST(Wbvh, StanfordBunnyAgreesWithEmbree) {
+    const Scene scene = test::stanford_bunny();
+    const auto rays = probe_rays(scene, 20000, 11);
+    for (const Params& p : variants()) {
+        auto w = built(scene, p);
+        expect_valid(*w, scene, describe(p) + " bunny");
+        const BuildStats s = w->build_stats();
+        std::printf("[bunny] %s: nodes %llu, leaves %llu, depth %llu, sah %.2f (binary %.2f), packet fill %.2f\n",
+                    describe(p).c_str(), (unsigned long long)s.nodes.value(), (unsigned long long)s.leaves.value(),
+                    (unsigned long long)s.max_depth.value(), s.sah_cost.value(), s.extra.at("binary_sah_cost"),
+                    s.extra.at("packet_fill"));
+        expect_agrees_with_embree(scene, *w, rays, describe(p) + " bunny");
+    }
+}
+
+// ---- the vector kernels equal the scalar ones ---------------------------------------------
+
+TEST(Wbvh, SimdAndScalarKernelsGiveIdenticalHits) {
+    const Scene bunny = test::stanford_bunny();
+    const Scene grid = closed_grid();
+    const Scene forest = make_procedural("forest", {});
+    for (const Params& p : variants()) {
+        expect_kernels_identical(bunny, p, probe_rays(bunny, 20000, 5), describe(p) + " bunny");
+        expect_kernels_identical(grid, p, probe_rays(grid, 3000, 8), describe(p) + " grid");
+        expect_kernels_identical(forest, p, probe_rays(forest, 6000, 9), describe(p) + " forest");
+    }
+    // Rays exactly through the grid's vertices and edges, where the double-precision ends of
+    // the triangle test run, and rays starting on box planes (the NaN lanes of the slab test).
+    std::vector<Ray> exact;
+    for (int j = 0; j <= 40; j += 3)
+        for (int i = 0; i <= 40; i += 3) {
+            const Vec3 v = grid.vertices[size_t(j * 41 + i)];
+            exact.push_back({{v.x, v.y, 1}, 0, {0, 0, -1}, kInfinity});
+            exact.push_back({{v.x, 0.5f, v.z}, 0, {0, 1, 0}, kInfinity});
+        }
+    for (const Params& p : variants()) expect_kernels_identical(grid, p, exact, describe(p) + " grid vertices");
+}
+
+// ---- the extreme-case catalogue ------------------------------------------------------------
+
+// robustness_test runs every registered structure at its defaults (width 8, max_prims 4);
+// here the other width and leaf sizes, and the scalar kernel.
+TEST(Wbvh, PassesTheExtremeCaseCatalogue) {
+    const std::vector<Params> settings = {{{"width", "4"}},
+                                          {{"width", "8"}, {"max_prims", "1"}},
+                                          {{"width", "4"}, {"max_prims", "16"}},
+                                          {{"width", "8"}, {"kernel", "scalar"}},
+                                          {{"width", "8"}, {"max_depth", "1"}}};
+    for (const RobustnessCase& c : robustness_catalogue())
+        for (const Params& p : settings) {
+            const CaseVerdict v = judge_case(c, "wbvh", p);
+            EXPECT_TRUE(v.pass) << "case " << c.id << " (" << c.name << ") on " << describe(p) << ": " << v.detail
+                                << "\n  " << v.counts();
+            EXPECT_EQ(v.leaks, 0u) << c.id << " " << describe(p);
+        }
+}
+
+// ---- exact trees and counts on hand-made scenes --------------------------------------------
+
+// Eight triangles along x, one per leaf: the binary tree is the balanced one (bvh_test).
+// Width 8 opens it completely: one node with 8 leaf children. Width 4: the root takes the
+// two 4-triangle subtrees, opens both (the largest first), and each of its 4 children is a
+// node of 2 leaves: 5 nodes.
+TEST(Wbvh, EightSeparatedTriangles) {
+    const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
+    auto w8 = built(scene, {{"width", "8"}, {"max_prims", "1"}});
+    expect_valid(*w8, scene, "w8");
+    BuildStats s = w8->build_stats();
+    EXPECT_EQ(s.nodes.value(), 1u);
+    EXPECT_EQ(s.leaves.value(), 8u);
+    EXPECT_EQ(s.max_depth.value(), 1u);
+    EXPECT_EQ(s.extra.at("packets"), 8);
+    EXPECT_EQ(s.extra.at("binary_nodes"), 15);
+    auto w4 = built(scene, {{"width", "4"}, {"max_prims", "1"}});
+    expect_valid(*w4, scene, "w4");
+    s = w4->build_stats();
+    EXPECT_EQ(s.nodes.value(), 5u);
+    EXPECT_EQ(s.leaves.value(), 8u);
+    EXPECT_EQ(s.max_depth.value(), 2u);
+    EXPECT_EQ(s.extra.at("avg_children"), 12.0 / 5.0);  // 4 at the root, 2 at each of the 4 others
+}
+
+// 64 triangles, one per leaf, a balanced binary tree of 6 levels: width 8 takes 3 levels per
+// node (1 + 8 nodes), width 4 two (1 + 4 + 16).
+TEST(Wbvh, SixtyFourSeparatedTriangles) {
+    std::vector<float> xs;
+    for (int i = 0; i < 64; ++i) xs.push_back(float(i));
+    const Scene scene = triangles_along_x(xs);
+    auto w8 = built(scene, {{"width", "8"}, {"max_prims", "1"}});
+    expect_valid(*w8, scene, "w8");
+    EXPECT_EQ(w8->build_stats().nodes.value(), 9u);
+    EXPECT_EQ(w8->build_stats().max_depth.value(), 2u);
+    auto w4 = built(scene, {{"width", "4"}, {"max_prims", "1"}});
+    expect_valid(*w4, scene, "w4");
+    EXPECT_EQ(w4->build_stats().nodes.value(), 21u);
+    EXPECT_EQ(w4->build_stats().max_depth.value(), 3u);
+
+    // A ray straight down onto triangle 0 enters the root (8 boxes tested, one hit: the
+    // subtree of triangles 0..7) and that node (8 boxes, one hit: triangle 0's leaf), and
+    // tests one triangle. Width 4: root, 16-triangle node, 4-triangle node, 4 boxes each.
+    const Ray ray{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity};
+    for (const char* kernel : {"simd", "scalar"}) {
+        auto a = built(scene, {{"width", "8"}, {"max_prims", "1"}, {"kernel", kernel}});
+        std::vector<Hit> hit(1);
+        std::vector<RayStats> st(1);
+        a->closest_hits({&ray, 1}, hit, st);
+        EXPECT_EQ(hit[0].prim, 0u);
+        EXPECT_FLOAT_EQ(hit[0].t, 1.0f);
+        EXPECT_EQ(st[0].node_visits, 2u) << kernel;
+        EXPECT_EQ(st[0].box_tests, 16u) << kernel;
+        EXPECT_EQ(st[0].prim_tests, 1u) << kernel;
+        auto b = built(scene, {{"width", "4"}, {"max_prims", "1"}, {"kernel", kernel}});
+        std::vector<RayStats> st4(1);
+        b->closest_hits({&ray, 1}, hit, st4);
+        EXPECT_EQ(hit[0].prim, 0u);
+        EXPECT_EQ(st4[0].node_visits, 3u) << kernel;
+        EXPECT_EQ(st4[0].box_tests, 12u) << kernel;
+        EXPECT_EQ(st4[0].prim_tests, 1u) << kernel;
+    }
+}
+
+// A leaf of 6 triangles is two packets, the second with 2 used lanes: prim tests count
+// the used lanes only, and the nearest of equally near triangles is the first one.
+TEST(Wbvh, PacketsCountUsedLanesAndKeepTheFirstOfEqualHits) {
+    Scene scene;
+    for (int i = 0; i < 6; ++i) add_triangle(scene, {0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+    scene.finalize();
+    auto w = built(scene, {{"max_prims", "8"}});
+    EXPECT_EQ(w->build_stats().extra.at("packets"), 2);
+    const Ray ray{{0.2f, 0.2f, 1}, 0, {0, 0, -1}, kInfinity};
+    std::vector<Hit> hit(1);
+    std::vector<RayStats> st(1);
+    w->closest_hits({&ray, 1}, hit, st);
+    EXPECT_EQ(st[0].node_visits, 1u);
+    EXPECT_EQ(st[0].box_tests, 1u);
+    EXPECT_EQ(st[0].prim_tests, 6u);
+    ASSERT_TRUE(hit[0].found());
+    EXPECT_EQ(hit[0].prim, w->tree8().packets[0].prim[0]);
+    std::vector<uint8_t> occ(1);
+    std::vector<RayStats> so(1);
+    w->any_hits({&ray, 1}, occ, so);
+    EXPECT_EQ(occ[0], 1);
+    EXPECT_EQ(so[0].prim_tests, 4u);  // stops after the first packet
+}
+
+// ---- degenerate input ----------------------------------------------------------------------
+
+TEST(Wbvh, IdenticalTrianglesBuildAndTerminate) {
+    Scene scene;
+    for (int i = 0; i < 100; ++i) add_triangle(scene, {0, 0, 0}, {1, 0, 0}, {0, 1, 0.5f});
+    scene.finalize();
+    for (const Params& p : variants()) {
+        auto w = built(scene, p);
+        expect_valid(*w, scene, describe(p));
+        expect_agrees_with_embree(scene, *w, probe_rays(scene, 500), "identical " + describe(p));
+    }
+}
+
+TEST(Wbvh, SingleTriangleAndEmptyScene) {
+    const Scene one = triangles_along_x({0});
+    Scene none;
+    none.finalize();
+    for (const Params& p : variants()) {
+        auto w = built(one, p);
+        EXPECT_EQ(w->build_stats().nodes.value(), 1u);  // a root with one leaf child
+        EXPECT_EQ(w->build_stats().leaves.value(), 1u);
+        std::vector<Ray> rays = {{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity}, {{0.4f, 0.4f, 1}, 0, {0, 0, -1}, kInfinity}};
+        std::vector<Hit> hits(2);
+        w->closest_hits(rays, hits);
+        EXPECT_EQ(hits[0].prim, 0u);
+        EXPECT_FLOAT_EQ(hits[0].t, 1.0f);
+        EXPECT_FALSE(hits[1].found());
+
+        auto e = built(none, p);
+        EXPECT_EQ(e->build_stats().nodes.value(), 0u);
+        EXPECT_FALSE(e->build_stats().sah_cost.has_value());
+        std::vector<uint8_t> occ(1, 1);
+        e->closest_hits({rays.data(), 1}, hits);
+        e->any_hits({rays.data(), 1}, occ);
+        EXPECT_FALSE(hits[0].found());
+        EXPECT_EQ(occ[0], 0);
+    }
+}
+
+TEST(Wbvh, DepthLimitMakesLargeLeavesThatStillAgree) {
+    const Scene scene = random_soup(1000, 99);
+    for (const char* width : {"4", "8"}) {
+        auto w = built(scene, {{"width", width}, {"max_depth", "2"}});
+        expect_valid(*w, scene, std::string("depth 2 width ") + width);
+        EXPECT_GT(w->build_stats().extra.at("forced_leaves"), 0);
+        expect_agrees_with_embree(scene, *w, probe_rays(scene, 1500, 9), std::string("depth 2 width ") + width);
+    }
+}
+
+TEST(Wbvh, ParametersAreValidated) {
+    EXPECT_THROW(make_accelerator("wbvh", {{"width", "6"}}), ParamError);
+    EXPECT_THROW(make_accelerator("wbvh", {{"max_prims", "0"}}), ParamError);
+    EXPECT_THROW(make_accelerator("wbvh", {{"kernel", "avx512"}}), ParamError);
+    ParamSet resolved;
+    make_accelerator("wbvh", {}, &resolved);
+    const Wbvh::Config c = Wbvh::Config::from(resolved);
+    EXPECT_EQ(c.width, 8u);
+    EXPECT_EQ(c.max_prims, 4u);
+    EXPECT_EQ(c.kernel, Wbvh::Kernel::simd);
+}
+
+}  // namespace
