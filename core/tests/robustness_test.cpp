@@ -52,6 +52,10 @@ std::vector<Config> configs() {
         } else {
             out.push_back({info.name, {}, info.name});
         }
+        if (info.name == "bvh") {  // the trees that its options change: SAH leaves, reinsertion
+            out.push_back({"bvh", {{"split", "sah"}}, "bvh_sah"});
+            out.push_back({"bvh", {{"split", "sah"}, {"reinsertion", "3"}}, "bvh_sah_reinsertion"});
+        }
     }
     return out;
 }

@@ -30,7 +30,7 @@
 #include <string>
 #include <utility>
 
-#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/base/geometry.h"
 #include "accelbench/base/params.h"
 #include "accelbench/base/triangle.h"
