@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/scene/scene.h"
 
 namespace accelbench::test {

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
-#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
 
 using namespace accelbench;

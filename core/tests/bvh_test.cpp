@@ -177,7 +177,7 @@ TEST(Bvh, RoundRobinFallsBackOnAxesWithoutSpread) {
     // depth 2 (4 nodes); those 6 ranges split by count along x instead.
     const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
     for (const std::string& split : kSplits) {
-        auto bvh = built(scene, {{"split", split}, {"axis", "round_robin"}});
+        auto bvh = built(scene, {{"split", split}, {"axis", "round_robin"}, {"max_prims", "1"}});
         expect_shape(*bvh, {15, 8, 3}, split);
         EXPECT_EQ(extra(*bvh, "degenerate_splits"), 6) << split;
     }
@@ -258,7 +258,7 @@ TEST(Bvh, IdenticalTrianglesBuildAndTerminate) {
     for (int i = 0; i < 100; ++i) add_triangle(scene, {0, 0, 0}, {1, 0, 0}, {0, 1, 0.5f});
     scene.finalize();
     for (const std::string& split : kSplits) {
-        auto bvh = built(scene, {{"split", split}});
+        auto bvh = built(scene, {{"split", split}, {"max_prims", "1"}});
         // Every range is split in two by count: 199 nodes, depth ceil(log2 100) = 7.
         expect_shape(*bvh, {199, 100, 7}, split);
         EXPECT_EQ(extra(*bvh, "degenerate_splits"), 99) << split;
@@ -274,7 +274,7 @@ TEST(Bvh, CommonCentroidBuildsAndAgrees) {
     const Scene scene = common_centroid_scene(300);
     for (const std::string& split : kSplits)
         for (const std::string traversal : {"ordered", "report"}) {
-            auto bvh = built(scene, {{"split", split}, {"traversal", traversal}});
+            auto bvh = built(scene, {{"split", split}, {"traversal", traversal}, {"max_prims", "1"}});
             EXPECT_EQ(bvh->build_stats().nodes.value(), 599u) << split;
             EXPECT_EQ(extra(*bvh, "degenerate_splits"), 299) << split;
             expect_agrees_with_embree(scene, *bvh, probe_rays(scene, 1000, 2), "common centroid " + split);
@@ -329,11 +329,11 @@ TEST(Bvh, DepthLimitsOnSoup) {
     const Scene scene = random_soup(1000, 99);
     const auto rays = probe_rays(scene, 1500, 9);
     for (const std::string& split : kSplits) {
-        auto shallow = built(scene, {{"split", split}, {"max_depth", "1"}});
+        auto shallow = built(scene, {{"split", split}, {"max_depth", "1"}, {"max_prims", "1"}});
         EXPECT_LE(shallow->build_stats().max_depth.value(), 1u) << split;
         EXPECT_EQ(extra(*shallow, "forced_leaves"), 2) << split;
         expect_agrees_with_embree(scene, *shallow, rays, "max_depth=1 " + split);
-        auto deep = built(scene, {{"split", split}, {"max_depth", "200"}});
+        auto deep = built(scene, {{"split", split}, {"max_depth", "200"}, {"max_prims", "1"}});
         EXPECT_EQ(extra(*deep, "forced_leaves"), 0) << split;
         EXPECT_EQ(deep->build_stats().leaves.value(), 1000u) << split;
         expect_agrees_with_embree(scene, *deep, rays, "max_depth=200 " + split);
@@ -384,7 +384,7 @@ TEST(Bvh, StanfordBunnyAgreesWithEmbree) {
              {}, {{"split", "sah"}}, {{"split", "sah"}, {"max_prims", "8"}, {"traversal", "report"}}}) {
         auto bvh = built(scene, p);
         const BuildStats s = bvh->build_stats();
-        if (p.count("max_prims") == 0) {
+        if (p.count("max_prims") == 0 && !p.count("split")) {  // the median's max_prims default: 1
             EXPECT_EQ(s.nodes.value(), 2u * 69451 - 1) << describe(p);  // one triangle per leaf
             EXPECT_EQ(s.leaves.value(), 69451u) << describe(p);
         }

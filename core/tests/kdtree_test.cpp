@@ -225,8 +225,10 @@ TEST(KdTree, ExactTreeForTwoTriangles) {
         EXPECT_EQ(st.extra.at("prim_refs"), 2.0);
         EXPECT_EQ(st.extra.at("empty_leaves"), 0.0);
         EXPECT_EQ(st.extra.at("bad_refines"), 0.0);
-        // SAH of the tree: C_T + C_I (2/8 * 1 + 6/8 * 1) = 1 + 80 = 81.
-        EXPECT_NEAR(*st.sah_cost, 81.0, 1e-9);
+        // SAH of the tree with every structure's constants (1, 1): 1 + (2/8 * 1 + 6/8 * 1) = 2;
+        // with this build's C_T = 1, C_I = 80: 1 + 80 = 81.
+        EXPECT_NEAR(*st.sah_cost, 2.0, 1e-9);
+        EXPECT_NEAR(st.extra.at("sah_cost_build"), 81.0, 1e-9);
     }
 }
 
@@ -516,13 +518,13 @@ TEST(KdTree, ReferenceBudgetStopsTheBuildWithAClearMessage) {
         add_triangle(hay, p, q, w);
     }
     hay.finalize();
-    KdTree full(KdTree::Settings{});
+    KdTree full(KdTree::Config{});
     full.build(hay);
     const double refs = full.build_stats().extra.at("prim_refs");
     std::printf("[haystack] default tree: %.0f references (%.1f per triangle)\n", refs, refs / 3000);
     ASSERT_GT(refs, 100000.0);
 
-    KdTree::Settings tight;
+    KdTree::Config tight;
     tight.max_refs = 100000;
     KdTree kd(tight);
     try {

@@ -58,6 +58,10 @@ std::vector<Config> configs() {
             if (info.watertight(resolve_params(info.name, info.params, flipped)) != watertight_by_default)
                 out.push_back({info.name, flipped, info.name + "_" + spec.name, info.third_party});
         }
+        if (info.name == "bvh") {  // the trees that its options change: SAH leaves, reinsertion
+            out.push_back({"bvh", {{"split", "sah"}}, "bvh_sah"});
+            out.push_back({"bvh", {{"split", "sah"}, {"reinsertion", "3"}}, "bvh_sah_reinsertion"});
+        }
     }
     return out;
 }

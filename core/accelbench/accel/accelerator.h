@@ -23,12 +23,21 @@
 
 namespace accelbench {
 
+// The constants of every structure's `sah_cost`, so that the column compares like with
+// like (BVH, LBVH, kd-tree, wide BVH): the expected number of node visits plus triangle
+// tests of a ray that hits the root box, sum over inner nodes of C_trav A(n)/A(root) plus
+// over leaves of C_isect prims(l) A(l)/A(root) (MacDonald & Booth 1990), with C_trav =
+// C_isect = 1 whatever constants the builder itself used (those appear, where a builder
+// has its own, as an extra named for them, e.g. the kd-tree's sah_cost_build).
+inline constexpr double kSahCostTraversal = 1.0;
+inline constexpr double kSahCostIntersection = 1.0;
+
 // What a structure reports after build. A value a structure cannot know (Embree's node
 // count) stays empty and is reported as missing, never as zero.
 struct BuildStats {
     std::optional<uint64_t> nodes, leaves, max_depth, memory_bytes;
     std::optional<double> avg_leaf_size;  // primitive references per leaf
-    std::optional<double> sah_cost;       // of the finished tree, constants in docs
+    std::optional<double> sah_cost;       // of the finished tree, with kSahCostTraversal/Intersection
     // Structure-specific extras, e.g. "degenerate_splits", "prim_refs".
     std::map<std::string, double> extra;
 };

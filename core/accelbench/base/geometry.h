@@ -6,6 +6,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cstddef>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -131,9 +132,18 @@ struct RayPrecomp {
     Vec3 org;
     Vec3 inv_dir;
     int near_is_upper[3];
+    // Where intersect_box reads axis a's near and far plane in a Bounds3 seen as six
+    // floats (lower x, y, z, upper x, y, z): a + 3 * near_is_upper[a] and the other one.
+    // An index load per plane instead of choosing between two Vec3 at every box test
+    // (that choice was a third of the BVHs' box-test instructions on the bunny).
+    uint32_t near_plane[3], far_plane[3];
 
     explicit RayPrecomp(const Ray& r) : org(r.org), inv_dir(safe_inverse(r.dir)) {
-        for (int a = 0; a < 3; ++a) near_is_upper[a] = std::signbit(inv_dir[a]) ? 1 : 0;
+        for (int a = 0; a < 3; ++a) {
+            near_is_upper[a] = std::signbit(inv_dir[a]) ? 1 : 0;
+            near_plane[a] = uint32_t(a + 3 * near_is_upper[a]);
+            far_plane[a] = uint32_t(a + 3 * (1 - near_is_upper[a]));
+        }
     }
 };
 
@@ -153,8 +163,12 @@ constexpr float kBoxSlack = 2.0f * (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f));
 // computed as (plane - origin) * (1 / dir), widened by kBoxSlack of its magnitude like
 // intersect_box's far distance (Ize 2013). An infinite t (a zero direction component)
 // stays itself, where t -+ kBoxSlack |t| would give NaN; NaN stays NaN.
-inline float slack_below(float t) { return std::isinf(t) ? t : t - kBoxSlack * std::fabs(t); }
-inline float slack_above(float t) { return std::isinf(t) ? t : t + kBoxSlack * std::fabs(t); }
+// Branch-free: the slack is capped at the largest float, so an infinite t minus (plus) it
+// stays infinite, and a finite t's slack (below 1e-6 |t|) is never capped; NaN stays NaN.
+// The kd-tree computes both at every interior node it visits.
+inline float slack_of(float t) { return std::min(kBoxSlack * std::fabs(t), std::numeric_limits<float>::max()); }
+inline float slack_below(float t) { return t - slack_of(t); }
+inline float slack_above(float t) { return t + slack_of(t); }
 
 // Slab test (Williams et al. 2005, "An efficient and robust ray-box intersection"):
 // the near and far planes per axis are picked by the direction's sign, so no min/max swap
@@ -168,12 +182,13 @@ inline float slack_above(float t) { return std::isinf(t) ? t : t + kBoxSlack * s
 // mesh's triangles meet on a box face — without it the BVHs leaked rays aimed exactly at
 // vertices of a closed sphere (robustness case 1) that the watertight triangle test alone
 // would have caught. The enlarged interval is returned (it only ever admits more boxes).
+static_assert(sizeof(Bounds3) == 6 * sizeof(float) && offsetof(Bounds3, upper) == 3 * sizeof(float),
+              "intersect_box reads a Bounds3 as six floats");
 inline BoxHit intersect_box(const Bounds3& b, const RayPrecomp& r, float tmin, float tmax) {
+    const float* planes = &b.lower.x;
     for (int a = 0; a < 3; ++a) {
-        const Vec3& near_plane = r.near_is_upper[a] ? b.upper : b.lower;
-        const Vec3& far_plane = r.near_is_upper[a] ? b.lower : b.upper;
-        float tn = (near_plane[a] - r.org[a]) * r.inv_dir[a];
-        float tf = (far_plane[a] - r.org[a]) * r.inv_dir[a];
+        float tn = (planes[r.near_plane[a]] - r.org[a]) * r.inv_dir[a];
+        float tf = (planes[r.far_plane[a]] - r.org[a]) * r.inv_dir[a];
         tmin = tn > tmin ? tn : tmin;
         tmax = tf < tmax ? tf : tmax;
     }

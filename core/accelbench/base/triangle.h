@@ -74,11 +74,17 @@ inline bool finish_in_double(float ax, float ay, float bx, float by, float cx, f
 inline bool intersect_triangle(const WatertightRay& r, Vec3 p0, Vec3 p1, Vec3 p2, float tmin,
                                float tmax, float& t_out, float& u_out, float& v_out) {
     if (!r.valid) return false;
-    const Vec3 a = p0 - r.org, b = p1 - r.org, c = p2 - r.org;
-    const float ax = a[r.kx] - r.sx * a[r.kz], ay = a[r.ky] - r.sy * a[r.kz];
-    const float bx = b[r.kx] - r.sx * b[r.kz], by = b[r.ky] - r.sy * b[r.kz];
-    const float cx = c[r.kx] - r.sx * c[r.kz], cy = c[r.ky] - r.sy * c[r.kz];
-    const float az = r.sz * a[r.kz], bz = r.sz * b[r.kz], cz = r.sz * c[r.kz];
+    // The vertices relative to the origin, permuted to (kx, ky, kz). Components are read
+    // by index from memory: Vec3's operator[] with a run-time axis is a chain of selects,
+    // which made up a third of this test's instructions. Same subtractions, same result.
+    auto rel = [&r](const Vec3& p, int k) { return (&p.x)[k] - (&r.org.x)[k]; };
+    const float a_x = rel(p0, r.kx), a_y = rel(p0, r.ky), a_z = rel(p0, r.kz);
+    const float b_x = rel(p1, r.kx), b_y = rel(p1, r.ky), b_z = rel(p1, r.kz);
+    const float c_x = rel(p2, r.kx), c_y = rel(p2, r.ky), c_z = rel(p2, r.kz);
+    const float ax = a_x - r.sx * a_z, ay = a_y - r.sy * a_z;
+    const float bx = b_x - r.sx * b_z, by = b_y - r.sy * b_z;
+    const float cx = c_x - r.sx * c_z, cy = c_y - r.sy * c_z;
+    const float az = r.sz * a_z, bz = r.sz * b_z, cz = r.sz * c_z;
 
     // Scaled barycentrics: 2D edge functions of the sheared triangle.
     const float e0 = cx * by - cy * bx;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <string>
+#include <string_view>
 #include <span>
 #include <vector>
 
@@ -10,38 +12,70 @@
 
 namespace accelbench {
 
+namespace {
+
+constexpr std::array<std::string_view, 2> kAxisNames = {"longest", "round_robin"};  // BvhAxisRule's order
+
+// The index of `name` in `names` (the ParamSet has checked that it is one of them).
+template <size_t N>
+size_t index_of(const std::array<std::string_view, N>& names, const std::string& name) {
+    return size_t(std::find(names.begin(), names.end(), name) - names.begin()) % N;
+}
+
+template <size_t N>
+std::vector<std::string> choices(const std::array<std::string_view, N>& names) {
+    return {names.begin(), names.end()};
+}
+
+}  // namespace
+
 AcceleratorInfo Bvh::info() {
+    const Config d;  // the defaults
     return {"bvh",
             "top-down BVH (report section 2): fit & split with median/midpoint/mean/spatial-median or binned SAH "
-            "splits, flattened depth-first",
+            "splits, flattened depth-first; optional reinsertion optimizer",
             {
-                {"split", ParamType::Enum, "median", {"median", "midpoint", "mean", "spatial_median", "sah"}, 0, 0,
+                {"split", ParamType::Enum, std::string(kSplitNames[size_t(d.split)]), choices(kSplitNames), 0, 0,
                  "where a node splits: object median (report default), centre of the centroid box (report's "
                  "centroid method), centroid mean, equal triangle area (spatial median), binned SAH (Wald 2007)"},
-                {"axis", ParamType::Enum, "longest", {"longest", "round_robin"}, 0, 0,
+                {"axis", ParamType::Enum, std::string(kAxisNames[size_t(d.axis)]), choices(kAxisNames), 0, 0,
                  "split axis: longest axis of the node's centroid box (report, Figure 6) or x, y, z by depth"},
-                {"max_prims", ParamType::Int, "1", {}, 1, 1e9,
-                 "largest leaf; ranges above it are split (sah may also stop below it when a leaf is cheaper)"},
-                {"max_depth", ParamType::Int, "50", {}, 0, 1000,
+                {"max_prims", ParamType::Int, "auto", {}, 1, BvhNode::kMaxLeafPrims,
+                 "largest leaf; auto = " + std::to_string(Config::default_max_prims(Split::median)) +
+                     " for the report's splits, " + std::to_string(Config::default_max_prims(Split::sah)) +
+                     " for sah, which makes a leaf wherever its SAH cost is not above the best split's",
+                 true},
+                {"max_depth", ParamType::Int, format_param(int64_t(d.max_depth)), {}, 0, 1000,
                  "nodes at this depth become leaves whatever their size (report Table 3: 50)"},
-                {"bins", ParamType::Int, "16", {}, 2, 1024, "SAH bins along the split axis (split=sah only)"},
-                {"traversal_cost", ParamType::Float, "1", {}, 0, 1e6, "SAH cost of visiting a node (split=sah only)"},
-                {"isect_cost", ParamType::Float, "1", {}, 1e-6, 1e6,
+                {"bins", ParamType::Int, format_param(int64_t(d.bins)), {}, 2, 1024,
+                 "SAH bins along the split axis (split=sah only)"},
+                {"traversal_cost", ParamType::Float, format_param(double(d.traversal_cost)), {}, 0, 1e6,
+                 "SAH cost of visiting a node (split=sah only)"},
+                {"isect_cost", ParamType::Float, format_param(double(d.isect_cost)), {}, 1e-6, 1e6,
                  "SAH cost of one triangle test (split=sah only)"},
                 bvh_traversal_param(),
+                {"reinsertion", ParamType::Int, format_param(int64_t(d.reinsertion)), {}, 0, 100,
+                 "passes of the reinsertion optimizer after the build (Meister & Bittner 2018; 0 = off, bvh v2 "
+                 "uses 3): lower SAH cost for a longer build, the same answers"},
             },
             [](const ParamSet& p) { return std::make_unique<Bvh>(p); }};
 }
 
-namespace {
-
-Bvh::Split split_from(const std::string& s) {
-    if (s == "midpoint") return Bvh::Split::midpoint;
-    if (s == "mean") return Bvh::Split::mean;
-    if (s == "spatial_median") return Bvh::Split::spatial_median;
-    if (s == "sah") return Bvh::Split::sah;
-    return Bvh::Split::median;
+Bvh::Config Bvh::Config::from(const ParamSet& p) {
+    Config c;
+    c.split = Split(index_of(kSplitNames, p.get_enum("split")));
+    c.axis = BvhAxisRule(index_of(kAxisNames, p.get_enum("axis")));
+    if (p.given("max_prims")) c.max_prims = uint32_t(p.get_int("max_prims"));
+    c.max_depth = uint32_t(p.get_int("max_depth"));
+    c.bins = uint32_t(p.get_int("bins"));
+    c.traversal_cost = float(p.get_float("traversal_cost"));
+    c.isect_cost = float(p.get_float("isect_cost"));
+    c.traversal = bvh_traversal_from(p);
+    c.reinsertion = uint32_t(p.get_int("reinsertion"));
+    return c;
 }
+
+namespace {
 
 // Moves the references whose centroid lies below `plane` on `axis` to the front; no
 // split when that leaves a side empty.
@@ -214,41 +248,39 @@ private:
 
 }  // namespace
 
-Bvh::Bvh(const ParamSet& params)
-    : split_(split_from(params.get_enum("split"))),
-      settings_{uint32_t(params.get_int("max_prims")), uint32_t(params.get_int("max_depth")),
-                params.get_enum("axis") == "round_robin" ? BvhAxisRule::round_robin : BvhAxisRule::longest},
-      bins_(uint32_t(params.get_int("bins"))),
-      traversal_cost_(float(params.get_float("traversal_cost"))),
-      isect_cost_(float(params.get_float("isect_cost"))),
-      traversal_(bvh_traversal_from(params)) {}
+Bvh::Bvh(const ParamSet& params) : Bvh(Config::from(params)) {}
+
+Bvh::Bvh(const Config& config) : config_(config) {}
 
 void Bvh::build(const Scene& scene) {
-    auto build_with = [&](auto&& strategy) { bvh_ = build_bvh_top_down(scene, settings_, strategy, counts_); };
-    switch (split_) {
+    const BvhTopDownSettings settings{config_.leaf_limit(), config_.max_depth, config_.axis};
+    auto build_with = [&](auto&& strategy) { bvh_ = build_bvh_top_down(scene, settings, strategy, counts_); };
+    switch (config_.split) {
         case Split::median: build_with(MedianSplit{}); break;
         case Split::midpoint: build_with(MidpointSplit{}); break;
         case Split::mean: build_with(MeanSplit{}); break;
         case Split::spatial_median: build_with(SpatialMedianSplit(scene)); break;
-        case Split::sah: build_with(SahSplit(bins_, traversal_cost_, isect_cost_)); break;
+        case Split::sah: build_with(SahSplit(config_.bins, config_.traversal_cost, config_.isect_cost)); break;
     }
+    reinsertion_counts_ = optimize_bvh_by_reinsertion(bvh_, scene, {config_.reinsertion});
 }
 
 BuildStats Bvh::build_stats() const {
     BuildStats s = bvh_build_stats(bvh_);
     s.extra["degenerate_splits"] = double(counts_.degenerate_splits);
     s.extra["forced_leaves"] = double(counts_.forced_leaves);
+    if (config_.reinsertion > 0) s.extra["reinsertions"] = double(reinsertion_counts_.reinsertions);
     return s;
 }
 
 template <class C>
 void Bvh::intersect(const Ray& ray, Hit& hit, C& counters) const {
-    intersect_bvh(traversal_, bvh_, ray, hit, counters);
+    intersect_bvh(config_.traversal, bvh_, ray, hit, counters);
 }
 
 template <class C>
 bool Bvh::occluded(const Ray& ray, C& counters) const {
-    return occluded_bvh(traversal_, bvh_, ray, counters);
+    return occluded_bvh(config_.traversal, bvh_, ray, counters);
 }
 
 ACCELBENCH_INSTANTIATE_RAY_QUERIES(Bvh);

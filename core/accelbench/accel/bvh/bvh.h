@@ -12,24 +12,57 @@
 //              sah             binned SAH (Wald 2007, "On fast construction of SAH-based
 //                              bounding volume hierarchies"), `bins` bins along the axis
 //   axis       longest | round_robin     (report, Figure 6)
-//   max_prims, max_depth, bins, traversal_cost, isect_cost, traversal.
+//   max_prims  the largest leaf. auto (the default): 1 for the report's splits (its Table 3),
+//              8 for sah, which decides its own leaves below that bound: a range becomes a
+//              leaf when its SAH cost is not above the best split's (as pbrt-v4 and bvh v2)
+//   max_depth, bins, traversal_cost, isect_cost, traversal,
+//   reinsertion  passes of the reinsertion optimizer after the build (bvh_reinsertion.h;
+//              0, the default, = off): a better tree for a longer build, same answers.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 #include "accelbench/accel/accelerator.h"
-#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/accel/bvh/bvh_reinsertion.h"
 #include "accelbench/accel/bvh/bvh_top_down.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 
 namespace accelbench {
 
 class Bvh final : public AcceleratorBase<Bvh> {
 public:
     enum class Split { median, midpoint, mean, spatial_median, sah };
+    // The split names, in the enum's order: the declared choices and the parser both read
+    // this list.
+    static constexpr std::array<std::string_view, 5> kSplitNames = {"median", "midpoint", "mean", "spatial_median",
+                                                                    "sah"};
+
+    // The parameters with their defaults (info() declares them from these values).
+    struct Config {
+        Split split = Split::median;               // where a node splits (report 2.2.1: median)
+        BvhAxisRule axis = BvhAxisRule::longest;   // split axis (report, Figure 6)
+        std::optional<uint32_t> max_prims;         // largest leaf; empty: default_max_prims(split)
+        uint32_t max_depth = 50;                   // nodes at this depth are leaves (report Table 3)
+        uint32_t bins = 16;                        // SAH bins (split=sah)
+        float traversal_cost = 1.0f;               // SAH cost of a node visit (split=sah)
+        float isect_cost = 1.0f;                   // SAH cost of a triangle test (split=sah)
+        BvhTraversal traversal = BvhTraversal::ordered;
+        uint32_t reinsertion = 0;                  // reinsertion passes after the build (0: off)
+
+        static Config from(const ParamSet& params);
+        // 1 for the report's splits, which always split down to one triangle; 8 for the
+        // SAH, which stops earlier where a leaf is cheaper (pbrt-v4 and Embree use 4-8).
+        static uint32_t default_max_prims(Split split) { return split == Split::sah ? 8 : 1; }
+        uint32_t leaf_limit() const { return max_prims ? *max_prims : default_max_prims(split); }
+    };
 
     static AcceleratorInfo info();
     explicit Bvh(const ParamSet& params);
+    explicit Bvh(const Config& config);
 
     void build(const Scene& scene) override;
     BuildStats build_stats() const override;
@@ -40,13 +73,10 @@ public:
     const FlatBvh& tree() const { return bvh_; }
 
 private:
-    Split split_;
-    BvhTopDownSettings settings_;
-    uint32_t bins_;
-    float traversal_cost_, isect_cost_;
-    BvhTraversal traversal_;
+    Config config_;
     FlatBvh bvh_;
     BvhTopDownCounts counts_;
+    BvhReinsertionCounts reinsertion_counts_;
 };
 
 }  // namespace accelbench

@@ -22,7 +22,7 @@ BvhMetrics measure_bvh(const FlatBvh& bvh) {
     if (m.leaves) m.avg_leaf_size = double(prims) / double(m.leaves);
     const double root_area = bvh.empty() ? 0.0 : double(bvh.nodes[0].bounds.area());
     if (root_area > 0)
-        m.sah_cost = (kBvhSahTraversalCost * inner_area + kBvhSahIntersectionCost * leaf_area) / root_area;
+        m.sah_cost = (kSahCostTraversal * inner_area + kSahCostIntersection * leaf_area) / root_area;
     return m;
 }
 

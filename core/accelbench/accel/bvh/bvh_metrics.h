@@ -7,8 +7,9 @@
 //     cost = ( C_trav  * sum over inner nodes n of A(n)
 //            + C_isect * sum over leaves l of A(l) * prims(l) ) / A(root)
 //
-// with A the surface area of the node's box, C_trav = 1 and C_isect = 1 (kBvhSahTraversalCost,
-// kBvhSahIntersectionCost), whatever constants the builder itself used. A(n)/A(root) is
+// with A the surface area of the node's box, C_trav = 1 and C_isect = 1 (kSahCostTraversal,
+// kSahCostIntersection, accelerator.h: every structure's sah_cost uses them), whatever
+// constants the builder itself used. A(n)/A(root) is
 // the probability that a random ray hitting the root also hits n, so the cost is the
 // expected number of node visits plus triangle tests per such ray. A tree whose root box
 // has zero area (no triangles, or all of them on one line or point) has no cost: it stays
@@ -19,12 +20,9 @@
 #include <optional>
 
 #include "accelbench/accel/accelerator.h"
-#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 
 namespace accelbench {
-
-inline constexpr double kBvhSahTraversalCost = 1.0;
-inline constexpr double kBvhSahIntersectionCost = 1.0;
 
 struct BvhMetrics {
     uint64_t nodes = 0;

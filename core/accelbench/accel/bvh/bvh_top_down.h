@@ -36,7 +36,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/scene/scene.h"
 
 namespace accelbench {

@@ -15,41 +15,44 @@
 namespace accelbench {
 
 AcceleratorInfo Lbvh::info() {
+    const Config d;  // the defaults
     return {"lbvh",
             "linear BVH (report section 3): Morton codes of the centroids, one radix sort, split at the highest "
             "differing code bit (Karras 2012); node boxes bottom-up; optional subtree threads",
             {
-                // 10 by default: on every model we have (bunny to the 871k dragon) 21 bits
-                // give the same tree quality within 0.02% SAH, while 30-bit codes sort as
-                // 8-byte items in 3 passes instead of 16-byte items in 6-7 (3-4x faster).
-                {"bits", ParamType::Int, "10", {}, kMortonMinBits, kMortonMaxBits<uint64_t>,
+                {"bits", ParamType::Int, format_param(int64_t(d.bits)), {}, kMortonMinBits, kMortonMaxBits<uint64_t>,
                  "Morton grid bits per axis (2^bits cells); up to 10 sorts 32-bit codes, 11..21 64-bit codes"},
-                {"max_prims", ParamType::Int, "1", {}, 1, BvhNode::kMaxLeafPrims,
+                {"max_prims", ParamType::Int, format_param(int64_t(d.max_prims)), {}, 1, BvhNode::kMaxLeafPrims,
                  "a range of at most this many primitives becomes a leaf (the report: 1)"},
-                {"max_depth", ParamType::Int, "50", {}, 0, 1000,
+                {"max_depth", ParamType::Int, format_param(int64_t(d.max_depth)), {}, 0, 1000,
                  "a node at this depth becomes a leaf whatever its size (root: depth 0; the report: 50)"},
-                {"threads", ParamType::Int, "1", {}, 0, 256,
+                {"threads", ParamType::Int, format_param(int64_t(d.threads)), {}, 0, 256,
                  "build threads (0 = all cores); the tree is the same for every value"},
-                {"task_threshold", ParamType::Int, "100", {}, 1, 1e9,
+                {"task_threshold", ParamType::Int, format_param(int64_t(d.task_threshold)), {}, 1, 1e9,
                  "a subtree goes to another thread only above this many primitives (the report: 100)"},
-                // 10: a 30-bit code is exactly three digits, and three 1024-entry
-                // histograms (12 KB) stay in L1 while counting. 8 needs a 4th pass.
-                {"sort_digit_bits", ParamType::Int, "10", {}, kRadixMinDigitBits, kRadixMaxDigitBits,
-                 "radix sort digit width: bits per counting pass"},
+                {"sort_digit_bits", ParamType::Int, format_param(int64_t(d.sort_digit_bits)), {}, kRadixMinDigitBits,
+                 kRadixMaxDigitBits, "radix sort digit width: bits per counting pass"},
                 bvh_traversal_param(),
             },
             [](const ParamSet& p) { return std::make_unique<Lbvh>(p); }};
 }
 
-Lbvh::Lbvh(const ParamSet& params) : traversal_(bvh_traversal_from(params)) {
-    config_.bits = int(params.get_int("bits"));
-    config_.max_prims = uint32_t(params.get_int("max_prims"));
-    config_.max_depth = uint32_t(params.get_int("max_depth"));
-    const int64_t threads = params.get_int("threads");
-    config_.threads = threads > 0 ? int(threads) : int(std::max(1u, std::thread::hardware_concurrency()));
-    config_.task_threshold = uint32_t(params.get_int("task_threshold"));
-    config_.sort_digit_bits = int(params.get_int("sort_digit_bits"));
+Lbvh::Config Lbvh::Config::from(const ParamSet& p) {
+    Config c;
+    c.bits = int(p.get_int("bits"));
+    c.max_prims = uint32_t(p.get_int("max_prims"));
+    c.max_depth = uint32_t(p.get_int("max_depth"));
+    const int64_t threads = p.get_int("threads");
+    c.threads = threads > 0 ? int(threads) : int(std::max(1u, std::thread::hardware_concurrency()));
+    c.task_threshold = uint32_t(p.get_int("task_threshold"));
+    c.sort_digit_bits = int(p.get_int("sort_digit_bits"));
+    c.traversal = bvh_traversal_from(p);
+    return c;
 }
+
+Lbvh::Lbvh(const ParamSet& params) : Lbvh(Config::from(params)) {}
+
+Lbvh::Lbvh(const Config& config) : config_(config) {}
 
 Lbvh::Counts& Lbvh::Counts::operator+=(const Counts& o) {
     equal_code_splits += o.equal_code_splits;
@@ -268,12 +271,12 @@ BuildStats Lbvh::build_stats() const {
 
 template <class C>
 void Lbvh::intersect(const Ray& ray, Hit& hit, C& counters) const {
-    intersect_bvh(traversal_, bvh_, ray, hit, counters);
+    intersect_bvh(config_.traversal, bvh_, ray, hit, counters);
 }
 
 template <class C>
 bool Lbvh::occluded(const Ray& ray, C& counters) const {
-    return occluded_bvh(traversal_, bvh_, ray, counters);
+    return occluded_bvh(config_.traversal, bvh_, ray, counters);
 }
 
 ACCELBENCH_INSTANTIATE_RAY_QUERIES(Lbvh);

@@ -205,7 +205,7 @@ WbvhMetrics measure_wbvh(const WbvhTree<W>& tree) {
     if (m.leaves) m.avg_leaf_size = double(prims) / double(m.leaves);
     if (m.nodes) m.avg_children = double(children) / double(m.nodes);
     if (m.packets) m.packet_fill = double(prims) / double(m.packets * WbvhTriPacket::kLanes);
-    if (root_area > 0) m.sah_cost = (kBvhSahTraversalCost * inner_area + kBvhSahIntersectionCost * leaf_area) / root_area;
+    if (root_area > 0) m.sah_cost = (kSahCostTraversal * inner_area + kSahCostIntersection * leaf_area) / root_area;
     return m;
 }
 

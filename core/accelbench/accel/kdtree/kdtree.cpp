@@ -5,54 +5,58 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "accelbench/base/triangle.h"
 
 namespace accelbench {
 
 AcceleratorInfo KdTree::info() {
+    const Config d;  // the defaults
     return {"kdtree",
             "SAH kd-tree after pbrt-v3 (report section 4): 8-byte nodes, edge-event SAH, front-to-back traversal",
             {
-                {"build", ParamType::Enum, "nlogn", {"nlogn", "pbrt"}, 0, 0,
+                {"build", ParamType::Enum, d.build == BuildAlgorithm::NLogN ? "nlogn" : "pbrt", {"nlogn", "pbrt"}, 0, 0,
                  "nlogn: events sorted once, split in linear time (Wald & Havran 2006); pbrt: edges sorted at "
                  "every node. Both give the same tree"},
-                {"isect_cost", ParamType::Float, "80", {}, 1e-4, 1e4, "SAH cost of one ray/triangle test C_I"},
-                {"traversal_cost", ParamType::Float, "1", {}, 1e-4, 1e4, "SAH cost of one traversal step C_T"},
-                {"empty_bonus", ParamType::Float, "0.5", {}, 0, 1,
+                {"isect_cost", ParamType::Float, format_param(double(d.isect_cost)), {}, 1e-4, 1e4,
+                 "SAH cost of one ray/triangle test C_I"},
+                {"traversal_cost", ParamType::Float, format_param(double(d.traversal_cost)), {}, 1e-4, 1e4,
+                 "SAH cost of one traversal step C_T"},
+                {"empty_bonus", ParamType::Float, format_param(double(d.empty_bonus)), {}, 0, 1,
                  "b_e: fraction of the cost forgiven when one child is empty"},
-                {"max_prims", ParamType::Int, "1", {}, 0, KdNode::kMaxIndex,
+                {"max_prims", ParamType::Int, format_param(int64_t(d.max_prims)), {}, 0, KdNode::kMaxIndex,
                  "nodes with at most this many primitives become leaves"},
                 {"max_depth", ParamType::Int, "auto", {}, 0, kMaxDepthLimit,
                  "deepest level; auto = round(8 + 1.3 log2 N)", true},
+                {"mailbox", ParamType::Bool, d.mailbox ? "true" : "false", {}, 0, 0,
+                 "test a triangle once per ray even when several leaves the ray visits hold it (the same "
+                 "answers; prim_tests then counts the tests made)"},
             },
             [](const ParamSet& p) { return std::make_unique<KdTree>(p); }};
 }
 
-namespace {
-
-KdTree::Settings settings_from(const ParamSet& p) {
-    KdTree::Settings s;
-    s.build = p.get_enum("build") == "pbrt" ? KdTree::BuildAlgorithm::Pbrt : KdTree::BuildAlgorithm::NLogN;
-    s.isect_cost = float(p.get_float("isect_cost"));
-    s.traversal_cost = float(p.get_float("traversal_cost"));
-    s.empty_bonus = float(p.get_float("empty_bonus"));
-    s.max_prims = int(p.get_int("max_prims"));
-    if (p.given("max_depth")) s.max_depth = int(p.get_int("max_depth"));
-    return s;
+KdTree::Config KdTree::Config::from(const ParamSet& p) {
+    Config c;
+    c.build = p.get_enum("build") == "pbrt" ? BuildAlgorithm::Pbrt : BuildAlgorithm::NLogN;
+    c.isect_cost = float(p.get_float("isect_cost"));
+    c.traversal_cost = float(p.get_float("traversal_cost"));
+    c.empty_bonus = float(p.get_float("empty_bonus"));
+    c.max_prims = int(p.get_int("max_prims"));
+    if (p.given("max_depth")) c.max_depth = int(p.get_int("max_depth"));
+    c.mailbox = p.get_bool("mailbox");
+    return c;
 }
 
-}  // namespace
+KdTree::KdTree(const ParamSet& params) : KdTree(Config::from(params)) {}
 
-KdTree::KdTree(const ParamSet& params) : KdTree(settings_from(params)) {}
-
-KdTree::KdTree(const Settings& settings) : settings_(settings) {
-    if (settings_.max_depth && (*settings_.max_depth < 0 || *settings_.max_depth > kMaxDepthLimit))
-        throw std::invalid_argument("kdtree: max_depth " + std::to_string(*settings_.max_depth) +
+KdTree::KdTree(const Config& config) : config_(config) {
+    if (config_.max_depth && (*config_.max_depth < 0 || *config_.max_depth > kMaxDepthLimit))
+        throw std::invalid_argument("kdtree: max_depth " + std::to_string(*config_.max_depth) +
                                     " is outside [0, " + std::to_string(kMaxDepthLimit) + "]");
-    if (settings_.max_prims < 0) throw std::invalid_argument("kdtree: max_prims must be >= 0");
-    if (!(settings_.isect_cost > 0) || !(settings_.traversal_cost > 0) || !(settings_.empty_bonus >= 0) ||
-        !(settings_.empty_bonus <= 1))
+    if (config_.max_prims < 0) throw std::invalid_argument("kdtree: max_prims must be >= 0");
+    if (!(config_.isect_cost > 0) || !(config_.traversal_cost > 0) || !(config_.empty_bonus >= 0) ||
+        !(config_.empty_bonus <= 1))
         throw std::invalid_argument("kdtree: costs must be > 0 and empty_bonus in [0, 1]");
 }
 
@@ -218,7 +222,7 @@ private:
 // subtree is built. Memory is the current path plus the pending above-siblings.
 class Builder {
 public:
-    Builder(const Scene& scene, const KdTree::Settings& s, int max_depth, std::vector<KdNode>& nodes,
+    Builder(const Scene& scene, const KdTree::Config& s, int max_depth, std::vector<KdNode>& nodes,
             std::vector<uint32_t>& prim_indices)
         : bounds_(scene.prim_bounds),
           sah_{s.traversal_cost, s.isect_cost, s.empty_bonus},
@@ -418,15 +422,14 @@ void KdTree::build(const Scene& scene) {
     bounds_ = scene.bounds;
     nodes_.clear();
     prim_indices_.clear();
-    stats_ = BuildStats{};
-    max_depth_used_ = settings_.max_depth ? *settings_.max_depth : default_max_depth(n);
+    max_depth_used_ = config_.max_depth ? *config_.max_depth : default_max_depth(n);
     // Only a scene of more than 2^92 triangles would get a default above the limit.
     max_depth_used_ = std::min(max_depth_used_, kMaxDepthLimit);
 
     BuildCounters counters;
     int deepest = 0;
     if (n > 0) {
-        Builder builder(scene, settings_, max_depth_used_, nodes_, prim_indices_);
+        Builder builder(scene, config_, max_depth_used_, nodes_, prim_indices_);
         try {
             builder.run(bounds_);
         } catch (...) {
@@ -441,53 +444,65 @@ void KdTree::build(const Scene& scene) {
     }
     nodes_.shrink_to_fit();
     prim_indices_.shrink_to_fit();
+    bad_refines_ = counters.bad_refines;
+    deepest_leaf_ = deepest;
+}
 
-    // Statistics of the finished tree, walking it with each node's box. The SAH cost is
-    // the expected cost of a ray through the root box (pbrt's model): every interior
-    // node costs C_T and every leaf C_I per primitive reference, each weighted by its
-    // surface area relative to the root's, with this build's C_T and C_I and no empty
-    // bonus. Its unit is therefore "C_T units" only when C_T = 1.
+uint64_t KdTree::memory_bytes() const {
+    return nodes_.size() * sizeof(KdNode) + prim_indices_.size() * sizeof(uint32_t) + corners_.size() * sizeof(corners_[0]);
+}
+
+// Walks the tree with each node's box. Both SAH costs are expected costs of a ray
+// through the root box: every interior node costs C_T and every leaf C_I per primitive
+// reference, each weighted by its surface area relative to the root's.
+BuildStats measure_kdtree(const KdTree& tree) {
+    const std::span<const KdNode> nodes = tree.nodes();
+    const KdTree::Config& config = tree.config();
     uint64_t leaves = 0, empty_leaves = 0, refs = 0;
-    double sah = 0.0;
-    const double root_area = bounds_.area();
+    double inner_area = 0.0, leaf_area = 0.0;  // relative to the root's, leaves' weighted by their references
+    const double root_area = tree.bounds().area();
     struct Item {
         uint32_t node;
         Bounds3 box;
     };
     std::vector<Item> todo;
-    if (!nodes_.empty()) todo.push_back({0, bounds_});
+    if (!nodes.empty()) todo.push_back({0, tree.bounds()});
     while (!todo.empty()) {
         const Item it = todo.back();
         todo.pop_back();
-        const KdNode& node = nodes_[it.node];
+        const KdNode& node = nodes[it.node];
         const double rel = root_area > 0 ? it.box.area() / root_area : 1.0;
         if (node.is_leaf()) {
             ++leaves;
             refs += node.prim_count();
             empty_leaves += node.prim_count() == 0;
-            sah += rel * settings_.isect_cost * node.prim_count();
+            leaf_area += rel * node.prim_count();
         } else {
-            sah += rel * settings_.traversal_cost;
+            inner_area += rel;
             Bounds3 below = it.box, above = it.box;
             below.upper[node.axis()] = above.lower[node.axis()] = node.split();
             todo.push_back({node.above_child(), above});
             todo.push_back({it.node + 1, below});
         }
     }
-    stats_.nodes = nodes_.size();
-    stats_.leaves = leaves;
-    stats_.max_depth = uint64_t(deepest);
-    stats_.memory_bytes = nodes_.size() * sizeof(KdNode) + prim_indices_.size() * sizeof(uint32_t) +
-                          corners_.size() * sizeof(corners_[0]);
-    stats_.avg_leaf_size = leaves ? double(refs) / double(leaves) : 0.0;
-    if (n > 0) stats_.sah_cost = sah;
-    stats_.extra["prim_refs"] = double(refs);
-    stats_.extra["empty_leaves"] = double(empty_leaves);
-    stats_.extra["bad_refines"] = double(counters.bad_refines);
-    stats_.extra["max_depth_limit"] = double(max_depth_used_);
+    BuildStats s;
+    s.nodes = nodes.size();
+    s.leaves = leaves;
+    s.max_depth = uint64_t(tree.deepest_leaf());
+    s.memory_bytes = tree.memory_bytes();
+    s.avg_leaf_size = leaves ? double(refs) / double(leaves) : 0.0;
+    if (!nodes.empty()) {
+        s.sah_cost = kSahCostTraversal * inner_area + kSahCostIntersection * leaf_area;
+        s.extra["sah_cost_build"] = double(config.traversal_cost) * inner_area + double(config.isect_cost) * leaf_area;
+    }
+    s.extra["prim_refs"] = double(refs);
+    s.extra["empty_leaves"] = double(empty_leaves);
+    s.extra["bad_refines"] = double(tree.bad_refines());
+    s.extra["max_depth_limit"] = double(tree.max_depth_used());
+    return s;
 }
 
-BuildStats KdTree::build_stats() const { return stats_; }
+BuildStats KdTree::build_stats() const { return measure_kdtree(*this); }
 
 // ---- traversal (report 4.2.2, Figures 15-16; pbrt's KdTreeAccel::Intersect) ------------
 //
@@ -601,14 +616,41 @@ bool KdTree::hit_triangle(const WatertightRay& wr, uint32_t prim, float tmin, fl
     return true;
 }
 
-template <class C>
-void KdTree::intersect(const Ray& ray, Hit& hit, C& counters) const {
+// The last kSize triangles a ray tested, in a ring. Leaves along a ray share triangles
+// mostly with the leaves just before them (the triangle straddles their common plane),
+// so a few entries catch most repeats.
+class Mailbox {
+public:
+    // Whether `prim` was tested already; if not, remembers it.
+    bool seen(uint32_t prim) {
+        bool found = false;
+        for (uint32_t i = 0; i < kSize; ++i) found |= ids_[i] == prim;  // branch-free: vectorised
+        if (!found) ids_[next_++ % kSize] = prim;
+        return found;
+    }
+
+private:
+    static constexpr uint32_t kSize = 8;
+    uint32_t ids_[kSize] = {kInvalidId, kInvalidId, kInvalidId, kInvalidId,
+                            kInvalidId, kInvalidId, kInvalidId, kInvalidId};
+    uint32_t next_ = 0;
+};
+
+// No mailbox: never seen.
+struct NoMailbox {
+    static constexpr bool seen(uint32_t) { return false; }
+};
+
+template <bool kMailbox, class C>
+void KdTree::intersect_with(const Ray& ray, Hit& hit, C& counters) const {
     const WatertightRay wr(ray);
     float best = ray.tmax;
+    std::conditional_t<kMailbox, Mailbox, NoMailbox> mailbox;
     traverse(
         nodes_, bounds_, ray, counters,
         [&](const KdNode& leaf) {
             any_leaf_prim(leaf, [&](uint32_t prim) {
+                if (mailbox.seen(prim)) return false;
                 counters.prim();
                 if (hit_triangle(wr, prim, ray.tmin, best, hit)) best = hit.t;
                 return false;
@@ -622,15 +664,17 @@ void KdTree::intersect(const Ray& ray, Hit& hit, C& counters) const {
         [&](float next_t_min) { return !(best < slack_below(next_t_min)); });
 }
 
-template <class C>
-bool KdTree::occluded(const Ray& ray, C& counters) const {
+template <bool kMailbox, class C>
+bool KdTree::occluded_with(const Ray& ray, C& counters) const {
     const WatertightRay wr(ray);
     bool found = false;
+    std::conditional_t<kMailbox, Mailbox, NoMailbox> mailbox;
     traverse(
         nodes_, bounds_, ray, counters,
         [&](const KdNode& leaf) {
             Hit scratch;
             found = any_leaf_prim(leaf, [&](uint32_t prim) {
+                if (mailbox.seen(prim)) return false;
                 counters.prim();
                 return hit_triangle(wr, prim, ray.tmin, ray.tmax, scratch);
             });
@@ -638,6 +682,19 @@ bool KdTree::occluded(const Ray& ray, C& counters) const {
         },
         [](float) { return true; });
     return found;
+}
+
+template <class C>
+void KdTree::intersect(const Ray& ray, Hit& hit, C& counters) const {
+    if (config_.mailbox)
+        intersect_with<true>(ray, hit, counters);
+    else
+        intersect_with<false>(ray, hit, counters);
+}
+
+template <class C>
+bool KdTree::occluded(const Ray& ray, C& counters) const {
+    return config_.mailbox ? occluded_with<true>(ray, counters) : occluded_with<false>(ray, counters);
 }
 
 ACCELBENCH_INSTANTIATE_RAY_QUERIES(KdTree);

@@ -80,7 +80,8 @@ public:
     static constexpr uint64_t kMaxRefsPerPrim = 256;
     static constexpr uint64_t kMinRefBudget = 1u << 22;
 
-    struct Settings {
+    // The parameters with their defaults (info() declares them from these values).
+    struct Config {
         float isect_cost = 80.0f;      // C_I, pbrt-v3's default
         float traversal_cost = 1.0f;   // C_T
         float empty_bonus = 0.5f;      // b_e
@@ -89,21 +90,20 @@ public:
         BuildAlgorithm build = BuildAlgorithm::NLogN;
         // Reference budget override (C++ callers, tests); empty: the limit above.
         std::optional<uint64_t> max_refs;
+        // Per-ray mailbox (Amanatides & Woo 1987; pbrt-v1's mailboxing): a triangle
+        // referenced by several leaves along a ray is tested once. Exact: a retest over
+        // the same or a shorter interval cannot answer differently.
+        bool mailbox = false;
+
+        static Config from(const ParamSet& params);
     };
 
     static AcceleratorInfo info();
     explicit KdTree(const ParamSet& params);
-    explicit KdTree(const Settings& settings);
+    explicit KdTree(const Config& config);
 
     void build(const Scene& scene) override;
-    // nodes, leaves (empty ones included), max_depth (deepest leaf; root = 0),
-    // avg_leaf_size (primitive references per leaf), memory_bytes (nodes, the shared
-    // primitive-index array and the triangle copy; inline single primitives cost
-    // nothing extra), sah_cost: the expected cost of a ray through the root box in pbrt's
-    // model with THIS build's constants and no empty bonus: sum over interior nodes of
-    // C_T * A(node)/A(root) plus over leaves of C_I * count * A(leaf)/A(root).
-    // extra: prim_refs (references over all leaves), empty_leaves, bad_refines (splits
-    // made although dearer than a leaf), max_depth_limit (the max_depth applied).
+    // measure_kdtree() of the built tree plus what the build counted.
     BuildStats build_stats() const override;
 
     template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
@@ -117,12 +117,18 @@ public:
     std::span<const uint32_t> prim_indices() const { return prim_indices_; }
     const Bounds3& bounds() const { return bounds_; }
     int max_depth_used() const { return max_depth_used_; }
+    const Config& config() const { return config_; }
+    uint64_t bad_refines() const { return bad_refines_; }
+    int deepest_leaf() const { return deepest_leaf_; }
+    uint64_t memory_bytes() const;
 
 private:
     template <class F> bool any_leaf_prim(const KdNode& leaf, F&& f) const;
+    template <bool kMailbox, class C> void intersect_with(const Ray& ray, Hit& hit, C& counters) const;
+    template <bool kMailbox, class C> bool occluded_with(const Ray& ray, C& counters) const;
     bool hit_triangle(const WatertightRay& wr, uint32_t prim, float tmin, float tmax, Hit& hit) const;
 
-    Settings settings_;
+    Config config_;
     // The triangles' corners, copied in primitive order: a leaf's test then loads one
     // 36-byte record instead of an index triple and three scattered vertices (~5%
     // faster on the bunny).
@@ -131,7 +137,19 @@ private:
     std::vector<KdNode> nodes_;
     std::vector<uint32_t> prim_indices_;
     int max_depth_used_ = 0;
-    BuildStats stats_;
+    // What only the build knows (the tree's own figures come from measure_kdtree).
+    uint64_t bad_refines_ = 0;  // splits made although dearer than a leaf
+    int deepest_leaf_ = 0;
 };
+
+// Statistics of a built kd-tree: nodes, leaves (empty ones included), max_depth
+// (deepest leaf; root = 0), avg_leaf_size (primitive references per leaf), memory_bytes
+// (nodes, the shared primitive-index array and the triangle copy; inline single
+// primitives cost nothing extra) and sah_cost with the constants every structure uses
+// (kSahCostTraversal, kSahCostIntersection: comparable with the BVHs'); extra:
+// sah_cost_build (pbrt's model with THIS build's C_T and C_I and no empty bonus, what its
+// SAH minimised), prim_refs (references over all leaves), empty_leaves, bad_refines,
+// max_depth_limit (the max_depth applied).
+BuildStats measure_kdtree(const KdTree& tree);
 
 }  // namespace accelbench

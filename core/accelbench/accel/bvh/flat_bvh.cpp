@@ -1,4 +1,4 @@
-#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 
 #include <algorithm>
 #include <stdexcept>

@@ -1,0 +1,38 @@
+// The flattened binary BVH that the top-down BVH (bvh.h) and the LBVH (lbvh.h) both build
+// and both traverse (bvh_traversal.h): the nodes (bvh_node.h) in one array in depth-first
+// order, plus the leaves' primitives and their triangles in leaf order.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "accelbench/accel/bvh/bvh_node.h"
+#include "accelbench/base/geometry.h"
+#include "accelbench/scene/scene.h"
+
+namespace accelbench {
+
+// A leaf slot's triangle, copied out of the scene in leaf order: a leaf's triangles are
+// then contiguous in memory, instead of three indirections (slot -> triangle -> three
+// vertex indices -> three vertices scattered over the vertex array) per test.
+struct LeafTriangle {
+    Vec3 p0, p1, p2;
+};
+
+// A finished BVH. Builders fill `nodes` (depth-first, nodes[0] the root) and `prim_ids`
+// (a leaf's slots are [first_prim, first_prim + prim_count)), then call finalize().
+// An empty scene gives no nodes at all; traversal then answers "miss".
+struct FlatBvh {
+    std::vector<BvhNode> nodes;
+    std::vector<uint32_t> prim_ids;        // slot -> triangle index in the scene
+    std::vector<LeafTriangle> triangles;   // slot -> that triangle's vertices
+    uint32_t depth = 0;                    // longest root-to-leaf path in edges (root alone: 0)
+
+    // Copies each slot's triangle out of the scene and measures the depth (which sizes
+    // the traversal stack, so a deep tree can never overflow it).
+    void finalize(const Scene& scene);
+
+    bool empty() const { return nodes.empty(); }
+};
+
+}  // namespace accelbench
