@@ -15,6 +15,7 @@
 #include "accelbench/accel/registry.h"
 #include "accelbench/verify/robustness_cases.h"
 #include "accelbench/base/unknown_name.h"
+#include "checked_yaml.h"
 #include "model_registry.h"
 #include "ray_file.h"
 #include "text.h"
@@ -27,272 +28,7 @@ std::string ModelTransformSpec::text() const {
     return std::string(kind == Kind::Decimate ? "decimate=" : "subdivide=") + std::to_string(amount);
 }
 
-std::string format_issue(const ConfigIssue& issue) {
-    std::string s = issue.mark.file;
-    for (int n : {issue.mark.line, issue.mark.column})
-        if (n > 0) {
-            s += ':';
-            s += std::to_string(n);
-        }
-    s += ": ";
-    if (!issue.key_path.empty()) {
-        s += issue.key_path;
-        s += ": ";
-    }
-    s += issue.message;
-    return s;
-}
-
 namespace {
-
-std::string join_issues(const std::vector<ConfigIssue>& issues) {
-    std::string s;
-    for (const auto& i : issues) {
-        if (!s.empty()) s += '\n';
-        s += format_issue(i);
-    }
-    return s;
-}
-
-}  // namespace
-
-ConfigError::ConfigError(std::vector<ConfigIssue> issues)
-    : std::runtime_error(join_issues(issues)), issues_(std::move(issues)) {}
-
-namespace {
-
-ConfigError single_issue(const std::string& file, int line, int column, const std::string& message) {
-    std::vector<ConfigIssue> issues(1);
-    issues[0].mark.file = file;
-    issues[0].mark.line = line;
-    issues[0].mark.column = column;
-    issues[0].message = message;
-    return ConfigError(std::move(issues));
-}
-
-std::string join(const std::vector<std::string>& v, const char* sep = ", ") {
-    std::string s;
-    for (size_t i = 0; i < v.size(); ++i) s += (i ? sep : "") + v[i];
-    return s;
-}
-
-// Edit distance, for "did you mean" hints on misspelt keys.
-size_t edit_distance(const std::string& a, const std::string& b) {
-    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
-    for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
-    for (size_t i = 1; i <= a.size(); ++i) {
-        cur[0] = i;
-        for (size_t j = 1; j <= b.size(); ++j)
-            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
-        std::swap(prev, cur);
-    }
-    return prev[b.size()];
-}
-
-std::string suggestion(const std::string& key, const std::vector<std::string>& allowed) {
-    std::string best;
-    size_t best_d = 3;  // only close misspellings
-    for (const auto& a : allowed) {
-        size_t d = edit_distance(key, a);
-        if (d < best_d) best_d = d, best = a;
-    }
-    return best.empty() ? "" : " (did you mean '" + best + "'?)";
-}
-
-const char* kind_of(const YAML::Node& n) {
-    switch (n.Type()) {
-        case YAML::NodeType::Map: return "a mapping";
-        case YAML::NodeType::Sequence: return "a list";
-        case YAML::NodeType::Scalar: return "a scalar";
-        case YAML::NodeType::Null: return "nothing (null)";
-        default: return "an undefined value";
-    }
-}
-
-// A quoted scalar ("1", 'x') is a string in YAML: it is never read as a number or bool.
-bool quoted(const YAML::Node& n) { return n.Tag() == "!"; }
-
-// Collects issues while the loader walks the document.
-struct Checker {
-    std::string file;
-    std::vector<ConfigIssue> issues;
-
-    void error(const YAML::Mark& m, const std::string& path, const std::string& msg) {
-        issues.push_back({{file, m.line + 1, m.column + 1}, path, msg});
-    }
-    void error(const YAML::Node& n, const std::string& path, const std::string& msg) { error(n.Mark(), path, msg); }
-};
-
-// The entries of one mapping, checked for duplicate and unknown keys. yaml-cpp 0.7 keeps
-// both entries of a duplicated key (lookups see the first), so the walk over the entries
-// is what finds them. A missing key has no mark of its own: it is reported at the
-// mapping's mark.
-class Fields {
-public:
-    struct Entry {
-        std::string key;
-        YAML::Node key_node;
-        YAML::Node value;
-    };
-
-    // `allowed` empty: any key (the caller checks them).
-    Fields(Checker& c, const YAML::Node& map, std::string path, const std::vector<std::string>& allowed)
-        : c_(c), map_(map), path_(std::move(path)) {
-        if (!map.IsMap()) {
-            c.error(map, path_, std::string("expected a mapping, got ") + kind_of(map));
-            return;
-        }
-        ok_ = true;
-        std::map<std::string, YAML::Mark> seen;
-        // Range-for, not `it->first`: yaml-cpp's iterator::operator-> returns a proxy that
-        // holds the key/value pair by value, so a reference to `it->first` dangles as soon
-        // as the statement ends (ASan: stack-use-after-scope). `*it` yields the pair by
-        // value and the range-for keeps it alive for the whole body.
-        for (const auto& entry : map) {
-            const YAML::Node& k = entry.first;
-            std::string key;
-            if (k.IsScalar()) key = k.Scalar();
-            else if (k.IsSequence()) key = flow_key(k);  // [max_prims, max_depth]: ...
-            else {
-                c.error(k, path_, std::string("a key must be a name, got ") + kind_of(k));
-                continue;
-            }
-            if (auto s = seen.find(key); s != seen.end()) {
-                c.error(k, child(key), "duplicate key '" + key + "' (first given at line " +
-                                           std::to_string(s->second.line + 1) + ", column " +
-                                           std::to_string(s->second.column + 1) + ")");
-                continue;
-            }
-            seen.emplace(key, k.Mark());
-            if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-                c.error(k, child(key), "unknown key '" + key + "'" + suggestion(key, allowed) + "; allowed here: " +
-                                           join(allowed));
-                continue;
-            }
-            entries_.push_back({key, k, entry.second});
-        }
-    }
-
-    bool ok() const { return ok_; }
-    const std::vector<Entry>& entries() const { return entries_; }
-    const Entry* find(const std::string& key) const {
-        for (const auto& e : entries_)
-            if (e.key == key) return &e;
-        return nullptr;
-    }
-    bool has(const std::string& key) const { return find(key) != nullptr; }
-    const Entry* require(const std::string& key) const {
-        const Entry* e = find(key);
-        if (!e && ok_) c_.error(map_, child(key), "missing key '" + key + "'");
-        return e;
-    }
-    std::string child(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-    const std::string& path() const { return path_; }
-    const YAML::Node& node() const { return map_; }
-
-    // A flow-sequence key, e.g. `[max_prims, max_depth]`, in the canonical spelling a
-    // quoted key uses.
-    static std::string flow_key(const YAML::Node& k) {
-        std::string s = "[";
-        for (size_t i = 0; i < k.size(); ++i) {
-            if (i) s += ", ";
-            s += k[i].IsScalar() ? k[i].Scalar() : std::string("?");
-        }
-        return s + "]";
-    }
-
-private:
-    Checker& c_;
-    YAML::Node map_;
-    std::string path_;
-    bool ok_ = false;
-    std::vector<Entry> entries_;
-};
-
-// ---- scalar readers: each reports its own error and returns nullopt ------------------
-
-std::optional<std::string> read_string(Checker& c, const YAML::Node& n, const std::string& path) {
-    if (!n.IsScalar()) {
-        c.error(n, path, std::string("expected a string, got ") + kind_of(n));
-        return std::nullopt;
-    }
-    if (n.Scalar().empty()) {
-        c.error(n, path, "expected a non-empty string");
-        return std::nullopt;
-    }
-    return n.Scalar();
-}
-
-std::optional<int64_t> read_int(Checker& c, const YAML::Node& n, const std::string& path, int64_t lo, int64_t hi) {
-    const std::string range = concat("[", std::to_string(lo), ", ", std::to_string(hi), "]");
-    if (!n.IsScalar() || quoted(n)) {
-        c.error(n, path, "expected an integer in " + range + ", got " +
-                             (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
-        return std::nullopt;
-    }
-    const std::string& t = n.Scalar();
-    int64_t v = 0;
-    auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
-    if (ec != std::errc() || p != t.data() + t.size()) {
-        c.error(n, path, "expected an integer in " + range + ", got '" + t + "'");
-        return std::nullopt;
-    }
-    if (v < lo || v > hi) {
-        c.error(n, path, "value " + t + " is out of range " + range);
-        return std::nullopt;
-    }
-    return v;
-}
-
-// A number in (lo, hi] when lo_open, else [lo, hi].
-std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::string& path, double lo, double hi,
-                                  bool lo_open) {
-    char range[96];
-    std::snprintf(range, sizeof range, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
-    if (!n.IsScalar() || quoted(n)) {
-        c.error(n, path, std::string("expected a number in ") + range + ", got " +
-                             (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
-        return std::nullopt;
-    }
-    const std::string& t = n.Scalar();
-    char* end = nullptr;
-    double v = std::strtod(t.c_str(), &end);
-    if (t.empty() || end != t.c_str() + t.size() || !std::isfinite(v)) {
-        c.error(n, path, std::string("expected a number in ") + range + ", got '" + t + "'");
-        return std::nullopt;
-    }
-    if (v > hi || v < lo || (lo_open && v == lo)) {
-        c.error(n, path, "value " + t + " is out of range " + range);
-        return std::nullopt;
-    }
-    return v;
-}
-
-std::optional<bool> read_bool(Checker& c, const YAML::Node& n, const std::string& path) {
-    if (n.IsScalar() && !quoted(n)) {
-        const std::string& t = n.Scalar();
-        if (t == "true" || t == "yes" || t == "on") return true;
-        if (t == "false" || t == "no" || t == "off") return false;
-    }
-    c.error(n, path, std::string("expected true or false, got ") +
-                         (n.IsScalar() ? "'" + n.Scalar() + "'" : std::string(kind_of(n))));
-    return std::nullopt;
-}
-
-std::optional<Vec3> read_vec3(Checker& c, const YAML::Node& n, const std::string& path) {
-    if (!n.IsSequence() || n.size() != 3) {
-        c.error(n, path, std::string("expected a list of three numbers [x, y, z], got ") +
-                             (n.IsSequence() ? "a list of " + std::to_string(n.size()) : std::string(kind_of(n))));
-        return std::nullopt;
-    }
-    Vec3 v;
-    for (int i = 0; i < 3; ++i) {
-        auto x = read_number(c, n[i], path + "[" + std::to_string(i) + "]", -1e30, 1e30, false);
-        if (!x) return std::nullopt;
-        v[i] = float(*x);
-    }
-    return v;
-}
 
 // parse_param's messages start with "accelerator 'x', parameter 'y': "; the key path
 // already says that.
@@ -354,15 +90,7 @@ public:
     }
 
     Config load() {
-        YAML::Node root;
-        try {
-            root = YAML::LoadFile(cfg_.path);
-        } catch (const YAML::BadFile&) {
-            throw single_issue(cfg_.path, 0, 0, "cannot open the config file");
-        } catch (const YAML::Exception& e) {
-            throw single_issue(cfg_.path, e.mark.line + 1, e.mark.column + 1, "YAML syntax error: " + e.msg);
-        }
-        if (root.IsNull()) throw single_issue(cfg_.path, 1, 1, "the config is empty");
+        const YAML::Node root = load_yaml_document(cfg_.path);
 
         // `grid:` belongs to the analysis's grid search (analysis/README.md): accepted, unread.
         Fields top(c_, root, "",
@@ -391,30 +119,20 @@ public:
         if (auto* e = top.find("render")) read_render(e->value);
         if (auto* e = top.find("rays")) default_rays_ = read_rays(e->value, "rays");
 
-        if (auto* e = top.require("models")) read_list(e->value, "models", [&](const YAML::Node& n, const std::string& p) {
+        if (auto* e = top.require("models")) read_list(c_, e->value, "models", [&](const YAML::Node& n, const std::string& p) {
             read_model(n, p);
         });
         check_models();
         if (auto* e = top.require("accelerators"))
-            read_list(e->value, "accelerators", [&](const YAML::Node& n, const std::string& p) { read_accelerator(n, p); });
+            read_list(c_, e->value, "accelerators", [&](const YAML::Node& n, const std::string& p) { read_accelerator(n, p); });
         if (auto* e = top.find("skip"))
-            read_list(e->value, "skip", [&](const YAML::Node& n, const std::string& p) { read_skip(n, p); }, true);
+            read_list(c_, e->value, "skip", [&](const YAML::Node& n, const std::string& p) { read_skip(n, p); }, true);
 
         if (!c_.issues.empty()) throw ConfigError(c_.issues);
         return std::move(cfg_);
     }
 
 private:
-    template <class F>
-    void read_list(const YAML::Node& n, const std::string& path, F&& each, bool may_be_empty = false) {
-        if (!n.IsSequence()) {
-            c_.error(n, path, std::string("expected a list, got ") + kind_of(n));
-            return;
-        }
-        if (n.size() == 0 && !may_be_empty) c_.error(n, path, "the list is empty");
-        for (size_t i = 0; i < n.size(); ++i) each(n[i], path + "[" + std::to_string(i) + "]");
-    }
-
     std::string resolve(const std::string& p) const {
         fs::path fp(p);
         return (fp.is_absolute() ? fp : fs::path(cfg_.dir) / fp).lexically_normal().string();
@@ -503,7 +221,7 @@ private:
         std::vector<std::string> names;
         for (const auto& e : registry_.entries()) names.push_back(e.name);
         c_.error(n, path, "unknown model '" + name + "': not in the model registry (configs/models.yaml: " +
-                              join(names) + "); a mesh file is written {path: FILE}");
+                              join_names(names) + "); a mesh file is written {path: FILE}");
         return false;
     }
 
@@ -573,7 +291,7 @@ private:
             if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
             std::string what = proc ? "procedural scene '" + proc->name + "' has no parameter '" + e.key + "'"
                                     : "unknown key '" + e.key + "'";
-            c_.error(e.key_node, f.child(e.key), what + suggestion(e.key, allowed) + "; allowed here: " + join(allowed));
+            c_.error(e.key_node, f.child(e.key), what + did_you_mean(e.key, allowed) + "; allowed here: " + join_names(allowed));
             ok = false;
         }
         if (proc) {
@@ -739,7 +457,7 @@ private:
         const AcceleratorInfo* info = find_accelerator(a.name);
         if (!info) {
             const auto names = names_of(accelerator_registry(), &AcceleratorInfo::name);
-            c_.error(ne->value, f.child("name"), unknown_name("accelerator", a.name, names, suggestion(a.name, names)));
+            c_.error(ne->value, f.child("name"), unknown_name("accelerator", a.name, names, did_you_mean(a.name, names)));
             return;
         }
         bool ok = read_effort(f, a.repetitions, a.warmup);
@@ -770,8 +488,8 @@ private:
                     if (!spec) {
                         const auto known = spec_names(info->params);
                         c_.error(e.key_node, base + "." + pn,
-                                 "accelerator '" + a.name + "' has no parameter '" + pn + "'" + suggestion(pn, known) +
-                                     (known.empty() ? " (it takes none)" : " (it has: " + join(known) + ")"));
+                                 "accelerator '" + a.name + "' has no parameter '" + pn + "'" + did_you_mean(pn, known) +
+                                     (known.empty() ? " (it takes none)" : " (it has: " + join_names(known) + ")"));
                         names_ok = false;
                         continue;
                     }
@@ -989,7 +707,7 @@ private:
             if (s && !known) {
                 std::vector<std::string> labels;
                 for (const auto& m : cfg_.models) labels.push_back(m.label);
-                c_.error(e->value, f.child("model"), "'" + *s + "' matches no model of this config (" + join(labels) + ")");
+                c_.error(e->value, f.child("model"), "'" + *s + "' matches no model of this config (" + join_names(labels) + ")");
                 s.reset();
             }
             if (s) r.model = *s;
@@ -1036,3 +754,4 @@ private:
 Config load_config(const std::string& path, const ModelRegistry& models) { return Loader(path, models).load(); }
 
 }  // namespace accelbench
+

@@ -1,9 +1,7 @@
-// A benchmark config (configs/*.yaml), read and validated in full before anything runs.
-//
-// Every problem found becomes one ConfigIssue naming the file, line and column and the key
-// path (`accelerators[2].kdtree.max_depth`); load_config reports all of them at once, so a
-// user fixes a config in one pass instead of one error per run. The keys are documented in
-// docs/configs.md.
+// A benchmark config (configs/*.yaml), read and validated in full before anything runs:
+// what its keys mean. The reading itself (positions, types, did-you-mean, every issue at
+// once, so a user fixes a config in one pass) is checked_yaml.h's. The keys are
+// documented in docs/configs.md.
 #pragma once
 
 #include <cstdint>
@@ -17,37 +15,11 @@
 #include "accelbench/scene/camera.h"
 #include "accelbench/base/geometry.h"
 #include "accelbench/render/renderer.h"
+#include "checked_yaml.h"
 
 namespace accelbench {
 
 class ModelRegistry;
-
-// Where in a file something is; line and column are 1-based, 0 when unknown.
-struct SourceMark {
-    std::string file;
-    int line = 0;
-    int column = 0;
-};
-
-struct ConfigIssue {
-    SourceMark mark;
-    std::string key_path;  // e.g. "accelerators[2].kdtree.max_depth"; empty for the whole file
-    std::string message;
-};
-
-// "file:line:column: key.path: message"
-std::string format_issue(const ConfigIssue& issue);
-
-// Thrown by load_config (and expansion) with every issue found; what() lists them all,
-// one per line.
-class ConfigError : public std::runtime_error {
-public:
-    explicit ConfigError(std::vector<ConfigIssue> issues);
-    const std::vector<ConfigIssue>& issues() const { return issues_; }
-
-private:
-    std::vector<ConfigIssue> issues_;
-};
 
 // A ray file (`rays: {file: ...}`), read once while validating.
 struct RaySet {

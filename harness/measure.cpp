@@ -43,11 +43,7 @@ double seconds_between(Clock::time_point a, Clock::time_point b) {
 }
 
 // A time limit as the config wrote it (0.1, not 0.10000000000000001).
-std::string limit_text(double s) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", s);
-    return buf;
-}
+std::string limit_text(double s) { return number_text(s, 6); }
 
 // ---- deterministic values: every run that produces them must agree ------------------
 
@@ -180,224 +176,314 @@ private:
     std::ostream null_{nullptr};
 };
 
-}  // namespace
+// ---- the stages of measuring one combination ------------------------------------------
 
-Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
-                    const LoadedModel& model, const RenderSettings& render_settings, const MeasureSettings& settings,
-                    const StageFn& stage) {
-    Measurement m;
-    reset_peak_rss();
-    const auto start = Clock::now();
-    std::string failure;     // first error; later repetitions are skipped with it
-    bool timed_out = false;
-    std::unique_ptr<Accelerator> accel;  // the last one built; the render benchmark traces it
-    std::optional<BuildStats> first_build;
-    std::optional<TraceOutput> first_trace, first_count;
-    int build_calls = 0, render_calls = 0;
-    std::optional<uint64_t> instructions;
-    const int reps = settings.repetitions;
-
-    auto begin = [&](const std::string& s) {
-        m.stage = s;
-        if (stage) stage(s);
-        if (settings.timeout_s > 0 && seconds_between(start, Clock::now()) > settings.timeout_s)
-            throw StageTimeout("exceeded the time limit (timeout_s = " + limit_text(settings.timeout_s) + " s) before " + s);
-    };
-    auto fail = [&](benchmark::State& st, const std::exception& e) {
-        if (failure.empty()) {
-            failure = e.what();
-            timed_out = dynamic_cast<const StageTimeout*>(&e) != nullptr;
+// One combination's measurement: what its stages share (the structure last built, the
+// first build's statistics, the counting renders) and the stages themselves, each a
+// function named for it. Google Benchmark calls build_benchmark() once per build
+// repetition and then render_benchmark() once per render repetition; the stages run in
+// this order:
+//   1. warm-up builds (before the first counted build)
+//   2. timed builds, one per repetition
+//   3. the first counting render (also the first render warm-up), further render warm-ups
+//   4. timed renders, one per repetition (under callgrind the first is also counted)
+//   5. the second counting render, also the error trace: its counters must equal the
+//      first one's; with reference answers it keeps every primary hit (and shades in an
+//      image run), and after Google Benchmark returns its answers are compared with the
+//      reference's (error_columns)
+// The first failure (an exception, a nondeterministic value, the time limit) skips every
+// later repetition and becomes the result's status.
+class MeasuringStages {
+public:
+    MeasuringStages(const AcceleratorInfo& info, const ParamSet& params, const LoadedModel& model,
+                    const RenderSettings& render, const MeasureSettings& settings, const StageFn& stage)
+        : info_(info), params_(params), model_(model), render_(render), settings_(settings), stage_(stage),
+          start_(Clock::now()) {
+        timed_.settings = render;
+        timed_.light = model.light;
+        timed_.counts = CountMode::Off;
+        timed_.albedo = model.albedo;
+        counting_ = timed_;
+        counting_.counts = CountMode::Totals;
+        counting_.settings.shading = false;  // counts do not depend on shading
+        // With reference answers, the second counting render is also the error trace: it
+        // keeps every primary hit and, in an image run, shades (its counts must still equal
+        // the first one's), so error measurement costs no render of its own.
+        error_trace_ = counting_;
+        if (model.reference) {
+            error_trace_.keep_hits = true;
+            error_trace_.settings.shading = render.shading;
         }
-        st.SkipWithError(failure.c_str());
-    };
-    auto check_build = [&](const BuildStats& bs, const std::string& what) {
-        if (!first_build) first_build = bs;
-        else if (auto d = build_stats_difference(*first_build, bs); !d.empty())
-            throw Nondeterministic("nondeterministic build: " + d + " (first build vs " + what + ")");
-    };
-    auto build_one = [&](const std::string& what) {
-        auto a = info.create(params);
-        a->build(model.scene);
-        check_build(a->build_stats(), what);
-        return a;
-    };
-
-    TraceRequest timed;
-    timed.settings = render_settings;
-    timed.light = model.light;
-    timed.counts = CountMode::Off;
-    timed.albedo = model.albedo;
-    TraceRequest counting = timed;
-    counting.counts = CountMode::Totals;
-    counting.settings.shading = false;  // counts do not depend on shading
-    // With reference answers, the second counting render is also the error trace: it keeps
-    // every primary hit and, in an image run, shades (its counts must still equal the first
-    // one's), so error measurement costs no render of its own.
-    TraceRequest last_counting = counting;
-    if (model.reference) {
-        last_counting.keep_hits = true;
-        last_counting.settings.shading = render_settings.shading;
     }
-    std::optional<TraceOutput> last_count;
-    auto trace = [&](const TraceRequest& req) { return trace_model(*accel, model, req); };
-    auto check_rays = [&](const TraceOutput& out, const std::string& what) {
-        if (!first_trace) first_trace = out;
-        else if (auto d = ray_count_difference(*first_trace, out); !d.empty())
-            throw Nondeterministic("nondeterministic render: " + d + " (first render vs " + what + ")");
-    };
 
-    auto build_bench = [&](benchmark::State& st) {
-        if (!failure.empty()) return st.SkipWithError(failure.c_str());
-        try {
-            const int rep = ++build_calls;
-            if (rep == 1)
-                for (int w = 0; w < settings.warmup; ++w) {
-                    begin("build warm-up " + std::to_string(w + 1) + " of " + std::to_string(settings.warmup));
-                    accel = build_one("a warm-up build");
-                }
-            begin("build repetition " + std::to_string(rep) + " of " + std::to_string(reps));
-            for (auto _ : st) {
-                accel.reset();  // at most one structure in memory at a time
-                auto a = info.create(params);
-                const auto t0 = Clock::now();
-                a->build(model.scene);
-                const auto t1 = Clock::now();
-                st.SetIterationTime(seconds_between(t0, t1));
-                accel = std::move(a);
-            }
-            const BuildStats bs = accel->build_stats();
-            check_build(bs, "repetition " + std::to_string(rep));
-            st.counters["triangles"] = double(model.scene.triangle_count());
-            for (const auto& f : build_stat_fields())
-                if (auto v = f.get(bs)) st.counters[f.name] = *v;
-        } catch (const std::exception& e) {
-            fail(st, e);
-        }
-    };
+    void build_benchmark(benchmark::State& st) {
+        guarded(st, [&] {
+            const int rep = ++build_calls_;
+            if (rep == 1) warm_up_builds();
+            timed_build(st, rep);
+        });
+    }
 
-    auto render_bench = [&](benchmark::State& st) {
-        if (!failure.empty()) return st.SkipWithError(failure.c_str());
-        try {
-            const int rep = ++render_calls;
-            if (!accel) {  // only if GB ran the benchmarks out of order
-                begin("build for rendering");
-                accel = build_one("the build for rendering");
-            }
+    void render_benchmark(benchmark::State& st) {
+        guarded(st, [&] {
+            const int rep = ++render_calls_;
+            if (!accel_) build_for_rendering();
             if (rep == 1) {
-                // The counting render touches the same nodes and triangles as a timed one: it
-                // is the first warm-up; further ones (warmup > 1) run the timed code path.
-                begin("counting render 1 of 2");
-                first_count = trace(counting);
-                check_rays(*first_count, "counting render 1");
-                for (int w = 1; w < settings.warmup; ++w) {
-                    begin("render warm-up " + std::to_string(w + 1) + " of " + std::to_string(settings.warmup));
-                    check_rays(trace(timed), "a warm-up render");
-                }
+                first_counting_render();
+                render_warm_ups();
             }
-            begin("render repetition " + std::to_string(rep) + " of " + std::to_string(reps));
-            TraceOutput out;
-            // Under callgrind, the first counted repetition is also the one whose
-            // instructions are counted: exactly one timed-mode render, nothing around it.
-            std::optional<CallgrindRegion> callgrind;
-            if (rep == 1 && !settings.callgrind_out.empty()) callgrind.emplace(settings.callgrind_out, settings.callgrind_tag);
-            for (auto _ : st) {
-                if (callgrind) callgrind->start();
-                const auto t0 = Clock::now();
-                out = trace(timed);
-                const auto t1 = Clock::now();
-                if (callgrind) instructions = callgrind->stop();
-                st.SetIterationTime(seconds_between(t0, t1));
-            }
-            check_rays(out, "render repetition " + std::to_string(rep));
-            if (rep == reps) {
-                begin("counting render 2 of 2");
-                TraceOutput again = trace(last_counting);
-                check_rays(again, "counting render 2");
-                if (auto d = counter_difference(*first_count, again); !d.empty())
-                    throw Nondeterministic("nondeterministic traversal counters: " + d +
-                                           " (counting render before vs after the timed repetitions)");
-                last_count = std::move(again);
-            }
-            st.counters["rays"] = double(out.rays);
-            st.counters["hits"] = double(out.hits);
-            st.counters["shadow_rays"] = double(out.shadow_rays);
-            st.counters["shadow_hits"] = double(out.shadow_hits);
-            if (auto total = reported_counts(*first_count)) {
-                st.counters["prim_tests"] = double(total->prim_tests);
-                st.counters["node_visits"] = double(total->node_visits);
-            }
-            st.counters["Mrays/s"] =
-                benchmark::Counter(double(out.rays + out.shadow_rays) * 1e-6, benchmark::Counter::kIsRate);
-        } catch (const std::exception& e) {
-            fail(st, e);
+            const TraceOutput out = timed_render(st, rep);
+            if (rep == settings_.repetitions) second_counting_render();
+            render_counters(st, out);
+        });
+    }
+
+    // After Google Benchmark returned: the failure, or the samples, the first counting
+    // render's counts and the error columns of the second against the reference.
+    Measurement result(const CaptureReporter& reporter, const std::string& name) {
+        Measurement m = std::move(m_);
+        m.json = reporter.json();
+        const int reps = settings_.repetitions;
+        if (!failure_.empty()) {
+            m.status = timed_out_ ? "timeout" : "error";
+            m.message = failure_;
+            if (failure_.rfind("nondeterministic", 0) == 0)
+                std::fprintf(stderr, "accelbench run: %s: %s\n", name.c_str(), failure_.c_str());
+            return m;
         }
-    };
-
-    CaptureReporter reporter(settings);
-    benchmark::ClearRegisteredBenchmarks();
-    for (auto [suffix, fn] : {std::pair<const char*, std::function<void(benchmark::State&)>>{"/build", build_bench},
-                              {"/render", render_bench}})
-        benchmark::RegisterBenchmark((name + suffix).c_str(), fn)
-            ->UseManualTime()
-            ->Iterations(1)
-            ->Repetitions(reps)
-            ->Unit(benchmark::kMillisecond);
-    try {
-        benchmark::RunSpecifiedBenchmarks(&reporter, std::string("."));
-    } catch (const std::exception& e) {
-        if (failure.empty()) failure = e.what();
-    }
-    benchmark::ClearRegisteredBenchmarks();
-    std::cout.flush();
-
-    m.json = reporter.json();
-    if (!failure.empty()) {
-        m.status = timed_out ? "timeout" : "error";
-        m.message = failure;
-        if (failure.rfind("nondeterministic", 0) == 0) std::fprintf(stderr, "accelbench run: %s: %s\n", name.c_str(), failure.c_str());
-        return m;
-    }
-    if (int(reporter.build_s.size()) != reps || int(reporter.render_s.size()) != reps || !first_count || !first_build) {
-        m.status = "error";
-        m.message = "Google Benchmark reported " + std::to_string(reporter.build_s.size()) + " build and " +
-                    std::to_string(reporter.render_s.size()) + " render repetitions, expected " + std::to_string(reps) +
-                    " of each (a --benchmark_* flag may have filtered them)";
-        return m;
-    }
-    if (model.reference && last_count) {
-        // Outside the timed part: the second counting render's primary hits (and image, in
-        // an image run) against the reference's answers.
+        if (int(reporter.build_s.size()) != reps || int(reporter.render_s.size()) != reps || !first_count_ ||
+            !first_build_) {
+            m.status = "error";
+            m.message = "Google Benchmark reported " + std::to_string(reporter.build_s.size()) + " build and " +
+                        std::to_string(reporter.render_s.size()) + " render repetitions, expected " +
+                        std::to_string(reps) + " of each (a --benchmark_* flag may have filtered them)";
+            return m;
+        }
         try {
-            std::optional<ImageErrors> image;
-            if (last_count->image && model.reference->image)
-                image = compare_images(*last_count->image, *model.reference->image, last_count->primary_hits,
-                                       model.reference->hits, render_settings.spp);
-            m.columns = error_columns(compare_hits(last_count->primary_hits, model.reference->hits), image);
+            if (auto errors = errors_against_reference()) m.columns = std::move(*errors);
         } catch (const std::exception& e) {
             m.status = "error";
             m.message = e.what();
             return m;
         }
+        m.columns["peak_rss_bytes"] = std::to_string(peak_rss_bytes());
+        m.build_s = reporter.build_s;
+        m.render_s = reporter.render_s;
+        m.build = *first_build_;
+        m.rays = first_count_->rays;
+        m.hits = first_count_->hits;
+        m.shadow_rays = first_count_->shadow_rays;
+        m.shadow_hits = first_count_->shadow_hits;
+        m.counts = reported_counts(*first_count_);
+        m.instructions = instructions_;
+        return m;
     }
-    m.columns["peak_rss_bytes"] = std::to_string(peak_rss_bytes());
-    m.build_s = reporter.build_s;
-    m.render_s = reporter.render_s;
-    m.build = *first_build;
-    m.rays = first_count->rays;
-    m.hits = first_count->hits;
-    m.shadow_rays = first_count->shadow_rays;
-    m.shadow_hits = first_count->shadow_hits;
-    m.counts = reported_counts(*first_count);
-    m.instructions = instructions;
-    return m;
+
+    // A failure outside the benchmarks (Google Benchmark itself threw).
+    void failed(const std::exception& e) {
+        if (failure_.empty()) failure_ = e.what();
+    }
+
+private:
+    // ---- stage 1: warm-up builds
+    void warm_up_builds() {
+        for (int w = 0; w < settings_.warmup; ++w) {
+            begin("build warm-up " + std::to_string(w + 1) + " of " + std::to_string(settings_.warmup));
+            accel_ = build_checked("a warm-up build");
+        }
+    }
+
+    // ---- stage 2: one timed build
+    void timed_build(benchmark::State& st, int rep) {
+        begin("build repetition " + std::to_string(rep) + " of " + std::to_string(settings_.repetitions));
+        for (auto _ : st) {
+            accel_.reset();  // at most one structure in memory at a time
+            auto a = info_.create(params_);
+            const auto t0 = Clock::now();
+            a->build(model_.scene);
+            const auto t1 = Clock::now();
+            st.SetIterationTime(seconds_between(t0, t1));
+            accel_ = std::move(a);
+        }
+        const BuildStats bs = accel_->build_stats();
+        check_build(bs, "repetition " + std::to_string(rep));
+        st.counters["triangles"] = double(model_.scene.triangle_count());
+        for (const auto& f : build_stat_fields())
+            if (auto v = f.get(bs)) st.counters[f.name] = *v;
+    }
+
+    // Only if Google Benchmark ran the render benchmark before the build benchmark.
+    void build_for_rendering() {
+        begin("build for rendering");
+        accel_ = build_checked("the build for rendering");
+    }
+
+    // ---- stage 3: the first counting render, then the render warm-ups. The counting
+    // render touches the same nodes and triangles as a timed one: it is the first warm-up;
+    // further ones (warmup > 1) run the timed code path.
+    void first_counting_render() {
+        begin("counting render 1 of 2");
+        first_count_ = trace(counting_);
+        check_rays(*first_count_, "counting render 1");
+    }
+
+    void render_warm_ups() {
+        for (int w = 1; w < settings_.warmup; ++w) {
+            begin("render warm-up " + std::to_string(w + 1) + " of " + std::to_string(settings_.warmup));
+            check_rays(trace(timed_), "a warm-up render");
+        }
+    }
+
+    // ---- stage 4: one timed render. Under callgrind, the first counted repetition is also
+    // the one whose instructions are counted: exactly one timed-mode render, nothing around it.
+    TraceOutput timed_render(benchmark::State& st, int rep) {
+        begin("render repetition " + std::to_string(rep) + " of " + std::to_string(settings_.repetitions));
+        TraceOutput out;
+        std::optional<CallgrindRegion> callgrind;
+        if (rep == 1 && !settings_.callgrind_out.empty()) callgrind.emplace(settings_.callgrind_out, settings_.callgrind_tag);
+        for (auto _ : st) {
+            if (callgrind) callgrind->start();
+            const auto t0 = Clock::now();
+            out = trace(timed_);
+            const auto t1 = Clock::now();
+            if (callgrind) instructions_ = callgrind->stop();
+            st.SetIterationTime(seconds_between(t0, t1));
+        }
+        check_rays(out, "render repetition " + std::to_string(rep));
+        return out;
+    }
+
+    // ---- stage 5: the second counting render (the error trace), after the last timed render
+    void second_counting_render() {
+        begin("counting render 2 of 2");
+        TraceOutput again = trace(error_trace_);
+        check_rays(again, "counting render 2");
+        if (auto d = counter_difference(*first_count_, again); !d.empty())
+            throw Nondeterministic("nondeterministic traversal counters: " + d +
+                                   " (counting render before vs after the timed repetitions)");
+        second_count_ = std::move(again);
+    }
+
+    // Outside the timed part: the error trace's primary hits (and image, in an image run)
+    // against the reference's answers; nullopt without reference answers.
+    std::optional<std::map<std::string, std::string>> errors_against_reference() const {
+        if (!model_.reference || !second_count_) return std::nullopt;
+        std::optional<ImageErrors> image;
+        if (second_count_->image && model_.reference->image)
+            image = compare_images(*second_count_->image, *model_.reference->image, second_count_->primary_hits,
+                                   model_.reference->hits, render_.spp);
+        return error_columns(compare_hits(second_count_->primary_hits, model_.reference->hits), image);
+    }
+
+    // Google Benchmark's counters of a render repetition (its console table).
+    void render_counters(benchmark::State& st, const TraceOutput& out) const {
+        st.counters["rays"] = double(out.rays);
+        st.counters["hits"] = double(out.hits);
+        st.counters["shadow_rays"] = double(out.shadow_rays);
+        st.counters["shadow_hits"] = double(out.shadow_hits);
+        if (auto total = reported_counts(*first_count_)) {
+            st.counters["prim_tests"] = double(total->prim_tests);
+            st.counters["node_visits"] = double(total->node_visits);
+        }
+        st.counters["Mrays/s"] =
+            benchmark::Counter(double(out.rays + out.shadow_rays) * 1e-6, benchmark::Counter::kIsRate);
+    }
+
+    // ---- what every stage shares
+
+    // A stage begins: reported to the parent process, checked against the time limit.
+    void begin(const std::string& s) {
+        m_.stage = s;
+        if (stage_) stage_(s);
+        if (settings_.timeout_s > 0 && seconds_between(start_, Clock::now()) > settings_.timeout_s)
+            throw StageTimeout("exceeded the time limit (timeout_s = " + limit_text(settings_.timeout_s) + " s) before " + s);
+    }
+
+    // Runs a repetition's stages unless an earlier one failed; a failure skips this
+    // repetition and every later one with the first failure's message.
+    template <class F>
+    void guarded(benchmark::State& st, F&& stages) {
+        if (!failure_.empty()) return st.SkipWithError(failure_.c_str());
+        try {
+            stages();
+        } catch (const std::exception& e) {
+            if (failure_.empty()) {
+                failure_ = e.what();
+                timed_out_ = dynamic_cast<const StageTimeout*>(&e) != nullptr;
+            }
+            st.SkipWithError(failure_.c_str());
+        }
+    }
+
+    std::unique_ptr<Accelerator> build_checked(const std::string& what) {
+        auto a = info_.create(params_);
+        a->build(model_.scene);
+        check_build(a->build_stats(), what);
+        return a;
+    }
+
+    void check_build(const BuildStats& bs, const std::string& what) {
+        if (!first_build_) first_build_ = bs;
+        else if (auto d = build_stats_difference(*first_build_, bs); !d.empty())
+            throw Nondeterministic("nondeterministic build: " + d + " (first build vs " + what + ")");
+    }
+
+    void check_rays(const TraceOutput& out, const std::string& what) {
+        if (!first_trace_) first_trace_ = out;
+        else if (auto d = ray_count_difference(*first_trace_, out); !d.empty())
+            throw Nondeterministic("nondeterministic render: " + d + " (first render vs " + what + ")");
+    }
+
+    TraceOutput trace(const TraceRequest& req) const { return trace_model(*accel_, model_, req); }
+
+    const AcceleratorInfo& info_;
+    const ParamSet& params_;
+    const LoadedModel& model_;
+    const RenderSettings& render_;
+    const MeasureSettings& settings_;
+    const StageFn& stage_;
+    const Clock::time_point start_;
+    TraceRequest timed_, counting_, error_trace_;
+
+    Measurement m_;          // its stage: the last one begun
+    std::string failure_;    // the first failure; later repetitions are skipped with it
+    bool timed_out_ = false;
+    int build_calls_ = 0, render_calls_ = 0;
+    std::unique_ptr<Accelerator> accel_;  // the last one built; the render benchmark traces it
+    std::optional<BuildStats> first_build_;
+    std::optional<TraceOutput> first_trace_, first_count_, second_count_;
+    std::optional<uint64_t> instructions_;
+};
+
+}  // namespace
+
+Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
+                    const LoadedModel& model, const RenderSettings& render_settings, const MeasureSettings& settings,
+                    const StageFn& stage) {
+    reset_peak_rss();
+    MeasuringStages stages(info, params, model, render_settings, settings, stage);
+    CaptureReporter reporter(settings);
+    benchmark::ClearRegisteredBenchmarks();
+    for (auto [suffix, fn] : {std::pair<const char*, std::function<void(benchmark::State&)>>{
+                                  "/build", [&](benchmark::State& st) { stages.build_benchmark(st); }},
+                              {"/render", [&](benchmark::State& st) { stages.render_benchmark(st); }}})
+        benchmark::RegisterBenchmark((name + suffix).c_str(), fn)
+            ->UseManualTime()
+            ->Iterations(1)
+            ->Repetitions(settings.repetitions)
+            ->Unit(benchmark::kMillisecond);
+    try {
+        benchmark::RunSpecifiedBenchmarks(&reporter, std::string("."));
+    } catch (const std::exception& e) {
+        stages.failed(e);
+    }
+    benchmark::ClearRegisteredBenchmarks();
+    std::cout.flush();
+    return stages.result(reporter, name);
 }
 
 std::map<std::string, std::string> error_columns(const HitErrors& hits, const std::optional<ImageErrors>& image) {
-    auto real = [](double v) {
-        char buf[40];
-        std::snprintf(buf, sizeof buf, "%.9g", v);
-        return std::string(buf);
-    };
+    auto real = [](double v) { return number_text(v); };
     std::map<std::string, std::string> c = {{"false_misses", std::to_string(hits.false_misses)},
                                             {"false_hits", std::to_string(hits.false_hits)},
                                             {"prim_mismatches", std::to_string(hits.prim_mismatches)},
@@ -438,11 +524,8 @@ std::string unescape(const std::string& s) {
     return out;
 }
 
-std::string real_text(double v) {
-    char buf[40];
-    std::snprintf(buf, sizeof buf, "%.17g", v);
-    return buf;
-}
+// Exact: 17 significant digits give back the same double.
+std::string real_text(double v) { return number_text(v, 17); }
 
 std::string list_text(const std::vector<double>& v) {
     std::string s;

@@ -3,12 +3,14 @@
 //
 // Each combination registers two benchmarks at run time, `<name>/build` and
 // `<name>/render`, with manual timing, one iteration per repetition and `repetitions`
-// repetitions. Before the first counted build come `warmup` uncounted builds (GB 1.7.1's
-// MinWarmUpTime cannot be combined with a fixed iteration count). Timed renders run with
-// CountMode::Off; the deterministic counters (primitive tests, node visits) come from a
-// counting render (CountMode::Totals) done before the timed repetitions — it is also the
-// first render warm-up, further ones (warmup > 1) run the timed path — and once after them. Everything deterministic is compared across every run
-// that produces it — build statistics across all builds, ray and hit counts across all
+// repetitions. Their stages, in order (measure.cpp, MeasuringStages, one function each):
+// `warmup` uncounted builds (GB 1.7.1's MinWarmUpTime cannot be combined with a fixed
+// iteration count); the timed builds; a counting render (CountMode::Totals: the
+// deterministic counters, primitive tests and node visits), which is also the first render
+// warm-up, further ones (warmup > 1) running the timed path; the timed renders
+// (CountMode::Off); a second counting render after them, which is also the error trace
+// against the reference. Everything deterministic is compared across every run that
+// produces it — build statistics across all builds, ray and hit counts across all
 // renders, traversal counters across both counting renders — and any difference fails the
 // combination with a message saying which value changed.
 #pragma once

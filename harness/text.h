@@ -3,6 +3,7 @@
 // (GCC bug 105329), which -Werror turns into a build failure.
 #pragma once
 
+#include <cstdio>
 #include <string>
 #include <string_view>
 
@@ -24,6 +25,18 @@ template <class... Parts>
 void append_item(std::string& list, std::string_view separator, const Parts&... parts) {
     if (!list.empty()) list.append(separator);
     (list.append(std::string_view(parts)), ...);
+}
+
+}  // namespace accelbench
+
+namespace accelbench {
+
+// A number in printf's %.<digits>g: the CSV's measured values (9 digits, enough for a
+// float's round trip), rates and ratios (6), a value as a user wrote it (6, "0.1").
+inline std::string number_text(double v, int digits = 9) {
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    return buf;
 }
 
 }  // namespace accelbench

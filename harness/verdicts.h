@@ -1,9 +1,9 @@
-// Robustness cases in a benchmark run (issue 6): a combination whose model is a case of
-// the extreme-case catalogue is judged against the case's requirements instead of timed,
-// and `accelbench run` ends with a table of every case's verdict per accelerator.
+// Robustness cases in a benchmark run: a combination whose model is a case of the
+// extreme-case catalogue is judged against the case's requirements instead of timed;
+// `accelbench run` ends with a table of every case's verdict per accelerator
+// (sinks/verdict_table.h).
 #pragma once
 
-#include <cstdio>
 #include <map>
 #include <string>
 #include <vector>
@@ -24,25 +24,5 @@ namespace accelbench {
 // resolved for the case's scene).
 Measurement judge_measurement(const std::string& accel, const std::map<std::string, std::string>& given,
                               const RobustnessCase& c, const StageFn& stage = {});
-
-// The verdicts of a run: cases as rows, accelerator settings as numbered columns (their
-// legend above the table), then every failure with its counts and detail.
-class VerdictTable {
-public:
-    // One combination's outcome: its verdict when judged, else its status (a timeout or a
-    // crash of a case is a failure of its own kind).
-    void add(const std::string& case_label, const Combination& c, const Measurement& m);
-    bool empty() const { return cells_.empty(); }
-    void print(std::FILE* out) const;
-
-private:
-    struct Cell {
-        size_t row, column;
-        std::string text;     // pass, FAIL, t/o, err, skip
-        std::string details;  // failures only
-    };
-    std::vector<std::string> rows_, columns_;
-    std::vector<Cell> cells_;
-};
 
 }  // namespace accelbench

@@ -1,0 +1,100 @@
+#include "sinks/results_csv.h"
+
+#include "provenance.h"
+#include "stats.h"
+#include "text.h"
+
+namespace accelbench {
+
+namespace {
+
+// The columns every row of a combination has, whatever its status.
+Row identification_row(const Config& config, const CombinationResult& result) {
+    const Combination& c = result.combination;
+    const ModelSpec& model = result.model;
+    const Provenance& p = provenance();
+    Row r;
+    r["config"] = config.name;
+    r["combo_id"] = c.id;
+    r["model"] = model.label;
+    if (result.triangles) r["triangles"] = std::to_string(*result.triangles);
+    if (result.vertices) r["vertices"] = std::to_string(*result.vertices);
+    const bool judged = model.kind == ModelSpec::Kind::Case;  // its own rays; no image, no shadow rays
+    r["ray_source"] = judged ? "robustness-case" : model.rays ? model.rays->display : "camera";
+    r["accel"] = c.accel;
+    r["params"] = c.params.canonical();
+    for (const auto& [k, v] : c.params.items()) r[param_column(k)] = v;
+    if (!model.rays && !judged) {
+        r["width"] = std::to_string(config.render.width);
+        r["height"] = std::to_string(config.render.height);
+        r["spp"] = std::to_string(config.render.spp);
+    }
+    if (!judged) {
+        r["light"] = config.render.light ? "true" : "false";
+        r["shading"] = config.render.shading ? "true" : "false";
+    }
+    r["git_sha"] = p.git_sha;
+    r["git_dirty"] = p.git_dirty ? "true" : "false";
+    r["compiler"] = p.compiler;
+    r["build_type"] = p.build_type;
+    r["cpu"] = p.cpu;
+    r["threads"] = std::to_string(config.render.threads);
+    r["embree_version"] = p.embree_version;
+    r["timestamp"] = result.timestamp;
+    return r;
+}
+
+void add_measurement(Row& r, const Measurement& m) {
+    r["status"] = m.status;
+    r["message"] = m.message;
+    if (m.status != "ok") return;  // nothing that could be mistaken for a result
+    for (const auto& [k, v] : m.columns) r[k] = v;
+    if (m.render_s.empty()) {  // a judged robustness case: a verdict, no timing
+        r["rays"] = std::to_string(m.rays);
+        for (const auto& f : build_stat_fields())
+            if (auto v = f.get(m.build)) r[f.name] = std::to_string(uint64_t(*v));
+        return;
+    }
+    r["repetitions"] = std::to_string(m.render_s.size());
+    for (auto [prefix, samples] : {std::pair<std::string, const std::vector<double>*>{"build_s", &m.build_s},
+                                   {"render_s", &m.render_s}}) {
+        const Summary s = summarize(*samples);
+        r[prefix + "_median"] = number_text(s.median);
+        r[prefix + "_mean"] = number_text(s.mean);
+        if (s.stddev) r[prefix + "_stddev"] = number_text(*s.stddev);
+        if (s.ci_lo) r[prefix + "_ci_lo"] = number_text(*s.ci_lo);
+        if (s.ci_hi) r[prefix + "_ci_hi"] = number_text(*s.ci_hi);
+        if (s.coverage) r["ci_coverage"] = number_text(*s.coverage, 6);
+    }
+    r["rays"] = std::to_string(m.rays);
+    r["hits"] = std::to_string(m.hits);
+    r["shadow_rays"] = std::to_string(m.shadow_rays);
+    r["shadow_hits"] = std::to_string(m.shadow_hits);
+    const uint64_t all_rays = m.rays + m.shadow_rays;
+    r["mrays_per_s"] = number_text(double(all_rays) / summarize(m.render_s).median * 1e-6, 6);
+    for (const auto& f : build_stat_fields())
+        if (auto v = f.get(m.build)) r[f.name] = f.count ? std::to_string(*(m.build.*f.count)) : number_text(*v, 12);
+    std::string extra;
+    for (const auto& [k, v] : m.build.extra) append_item(extra, ";", k, "=", number_text(v));
+    r["build_extra"] = extra;
+    if (m.counts) {
+        r["prim_tests"] = std::to_string(m.counts->prim_tests);
+        r["node_visits"] = std::to_string(m.counts->node_visits);
+        r["box_tests"] = std::to_string(m.counts->box_tests);
+        if (all_rays) {
+            r["prim_tests_per_ray"] = number_text(double(m.counts->prim_tests) / double(all_rays), 6);
+            r["node_visits_per_ray"] = number_text(double(m.counts->node_visits) / double(all_rays), 6);
+        }
+    }
+    if (m.instructions) r["instructions"] = std::to_string(*m.instructions);
+}
+
+}  // namespace
+
+Row result_row(const Config& config, const CombinationResult& result) {
+    Row r = identification_row(config, result);
+    add_measurement(r, result.measurement);
+    return r;
+}
+
+}  // namespace accelbench
