@@ -87,7 +87,7 @@ test-sanitize: deps
 # skipped) unless FRESH=1. QUICK=1 runs reduced configs into results/quick/ and leaves
 # the committed reference run in results/ alone.
 ifeq ($(QUICK),)
-RUN_CONFIGS    := table2 table4 table5
+RUN_CONFIGS    := table2 table4 table5 ray-sets thread-scaling
 SCALING_CONFIG := scaling
 RUN_DIR        := results/csv
 ANALYSIS_OUT   := results
