@@ -17,25 +17,31 @@ FRESH       ?=
 # Debian packages the build, tests and analysis need (checked with dpkg first).
 DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
   libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
-  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev valgrind \
+  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev valgrind \
   python3 python3-venv python3-pip
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: deps venv build models test test-cpp test-python reproduce-tables \
-        test-sanitize regress update-baseline grid-search robustness clean
+.PHONY: deps venv build models test test-cpp test-python reproduce-tables reference-run \
+        test-sanitize regress update-baseline grid-search robustness clean \
+        slurm-deps slurm-submit test-slurm
 
 # ---- set-up -----------------------------------------------------------------------
 # Installs only what is missing; `apt-get update` runs once, and only if something is.
-deps:
-	@missing=""; \
-	for p in $(DEB_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
-	command -v npm >/dev/null 2>&1 || missing="$$missing npm"; \
-	if [ -n "$$missing" ]; then \
-	  echo "deps: installing$$missing"; \
+# $(call apt_missing,PACKAGES) adds the PACKAGES dpkg does not know to $$missing;
+# $(call apt_install,TARGET) installs $$missing (waiting for another apt's lock).
+apt_missing = for p in $(1); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done
+apt_install = if [ -n "$$missing" ]; then \
+	  echo "$(1): installing$$missing"; \
 	  $(SUDO) apt-get update -qq && \
-	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
-	else echo "deps: all Debian packages present"; fi
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -o DPkg::Lock::Timeout=300 -y -qq \
+	    --no-install-recommends $$missing; \
+	else echo "$(1): all Debian packages present"; fi
+
+deps:
+	@missing=""; $(call apt_missing,$(DEB_PACKAGES)); \
+	command -v npm >/dev/null 2>&1 || missing="$$missing npm"; \
+	$(call apt_install,deps)
 
 # The venv is rebuilt when the pinned requirements change.
 $(VENV)/.installed: analysis/requirements.txt | deps
@@ -82,40 +88,37 @@ test-sanitize: deps
 	UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(SAN_DIR) --output-on-failure -j $(JOBS)
 
 # ---- the main job ----------------------------------------------------------------------
-# Runs the report's tables through the harness and the analysis over their CSVs.
-# Finished CSVs are reused (the harness resumes: combinations already measured are
-# skipped) unless FRESH=1. QUICK=1 runs reduced configs into results/quick/ and leaves
-# the committed reference run in results/ alone.
-ifeq ($(QUICK),)
-RUN_CONFIGS    := table2 table4 table5 ray-sets thread-scaling
-SCALING_CONFIG := scaling
-RUN_DIR        := results/csv
-ANALYSIS_OUT   := results
-else
-RUN_CONFIGS    := quick-table2 quick-tables
-SCALING_CONFIG := scaling-quick
-RUN_DIR        := results/quick/csv
-ANALYSIS_OUT   := results/quick
+# `make reproduce-tables` measures on this machine every time, into a run directory of its
+# own, results/runs/<UTC time>-<short sha>[-quick]/ (csv/, tables/, figures/, REPORT.md,
+# run.json), then points results/latest at it. It continues a run only when the newest run
+# of the same configs is unfinished and was measured by a build with the same provenance
+# (`accelbench provenance`); otherwise it starts afresh and says why; FRESH=1 never
+# continues. The driver: analysis/accelbench_analysis/reproduce.py. REPORT.md compares
+# the run with the report and the committed reference run (results/reference/).
+# The configs of the job, in order (add one here):
+REPRODUCE_CONFIGS := table2 table4 table5 scaling ray-sets thread-scaling
+SCALING_CONFIG    := scaling
+ifneq ($(QUICK),)
+# QUICK=1: reduced configs (smaller models and images, one repetition), no cost images.
+REPRODUCE_CONFIGS := quick-table2 quick-tables scaling-quick
+SCALING_CONFIG    := scaling-quick
 endif
+REFERENCE_RUN := results/reference
+COST_IMAGES    = harness/cost_images.sh $(BUILD_DIR) $(PYTHON)
+REPRODUCE      = $(ANALYSIS) reproduce $(foreach c,$(REPRODUCE_CONFIGS),configs/$(c).yaml) \
+  --scaling configs/$(SCALING_CONFIG).yaml --accelbench $(ACCELBENCH) \
+  --report-numbers results/report/report-tables.csv --reference-run $(REFERENCE_RUN)
 
 reproduce-tables: build models venv
-	@mkdir -p $(RUN_DIR)
-	@set -e; start=$$(date +%s); \
-	for c in $(RUN_CONFIGS) $(SCALING_CONFIG); do \
-	  csv=$(RUN_DIR)/$$c.csv; \
-	  if [ -n "$(FRESH)" ]; then rm -f "$$csv" "$${csv%.csv}.reps.csv"; fi; \
-	  if [ -f "$$csv" ]; then resume=--resume; else resume=; fi; \
-	  echo "== $$c -> $$csv $$resume"; \
-	  $(ACCELBENCH) run configs/$$c.yaml --out "$$csv" $$resume; \
-	done; \
-	echo "== analysis -> $(ANALYSIS_OUT)"; \
-	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis scaling $(RUN_DIR)/$(SCALING_CONFIG).csv --out $(ANALYSIS_OUT); \
-	if [ -z "$(QUICK)" ]; then echo "== cost images"; harness/cost_images.sh $(BUILD_DIR) $(PYTHON) $(ANALYSIS_OUT); fi; \
-	PYTHONPATH=analysis $(PYTHON) -m accelbench_analysis all $(addprefix $(RUN_DIR)/,$(addsuffix .csv,$(RUN_CONFIGS))) \
-	  --out $(ANALYSIS_OUT) --reference results/report/report-tables.csv; \
-	echo "reproduce-tables: done in $$(( $$(date +%s) - start )) s; see $(ANALYSIS_OUT)/REPORT.md"
+	$(REPRODUCE) $(if $(QUICK),--tag quick,--cost-images "$(COST_IMAGES)") $(if $(FRESH),--fresh)
 
-# ---- regression check (issue 7) -----------------------------------------------------
+# The committed reference run: the full job measured from scratch into results/reference/
+# from a clean work tree only (refused otherwise: its rows must name the code that ran);
+# its REPORT.md names the commit and machine. Commit the result.
+reference-run: build models venv
+	$(REPRODUCE) --into $(REFERENCE_RUN) --require-clean-tree --cost-images "$(COST_IMAGES)"
+
+# ---- regression check against the committed baseline -------------------------------
 # `make regress`: configs/ci.yaml measured twice — a timed run (counts and times) and a
 # run under callgrind (the `instructions` of one render per combination) — joined by
 # combo_id and compared with the committed baseline by the analysis (three tiers, exit
@@ -165,7 +168,7 @@ update-baseline: build
 	$(call ci_join,$(BASELINE),$(REGRESS_DIR)/baseline/timed.csv,$(REGRESS_DIR)/baseline/callgrind.csv)
 	@echo "update-baseline: wrote $(BASELINE); commit it saying why the baseline changed"
 
-# ---- parameter grid search (issue 7) ------------------------------------------------
+# ---- parameter grid search ----------------------------------------------------------
 # `make grid-search [GRID_CONFIG=configs/grid-NAME.yaml]`: runs the grid through the
 # harness (resumable: rerunning continues an interrupted run) and ranks it into
 # results/grid/NAME/. A config with `grid.mode: successive_halving` runs the cheap pass,
@@ -191,7 +194,7 @@ grid-search: build venv
 	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
 	fi
 
-# ---- robustness (issue 6) ----------------------------------------------------------------
+# ---- robustness: extreme cases and stiff parameters -----------------------------------
 # configs/robustness.yaml: every case of the extreme-case catalogue judged by every
 # accelerator setting (the verdict table ends the log), the stiff parameters timed on a
 # dense cluster and the 871k dragon; then the analysis's robustness report. Always a fresh
@@ -204,6 +207,48 @@ robustness: build models venv
 	set -o pipefail; $(ACCELBENCH) run --out $(ROBUSTNESS_DIR)/robustness.csv configs/robustness.yaml \
 	  | tee $(ROBUSTNESS_DIR)/robustness.log | sed -n '/^Robustness verdicts/,$$p'
 	$(ANALYSIS) robustness --csv $(ROBUSTNESS_DIR)/robustness.csv --out $(ROBUSTNESS_DIR)
+
+# ---- Slurm (issue 16) ------------------------------------------------------------------
+# `make slurm-submit CONFIG=configs/NAME.yaml SHARDS=N`: an array job of N tasks, task i
+# running `accelbench run --shard i/N` into $(SLURM_OUT)/shard-<i>ofN.csv, and a merge job
+# (--dependency=afterok on the array) that joins them into $(SLURM_OUT)/NAME.csv, refusing
+# a partial result, and runs the analysis into $(SLURM_OUT)/analysis/ (`grid` for a grid
+# config, `all` otherwise). Prints both job ids. After a failed or cancelled task, ARRAY=<ids>
+# (e.g. ARRAY=3 or ARRAY=1,3) resubmits only those shards (their CSVs are resumed) and a
+# new merge job. The checkout (build/, .venv/, models) must be on a filesystem the nodes
+# share. harness/slurm/ holds the scripts. Site settings (empty: the site's default):
+CONFIG           ?=
+SHARDS           ?= 4
+ARRAY            ?=
+SLURM_OUT        ?= results/runs/slurm-$(basename $(notdir $(CONFIG)))
+PARTITION        ?=
+TIME_LIMIT       ?= 4:00:00
+MERGE_TIME_LIMIT ?= 1:00:00
+CPUS_PER_TASK    ?= 1
+MEM_PER_TASK     ?=
+ACCOUNT          ?=
+SBATCH_ARGS      ?=
+SLURM_PACKAGES   := slurm-wlm munge
+
+slurm-submit: build venv
+	@[ -n "$(CONFIG)" ] || { echo "slurm-submit: give CONFIG=configs/NAME.yaml (and SHARDS=N)" >&2; exit 2; }
+	@PARTITION='$(PARTITION)' TIME_LIMIT='$(TIME_LIMIT)' MERGE_TIME_LIMIT='$(MERGE_TIME_LIMIT)' \
+	  CPUS_PER_TASK='$(CPUS_PER_TASK)' MEM_PER_TASK='$(MEM_PER_TASK)' ACCOUNT='$(ACCOUNT)' \
+	  SBATCH_ARGS='$(SBATCH_ARGS)' harness/slurm/submit.sh $(abspath $(ACCELBENCH)) $(abspath $(PYTHON)) \
+	  $(CONFIG) $(SHARDS) $(SLURM_OUT) $(ARRAY)
+
+# Debian 12's Slurm (slurmctld, slurmd, the client commands) and munge, for test-slurm.
+slurm-deps:
+	@missing=""; $(call apt_missing,$(SLURM_PACKAGES)); $(call apt_install,slurm-deps)
+
+# A real single-node Slurm cluster on 127.0.0.1 in a temporary directory (stopped and
+# removed on exit, failure included): SLURM_TEST_CONFIG as 4 tasks with one cancelled,
+# the merge refusing the partial result, the missing shard resubmitted, the merge checked
+# against a single-process run; no daemon left. About a minute on 2 cores. As root.
+SLURM_TEST_CONFIG ?= configs/grid-kdtree-ci.yaml
+
+test-slurm: build venv slurm-deps
+	harness/slurm/test_slurm.sh $(abspath $(ACCELBENCH)) $(abspath $(PYTHON)) $(SLURM_TEST_CONFIG)
 
 clean:
 	rm -rf $(BUILD_DIR) $(SAN_DIR)

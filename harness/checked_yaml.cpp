@@ -53,16 +53,23 @@ ConfigError single_issue(const std::string& file, int line, int column, const st
 }
 
 YAML::Node load_yaml_document(const std::string& path) {
-    YAML::Node root;
+    std::vector<YAML::Node> documents;
     try {
-        root = YAML::LoadFile(path);
+        documents = YAML::LoadAllFromFile(path);
     } catch (const YAML::BadFile&) {
         throw single_issue(path, 0, 0, "cannot open the config file");
     } catch (const YAML::Exception& e) {
         throw single_issue(path, e.mark.line + 1, e.mark.column + 1, "YAML syntax error: " + e.msg);
     }
-    if (root.IsNull()) throw single_issue(path, 1, 1, "the config is empty");
-    return root;
+    // A second document (after `---`) would be ignored by a reader of the first: refused,
+    // so that nothing the user wrote is silently dropped.
+    if (documents.size() > 1) {
+        const YAML::Mark m = documents[1].Mark();
+        throw single_issue(path, m.line >= 0 ? m.line + 1 : 0, m.column >= 0 ? m.column + 1 : 0,
+                           "a second YAML document (after '---'): a config is one document; join them or use two files");
+    }
+    if (documents.empty() || documents[0].IsNull()) throw single_issue(path, 1, 1, "the config is empty");
+    return documents[0];
 }
 
 const char* kind_of(const YAML::Node& n) {

@@ -49,7 +49,7 @@ private:
 ConfigError single_issue(const std::string& file, int line, int column, const std::string& message);
 
 // The document of a YAML file. Throws ConfigError: the file cannot be opened, a syntax
-// error (at its line and column), an empty document.
+// error (at its line and column), an empty document, a second document.
 YAML::Node load_yaml_document(const std::string& path);
 
 // "a mapping", "a list", "a scalar", ...: what a value is, for "expected X, got Y".

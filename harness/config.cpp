@@ -128,6 +128,8 @@ public:
         check_models();
         if (auto* e = top.require("accelerators"))
             read_list(c_, e->value, "accelerators", [&](const YAML::Node& n, const std::string& p) { read_accelerator(n, p); });
+        check_combination_count(top);
+        check_reference_size();
         if (auto* e = top.find("skip"))
             read_list(c_, e->value, "skip", [&](const YAML::Node& n, const std::string& p) { read_skip(n, p); }, true);
 
@@ -337,8 +339,13 @@ private:
         } else if (has_path) {
             m.kind = ModelSpec::Kind::Path;
             m.resolved_path = resolve(m.name);
-            if (!fs::is_regular_file(m.resolved_path)) {
+            std::error_code ec;
+            if (!fs::exists(m.resolved_path, ec)) {
                 c_.error(given->value, f.child(form), "no such mesh file: " + m.resolved_path);
+                ok = false;
+            } else if (!fs::is_regular_file(m.resolved_path, ec)) {
+                // a directory or a FIFO: there, but not something a mesh can be read from
+                c_.error(given->value, f.child(form), "not a regular file (a mesh file is needed): " + m.resolved_path);
                 ok = false;
             }
             m.label = m.name;
@@ -495,7 +502,8 @@ private:
     }
 
     // Two models with the same identity would be measured twice under one id; two with
-    // the same label could not be told apart in the CSV.
+    // the same label could not be told apart in the CSV. One pass with maps: a list of
+    // 100,000 models is checked in well under a second.
     void check_models() {
         // Ray sets start from the camera's rays and their reference hits.
         for (const ModelSpec& m : cfg_.models)
@@ -503,17 +511,67 @@ private:
                 c_.issues.push_back({m.mark, m.key_path,
                                      std::string("`ray_sets` are made from a model's camera view; ") +
                                          (m.rays ? "this model traces a ray file" : "a robustness case is judged, not timed")});
-        for (size_t i = 0; i < cfg_.models.size(); ++i)
-            for (size_t j = 0; j < i; ++j) {
-                const ModelSpec& a = cfg_.models[j];
-                const ModelSpec& b = cfg_.models[i];
-                const SourceMark& m = b.mark;
-                if (a.key == b.key)
-                    c_.issues.push_back({m, b.key_path, "the same model as " + a.key_path + " ('" + a.label + "')"});
-                else if (a.label == b.label)
-                    c_.issues.push_back({m, b.key_path, "the same label '" + b.label + "' as " + a.key_path +
-                                                            ": give one of them a distinct `label:`"});
+        std::map<std::string, size_t> by_key, by_label;
+        for (size_t i = 0; i < cfg_.models.size(); ++i) {
+            const ModelSpec& b = cfg_.models[i];
+            const auto [key, new_key] = by_key.emplace(b.key, i);
+            const auto [label, new_label] = by_label.emplace(b.label, i);
+            if (!new_key) {
+                const ModelSpec& a = cfg_.models[key->second];
+                c_.issues.push_back({b.mark, b.key_path, "the same model as " + a.key_path + " ('" + a.label + "')"});
+            } else if (!new_label) {
+                const ModelSpec& a = cfg_.models[label->second];
+                c_.issues.push_back({b.mark, b.key_path, "the same label '" + b.label + "' as " + a.key_path +
+                                                             ": give one of them a distinct `label:`"});
             }
+        }
+    }
+
+    // The number of combinations (models x the sum over accelerator entries of the product
+    // of their axes) is bounded before anything is expanded: three ranges of 10,000 values
+    // each would otherwise allocate 10^12 combinations, with --dry-run too.
+    void check_combination_count(const Fields& top) {
+        uint64_t per_model = 0;
+        bool over = false;
+        for (const auto& a : cfg_.accelerators) {
+            uint64_t product = 1;
+            for (const auto& axis : a.axes) over |= __builtin_mul_overflow(product, uint64_t(axis.values.size()), &product);
+            over |= __builtin_add_overflow(per_model, product, &per_model);
+        }
+        uint64_t total = 0;
+        over |= __builtin_mul_overflow(per_model, uint64_t(cfg_.models.size()), &total);
+        if (over || total > kMaxCombinations) {
+            const auto* e = top.find("accelerators");
+            c_.error(e ? e->value : top.node(), "accelerators",
+                     "the config expands to " + (over ? std::string("more than 2^64") : std::to_string(total)) +
+                         " combinations (" + std::to_string(cfg_.models.size()) + (cfg_.models.size() == 1 ? " model x " : " models x ") +
+                         (over ? std::string("too many") : std::to_string(per_model)) +
+                         " accelerator settings); at most " + std::to_string(kMaxCombinations) +
+                         " in one config: split it, or use grid.mode: successive_halving");
+        }
+    }
+
+    // With error columns, the reference keeps every primary ray's hit, and so does the
+    // measurement's second counting render (16 bytes each, plus the images in an image
+    // run): an image that cannot fit is refused here, not as std::bad_alloc in a row.
+    void check_reference_size() {
+        if (!cfg_.errors) return;
+        const RenderSettings& r = cfg_.render;
+        const uint64_t camera_rays = uint64_t(r.width) * uint64_t(r.height) * uint64_t(r.spp);
+        uint64_t most = 0;
+        const ModelSpec* worst = nullptr;
+        for (const auto& m : cfg_.models) {
+            if (m.kind == ModelSpec::Kind::Case) continue;  // its own small ray set
+            const uint64_t rays = m.rays ? uint64_t(m.rays->rays.size()) : camera_rays;
+            if (rays > most) most = rays, worst = &m;
+        }
+        if (most <= kMaxReferenceRays) return;
+        const std::string what = worst->rays ? "the ray file " + worst->rays->display + " has " + std::to_string(most) + " rays"
+                                             : "render: width x height x spp = " + std::to_string(most) + " primary rays";
+        c_.issues.push_back({worst->mark, worst->key_path,
+                             what + "; with error columns the reference keeps a 16-byte hit per primary ray (twice, "
+                                    "with the measurement's), at most " + std::to_string(kMaxReferenceRays) +
+                                 " rays: a smaller image or spp, or errors: false"});
     }
 
     void read_accelerator(const YAML::Node& n, const std::string& path) {

@@ -40,7 +40,7 @@ struct ModelTransformSpec {
 };
 
 struct ModelSpec {
-    // Case: a scene of the extreme-case catalogue (core/accelbench/robustness_cases.h),
+    // Case: a scene of the extreme-case catalogue (core/accelbench/verify/robustness_cases.h),
     // judged rather than timed.
     enum class Kind { Registry, Path, Procedural, Case };
     Kind kind = Kind::Registry;
@@ -100,7 +100,7 @@ struct Config {
     int warmup = 1;
     double timeout_s = 300;
     // Trace every combination's rays through the `reference` accelerator too and write the
-    // error columns (issue 6); `errors: false` turns it off.
+    // error columns; `errors: false` turns it off.
     bool errors = true;
     RenderSettings render;  // shading defaults to off in configs (see docs/configs.md)
     // Absent: one row per combination, primary and shadow rays timed together as the report
@@ -113,6 +113,11 @@ struct Config {
     std::vector<AcceleratorSpec> accelerators;
     std::vector<SkipRule> skip;
 };
+
+// Limits that load_config enforces (docs/configs.md "Limits"): the combinations of one
+// config, and the primary rays of a model when error columns are measured.
+inline constexpr uint64_t kMaxCombinations = 100000;
+inline constexpr uint64_t kMaxReferenceRays = uint64_t(1) << 25;  // 33,554,432: 512 MiB of hits
 
 // Reads and validates the config at `path` against the accelerator registry, the
 // procedural scene registry and the model registry. Throws ConfigError listing every

@@ -1,7 +1,8 @@
 #!/bin/sh
-# Cost images (issue 5): for the bunny, Conference and the procedural forest, the shaded
+# Cost images (where each structure spends its traversal work): for the bunny, Conference
+# and the procedural forest, the shaded
 # image and per-pixel node-visit / triangle-test heatmaps of the SAH BVH, the LBVH and the
-# kd-tree at 640x480, then one figure per model, results/figures/cost-<model>.png.
+# kd-tree at 640x480, then one figure per model, OUT_DIR/figures/cost-<model>.png.
 #
 #   harness/cost_images.sh [BUILD_DIR [PYTHON [OUT_DIR]]]
 #

@@ -1,5 +1,7 @@
 // CSV as RFC 4180 has it: fields with a comma, a double quote, CR or LF are quoted, quotes
 // inside doubled. Lines end with LF.
+// Our own: libcsv, the C CSV parser Debian packages, hands rows to callbacks without where
+// each ends in the file, which a resumed run needs to cut a torn last line.
 #pragma once
 
 #include <cstdint>

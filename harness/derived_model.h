@@ -1,5 +1,5 @@
 // Registry models at other sizes (`{name: stanford-dragon, decimate: 100000}`), made by
-// core/accelbench/mesh_transform.h and cached on disk, because decimating the 871k dragon
+// core/accelbench/scene/mesh_transform.h and cached on disk, because decimating the 871k dragon
 // takes far longer than loading the result.
 //
 // The cache file is <project>/models/derived/<name>-<decimate|subdivide>-<N>.ply, a binary

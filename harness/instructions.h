@@ -1,5 +1,5 @@
-// Instruction counts of one measured render under callgrind (issue 7, tier 2 of
-// `make regress`).
+// Instruction counts of one measured render under callgrind (tier 2 of `make regress`:
+// a count that, unlike time, does not depend on the machine's load).
 //
 // Run as
 //   valgrind --tool=callgrind --instr-atstart=no --callgrind-out-file=OUT

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include "accelbench/scene/mesh_io.h"
@@ -97,6 +98,58 @@ const GeneratedRaySet& LoadedModel::ray_set(RaySetKind kind) const {
         for (const GeneratedRaySet& s : *ray_sets)
             if (s.kind == kind) return s;
     throw std::logic_error("ray set '" + std::string(ray_set_name(kind)) + "' was not made for this model");
+}
+
+namespace {
+
+template <class T>
+void put(std::string& out, const T& v) {
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+}
+
+template <class T>
+T take(const std::string& in, size_t& at) {
+    if (at + sizeof(T) > in.size()) throw std::runtime_error("reference answers: truncated");
+    T v;
+    std::memcpy(&v, in.data() + at, sizeof v);
+    at += sizeof v;
+    return v;
+}
+
+}  // namespace
+
+// Raw bytes, in this machine's layout: they only cross a pipe to the parent process.
+std::string reference_bytes(const ReferenceAnswers& r) {
+    std::string out;
+    put(out, r.seconds);
+    put(out, uint64_t(r.hits.size()));
+    out.append(reinterpret_cast<const char*>(r.hits.data()), r.hits.size() * sizeof(Hit));
+    put(out, uint8_t(r.image.has_value()));
+    if (r.image) {
+        put(out, int32_t(r.image->width));
+        put(out, int32_t(r.image->height));
+        out.append(reinterpret_cast<const char*>(r.image->rgb.data()), r.image->rgb.size());
+    }
+    return out;
+}
+
+std::shared_ptr<const ReferenceAnswers> reference_from_bytes(const std::string& in) {
+    auto r = std::make_shared<ReferenceAnswers>();
+    size_t at = 0;
+    r->seconds = take<double>(in, at);
+    const uint64_t n = take<uint64_t>(in, at);
+    if (n > (in.size() - at) / sizeof(Hit)) throw std::runtime_error("reference answers: truncated");
+    r->hits.resize(n);
+    std::memcpy(r->hits.data(), in.data() + at, n * sizeof(Hit));
+    at += n * sizeof(Hit);
+    if (take<uint8_t>(in, at)) {
+        const int32_t w = take<int32_t>(in, at), h = take<int32_t>(in, at);
+        Image image(w, h);
+        if (in.size() - at != image.rgb.size()) throw std::runtime_error("reference answers: truncated image");
+        std::memcpy(image.rgb.data(), in.data() + at, image.rgb.size());
+        r->image = std::move(image);
+    }
+    return r;
 }
 
 std::optional<uint64_t> known_triangles(const ModelSpec& spec, const ModelRegistry& registry) {

@@ -17,7 +17,7 @@ class ModelRegistry;
 
 struct RobustnessCase;
 
-// What the `reference` accelerator answers for a model's rays (issue 6): the error columns
+// What the `reference` accelerator answers for a model's rays: the error columns
 // of every combination on the model are measured against it. Traced once per model, in
 // the parent process, before any combination's measurement.
 struct ReferenceAnswers {
@@ -58,6 +58,10 @@ void add_reference_answers(LoadedModel& model, const RenderSettings& render);
 // reference's hits and its light), once per model in the parent process, outside anything
 // timed, so every accelerator traces the same rays. Prints each set's size and hash.
 void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySetsSpec& spec);
+// The answers as bytes and back, to bring them from the child process that traces them
+// under the time limit (runner.cpp) to the parent.
+std::string reference_bytes(const ReferenceAnswers& answers);
+std::shared_ptr<const ReferenceAnswers> reference_from_bytes(const std::string& bytes);
 
 // The view: the config's camera, else the registry's or procedural scene's own, else
 // Camera::fit for the image's aspect. The light: the registry's or procedural scene's,

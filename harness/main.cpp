@@ -3,6 +3,7 @@
 #include <cstring>
 
 #include "cli.h"
+#include "provenance.h"
 #include "run_command.h"
 
 namespace {
@@ -19,11 +20,12 @@ const Command kCommands[] = {
     {"render", accelbench::render_command, "render one model with one accelerator, print what it measured"},
     {"list", accelbench::list_command, "accelerators with their parameters and defaults; procedural scenes"},
     {"models", accelbench::models_command, "the model registry: where each file was found (--fetch: download missing)"},
+    {"provenance", accelbench::provenance_command, "the provenance columns this build writes into every results row"},
 };
 
 int usage(FILE* to) {
     std::fprintf(to, "usage: accelbench COMMAND [ARGS]\n\ncommands:\n");
-    for (const auto& c : kCommands) std::fprintf(to, "  %-8s %s\n", c.name, c.help);
+    for (const auto& c : kCommands) std::fprintf(to, "  %-10s %s\n", c.name, c.help);
     return to == stdout ? 0 : 2;
 }
 

@@ -116,12 +116,12 @@ std::string counter_difference(const TraceOutput& a, const TraceOutput& b) {
     return "";
 }
 
-// Primary plus shadow totals; nullopt when the structure counted nothing at all (Embree
-// cannot count), so that no zero is ever written for a count that was not made.
-std::optional<RayStats> reported_counts(const TraceOutput& out) {
+// Primary plus shadow totals; nullopt when the structure does not count its traversal
+// (Embree), so that no zero is ever written for a count that was not made.
+std::optional<RayStats> reported_counts(const AcceleratorInfo& info, const TraceOutput& out) {
+    if (!info.counts_traversal) return std::nullopt;
     RayStats total = out.primary_stats;
     total += out.shadow_stats;
-    if (total.node_visits + total.box_tests + total.prim_tests == 0) return std::nullopt;
     return total;
 }
 
@@ -286,7 +286,7 @@ public:
         m.hits = first_count_->hits;
         m.shadow_rays = first_count_->shadow_rays;
         m.shadow_hits = first_count_->shadow_hits;
-        m.counts = reported_counts(*first_count_);
+        m.counts = reported_counts(info_, *first_count_);
         m.instructions = instructions_;
         return m;
     }
@@ -400,7 +400,7 @@ private:
         st.counters["hits"] = double(out.hits);
         st.counters["shadow_rays"] = double(out.shadow_rays);
         st.counters["shadow_hits"] = double(out.shadow_hits);
-        if (auto total = reported_counts(*first_count_)) {
+        if (auto total = reported_counts(info_, *first_count_)) {
             st.counters["prim_tests"] = double(total->prim_tests);
             st.counters["node_visits"] = double(total->node_visits);
         }
@@ -658,7 +658,7 @@ void send_frame(int fd, char tag, const std::string& payload) {
 
 }  // namespace
 
-Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s) {
+ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s) {
     int fds[2];
     if (pipe(fds) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
     std::cout.flush();
@@ -669,17 +669,8 @@ Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work,
     if (pid == 0) {
         ::close(fds[0]);
         prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive a killed parent
-        Measurement m;
-        try {
-            m = work([&](const std::string& s) { send_frame(fds[1], 'S', s); });
-        } catch (const std::exception& e) {
-            m.status = "error";
-            m.message = e.what();
-        } catch (...) {
-            m.status = "error";
-            m.message = "unknown exception";
-        }
-        send_frame(fds[1], 'R', serialize(m));
+        const std::string result = work([&](const std::string& s) { send_frame(fds[1], 'S', s); });
+        send_frame(fds[1], 'R', result);
         std::cout.flush();
         std::cerr.flush();
         std::fflush(nullptr);
@@ -688,13 +679,13 @@ Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work,
     ::close(fds[1]);
 
     const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
-    std::string buffer, stage = "start-up";
-    std::optional<Measurement> result;
-    bool timed_out = false;
+    std::string buffer;
+    ChildOutcome o;
+    o.stage = "start-up";
     for (;;) {
         const double left = seconds_between(Clock::now(), deadline);
         if (left <= 0) {
-            timed_out = true;
+            o.timed_out = true;
             break;
         }
         pollfd p{fds[0], POLLIN, 0};
@@ -711,32 +702,54 @@ Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work,
             if (nl == std::string::npos) break;
             const size_t len = std::strtoull(buffer.c_str() + 1, nullptr, 10);
             if (buffer.size() < nl + 1 + len) break;
-            const std::string payload = buffer.substr(nl + 1, len);
-            if (buffer[0] == 'S') stage = payload;
-            else if (buffer[0] == 'R') result = deserialize(payload);
+            if (buffer[0] == 'S') o.stage = buffer.substr(nl + 1, len);
+            else if (buffer[0] == 'R') o.result = buffer.substr(nl + 1, len);
             buffer.erase(0, nl + 1 + len);
         }
     }
-    if (timed_out) kill(pid, SIGKILL);
+    if (o.timed_out) kill(pid, SIGKILL);
     ::close(fds[0]);
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
     }
+    if (o.timed_out) o.result.reset();
+    if (!o.result && !o.timed_out) {
+        o.failure = WIFSIGNALED(status) ? "died from signal " + std::to_string(WTERMSIG(status)) + " (" +
+                                              strsignal(WTERMSIG(status)) + ")"
+                                        : "exited with status " + std::to_string(WEXITSTATUS(status)) + " without a result";
+    }
+    return o;
+}
 
-    if (result && !timed_out) return *result;
+std::string time_limit_message(double timeout_s, const std::string& stage) {
+    return "exceeded the time limit (timeout_s = " + limit_text(timeout_s) + " s) during " + stage;
+}
+
+Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s) {
+    const ChildOutcome o = run_in_child(
+        [&](const StageFn& stage) {
+            Measurement m;
+            try {
+                m = work(stage);
+            } catch (const std::exception& e) {
+                m.status = "error";
+                m.message = e.what();
+            } catch (...) {
+                m.status = "error";
+                m.message = "unknown exception";
+            }
+            return serialize(m);
+        },
+        timeout_s);
+    if (o.result) return deserialize(*o.result);
     Measurement m;
-    m.stage = stage;
-    if (timed_out) {
+    m.stage = o.stage;
+    if (o.timed_out) {
         m.status = "timeout";
-        m.message = "exceeded the time limit (timeout_s = " + limit_text(timeout_s) + " s) during " + stage;
-    } else if (WIFSIGNALED(status)) {
-        m.status = "error";
-        m.message = "the measurement process died from signal " + std::to_string(WTERMSIG(status)) + " (" +
-                    strsignal(WTERMSIG(status)) + ") during " + stage;
+        m.message = time_limit_message(timeout_s, o.stage);
     } else {
         m.status = "error";
-        m.message = "the measurement process exited with status " + std::to_string(WEXITSTATUS(status)) +
-                    " without a result during " + stage;
+        m.message = "the measurement process " + o.failure + " during " + o.stage;
     }
     return m;
 }

@@ -51,8 +51,9 @@ struct Measurement {
     std::vector<double> render_cpu_s;
     BuildStats build;
     uint64_t rays = 0, hits = 0, shadow_rays = 0, shadow_hits = 0;
-    // Totals over primary and shadow rays; nullopt when the structure reports no counts
-    // at all (Embree), so that they are written as missing, never as zero.
+    // Totals over primary and shadow rays; nullopt when the structure does not count its
+    // traversal (AcceleratorInfo::counts_traversal: Embree), so that they are written as
+    // missing, never as zero.
     std::optional<RayStats> counts;
     std::optional<uint64_t> instructions;  // callgrind's Ir of one render (MeasureSettings::callgrind_out)
     // Result columns beyond timing and counts, as CSV text by column name: the error
@@ -106,6 +107,22 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
 // result gives status "error" with the signal or exit code, so one broken structure does
 // not end the run. The parent must not have started threads (fork copies one thread).
 Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s);
+
+// What a forked child gave back (run_in_child): its result, or why there is none.
+struct ChildOutcome {
+    std::optional<std::string> result;  // the work's return value, when it finished in time
+    bool timed_out = false;             // killed at the deadline
+    std::string failure;                // no result otherwise: "died from signal 11 (...)", "exited with status 3 ..."
+    std::string stage;                  // the last stage the child began
+};
+
+// Runs `work` in a forked child with the deadline `timeout_s` and brings its return value
+// (any bytes) back through a pipe; the child reports each stage it begins. `work` must
+// not throw. The parent must not have started threads (fork copies one thread).
+ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s);
+
+// "exceeded the time limit (timeout_s = 2 s) during <stage>"
+std::string time_limit_message(double timeout_s, const std::string& stage);
 
 // The text form that crosses the pipe from child to parent.
 std::string serialize(const Measurement& m);

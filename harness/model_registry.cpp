@@ -148,6 +148,8 @@ void verify_checksum(const ModelEntry& entry, const std::string& path) {
 }
 
 // ---- downloading -----------------------------------------------------------------------
+// Through the curl, npm and tar commands rather than libcurl: npm pack has no library, and
+// a failed download then shows the same message a user running the command would see.
 
 std::string shell_quote(const std::string& s) {
     std::string quoted = "'";

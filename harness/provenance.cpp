@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <string>
 
 #include "accelbench/accel/baseline/embree_accel.h"
 
@@ -40,6 +41,27 @@ std::string cpu_model() {
 }
 
 }  // namespace
+
+std::vector<std::pair<std::string, std::string>> provenance_values() {
+    const Provenance& p = provenance();
+    return {{"git_sha", p.git_sha},   {"git_dirty", p.git_dirty ? "true" : "false"},
+            {"compiler", p.compiler}, {"build_type", p.build_type},
+            {"cpu", p.cpu},           {"embree_version", p.embree_version}};
+}
+
+int provenance_command(int argc, char** argv) {
+    if (argc > 0 && (std::string(argv[0]) == "-h" || std::string(argv[0]) == "--help")) {
+        std::printf("usage: accelbench provenance\n"
+                    "  prints the provenance columns this build writes into every results row, NAME=VALUE\n");
+        return 0;
+    }
+    if (argc > 0) {
+        std::fprintf(stderr, "accelbench provenance: takes no arguments (got '%s')\n", argv[0]);
+        return 2;
+    }
+    for (const auto& [name, value] : provenance_values()) std::printf("%s=%s\n", name.c_str(), value.c_str());
+    return 0;
+}
 
 const Provenance& provenance() {
     static const Provenance p = [] {

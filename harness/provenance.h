@@ -4,6 +4,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace accelbench {
 
@@ -19,5 +21,14 @@ struct Provenance {
 // Gathered once per process (git is asked at run time in the source tree the binary
 // was built from; "unknown" when that is not a git checkout).
 const Provenance& provenance();
+
+// The provenance columns of every results CSV row (results.h's provenance_columns(), in
+// that order) with this process's values; `threads` and `timestamp` are per run, not facts
+// of the build. The rows and `accelbench provenance` both print this one list, so a driver
+// that compares runs (analysis/accelbench_analysis/reproduce.py) sees what rows will record.
+std::vector<std::pair<std::string, std::string>> provenance_values();
+
+// `accelbench provenance`: prints provenance_values() as NAME=VALUE lines.
+int provenance_command(int argc, char** argv);
 
 }  // namespace accelbench

@@ -16,7 +16,8 @@ std::string trim(const std::string& s) {
     return s.substr(b, e - b + 1);
 }
 
-// Splits at commas, remembering the 1-based column where each field starts.
+// Splits at commas, remembering the 1-based column where each field starts (not csv.h's
+// reader: a ray file holds only numbers, and its errors name the column of the field).
 std::vector<std::pair<std::string, int>> split_fields(const std::string& line) {
     std::vector<std::pair<std::string, int>> out;
     size_t start = 0;

@@ -1,11 +1,16 @@
 #include "results.h"
 
 #include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 
 #include "accelbench/accel/registry.h"
 #include "csv.h"
+#include "output_lock.h"
 
 namespace fs = std::filesystem;
 
@@ -177,13 +182,16 @@ void write_parts(const std::string& path, const std::vector<CsvData>& parts) {
 std::set<std::string> prepare_resume(const std::string& results_path, const std::vector<std::string>& columns,
                                      const std::vector<std::string>& rep_columns) {
     std::set<std::string> done;
-    if (!fs::exists(results_path) || fs::file_size(results_path) == 0) return done;
-    CsvData d = read_csv(results_path);
-    if (auto m = header_mismatch(results_path, d.header, column_headers(columns)); !m.empty())
-        throw std::runtime_error(m);
-    if (d.incomplete_tail) fs::resize_file(results_path, d.complete_bytes);
-    const size_t id = column_index(d, "combo_id", results_path);
-    for (const auto& r : d.rows) done.insert(r[id]);
+    if (fs::exists(results_path) && fs::file_size(results_path) > 0) {
+        CsvData d = read_csv(results_path);
+        if (auto m = header_mismatch(results_path, d.header, column_headers(columns)); !m.empty())
+            throw std::runtime_error(m);
+        if (d.incomplete_tail) fs::resize_file(results_path, d.complete_bytes);
+        const size_t id = column_index(d, "combo_id", results_path);
+        for (const auto& r : d.rows) done.insert(r[id]);
+    }
+    // Also when the results file is gone or empty: then every repetition row is an orphan
+    // and is dropped, so samples of two runs are never mixed.
     const std::string reps = repetitions_path(results_path);
     if (fs::exists(reps) && fs::file_size(reps) > 0) {
         CsvData rd = read_csv(reps);
@@ -193,6 +201,74 @@ std::set<std::string> prepare_resume(const std::string& results_path, const std:
     }
     return done;
 }
+
+namespace {
+
+// A results file's rows as merge accepts them: a combo_id, a known status, numbers where
+// the columns hold numbers (empty: not measured). `path` and the row (1 = the first after
+// the header) name each refusal.
+void check_result_rows(const CsvData& d, const std::string& path) {
+    static const std::set<std::string> statuses = {"ok", "skipped", "error", "timeout"};
+    static const std::set<std::string> numeric = {
+        "triangles", "vertices", "repetitions", "build_s_median", "build_s_mean", "build_s_stddev", "build_s_ci_lo",
+        "build_s_ci_hi", "render_s_median", "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi",
+        "ci_coverage", "rays", "hits", "shadow_rays", "shadow_hits", "mrays_per_s", "nodes", "leaves", "max_depth",
+        "memory_bytes", "sah_cost", "avg_leaf_size", "prim_tests", "node_visits", "box_tests", "prim_tests_per_ray",
+        "node_visits_per_ray", "instructions", "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50",
+        "t_err_ulp_max", "nan_results", "image_rmse", "hole_pixels", "peak_rss_bytes", "width", "height", "spp"};
+    const size_t id = column_index(d, "combo_id", path);
+    auto optional_column = [&](const char* name) {
+        const auto it = std::find(d.header.begin(), d.header.end(), name);
+        return it == d.header.end() ? std::optional<size_t>() : size_t(it - d.header.begin());
+    };
+    const std::optional<size_t> status = optional_column("status"), params = optional_column("params");
+    // Parameter columns (between params and status) may share a name with a measured
+    // column (max_depth): only the measured one is checked here.
+    std::vector<size_t> checked;
+    for (size_t c = 0; c < d.header.size(); ++c)
+        if (!(params && status && c > *params && c < *status) && numeric.count(d.header[c])) checked.push_back(c);
+    for (size_t i = 0; i < d.rows.size(); ++i) {
+        const auto& r = d.rows[i];
+        const std::string where = path + ", row " + std::to_string(i + 1);
+        if (r[id].empty()) throw std::runtime_error(where + ": empty combo_id");
+        if (status && !statuses.count(r[*status]))
+            throw std::runtime_error(where + ": unknown status '" + r[*status] + "' (ok, skipped, error or timeout)");
+        for (size_t c : checked) {
+            const std::string& v = r[c];
+            if (v.empty()) continue;
+            char* end = nullptr;
+            const double x = std::strtod(v.c_str(), &end);
+            if (std::isspace(static_cast<unsigned char>(v.front())) || end != v.c_str() + v.size() || !std::isfinite(x))
+                throw std::runtime_error(where + ", column " + d.header[c] + ": '" + v + "' is not a finite number");
+        }
+    }
+}
+
+// Every repetition row belongs to a results row of its own input.
+void check_no_orphans(const CsvData& results, const std::string& results_path, const CsvData& reps,
+                      const std::string& reps_path) {
+    std::set<std::string> ids;
+    const size_t id = column_index(results, "combo_id", results_path);
+    for (const auto& r : results.rows) ids.insert(r[id]);
+    const size_t rid = column_index(reps, "combo_id", reps_path);
+    for (size_t i = 0; i < reps.rows.size(); ++i)
+        if (!ids.count(reps.rows[i][rid]))
+            throw std::runtime_error(reps_path + ", row " + std::to_string(i + 1) + ": repetition of combination '" +
+                                     reps.rows[i][rid] + "', which has no row in " + results_path);
+}
+
+// What merge and take_column write: OUT.reps.csv first, then OUT (as a run writes a
+// combination's repetitions before its row), both under OUT's locks; without repetitions
+// an OUT.reps.csv left from an earlier file is removed, never left beside the new OUT.
+void write_output(const std::string& out, const std::vector<CsvData>& results, const std::vector<CsvData>* reps) {
+    const std::string reps_out = repetitions_path(out);
+    OutputLock lock({out, reps_out});
+    if (reps) write_parts(reps_out, *reps);
+    else fs::remove(reps_out);
+    write_parts(out, results);
+}
+
+}  // namespace
 
 size_t merge_results(const std::string& out, const std::vector<std::string>& inputs, bool allow_mixed) {
     if (inputs.empty()) throw std::runtime_error("nothing to merge");
@@ -206,6 +282,7 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
             throw std::runtime_error(in + ": the last line is incomplete (an interrupted run?); resume it first");
         if (auto m = header_mismatch(in, data.back().header, data.front().header); !m.empty())
             throw std::runtime_error(m + " (compared with " + inputs.front() + ")");
+        check_result_rows(data.back(), in);
     }
     const CsvData& first = data.front();
     const size_t id = column_index(first, "combo_id", inputs.front());
@@ -225,10 +302,10 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
             reps.push_back(read_csv(repetitions_path(in)));
             if (auto m = header_mismatch(repetitions_path(in), reps.back().header, reps.front().header); !m.empty())
                 throw std::runtime_error(m);
+            check_no_orphans(data[reps.size() - 1], in, reps.back(), repetitions_path(in));
         }
 
-    write_parts(out, data);
-    if (all_reps) write_parts(repetitions_path(out), reps);
+    write_output(out, data, all_reps ? &reps : nullptr);
     return owner.size();
 }
 
@@ -251,8 +328,9 @@ size_t take_column(const std::string& out, const std::string& in, const std::str
             r[col] = it->second;
             ++taken;
         }
-    write_parts(out, {data[0]});
-    if (fs::exists(repetitions_path(in))) write_parts(repetitions_path(out), {read_csv(repetitions_path(in))});
+    std::vector<CsvData> reps;
+    if (fs::exists(repetitions_path(in))) reps.push_back(read_csv(repetitions_path(in)));
+    write_output(out, {data[0]}, reps.empty() ? nullptr : &reps);
     return taken;
 }
 

@@ -13,10 +13,11 @@ namespace accelbench {
 using Row = std::map<std::string, std::string>;
 
 // Columns are named by keys. A parameter's column has the key "param:<name>" and the
-// header text <name>: the contract (and analysis/README.md) puts one column per
-// parameter name between `params` and `status`, so a parameter may share its header text
-// with a measured column (`max_depth`, the limit vs the depth reached) or provenance
-// (`threads`); readers tell them apart by position, the harness by key.
+// header text <name>: the CSV's documented layout (docs/configs.md, analysis/README.md)
+// puts one column per parameter name between `params` and `status`, so a parameter may
+// share its header text with a measured column (`max_depth`, the limit vs the depth
+// reached) or provenance (`threads`); readers tell them apart by position, the harness by
+// key.
 std::string param_column(const std::string& param);
 // The header text of a column key.
 std::string column_header(const std::string& key);

@@ -11,6 +11,7 @@
 #include "results.h"
 #include "run_plan.h"
 #include "runner.h"
+#include "shard_check.h"
 #include "sinks/json_output.h"
 #include "sinks/progress.h"
 #include "sinks/repetitions_csv.h"
@@ -135,18 +136,31 @@ int run_command(int argc, char** argv) {
 
 int merge_command(int argc, char** argv) {
     bool allow_mixed = false;
-    std::string take;
+    std::string take, config_path;
+    uint64_t shards = 1;
     std::vector<std::string> files;
     for (int i = 0; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--allow-mixed") allow_mixed = true;
         else if (a == "--take-column" && i + 1 < argc) take = argv[++i];
+        else if (a == "--config" && i + 1 < argc) config_path = argv[++i];
+        else if (a == "--shards" && i + 1 < argc) {
+            try {
+                shards = parse_shard("0/" + std::string(argv[++i])).count;
+            } catch (const std::invalid_argument&) {
+                std::fprintf(stderr, "accelbench merge: --shards expects a count > 0, got '%s'\n", argv[i]);
+                return 2;
+            }
+        }
         else if (a == "-h" || a == "--help") {
-            std::printf("usage: accelbench merge [--allow-mixed] OUT.csv IN.csv...\n"
+            std::printf("usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
                         "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
                         "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
                         "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version) differs\n"
                         "  unless --allow-mixed, and a combination present in two inputs.\n"
+                        "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
+                        "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"
+                        "  and refuses rows that are not of CONFIG\n"
                         "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
                         "  instructions of a callgrind run added to a timed run of the same config)\n");
             return 0;
@@ -174,6 +188,8 @@ int merge_command(int argc, char** argv) {
         }
         return 0;
     }
+    if (!config_path.empty())
+        if (int rc = check_shards_complete(config_path, shards, {files.begin() + 1, files.end()}); rc != 0) return rc;
     try {
         const size_t rows = merge_results(files[0], {files.begin() + 1, files.end()}, allow_mixed);
         std::fprintf(stderr, "accelbench merge: %zu rows from %zu files written to %s\n", rows, files.size() - 1,

@@ -9,7 +9,9 @@ namespace accelbench {
 // 2 the config, the arguments or the output file are wrong (nothing was measured).
 int run_command(int argc, char** argv);
 
-// accelbench merge [--allow-mixed] OUT.csv IN.csv...
+// accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...
+// Exit codes: 0 merged; 2 bad input; 3 (--config) combinations of the config are in no
+// input (nothing written).
 int merge_command(int argc, char** argv);
 
 }  // namespace accelbench

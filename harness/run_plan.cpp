@@ -122,8 +122,18 @@ void choose_output(RunPlan& plan, const RunOptions& options) {
     }
     if (plan.out.empty())
         plan.out = runs_dir + "/" + plan.config.name + "-" + utc_now("%Y%m%d-%H%M%S") + shard_suffix(plan.shard) + ".csv";
-    if (!options.resume && fs::exists(plan.out) && fs::file_size(plan.out) > 0)
+    const std::string reps = repetitions_path(plan.out);
+    require_regular_file_or_absent(plan.out, "--out (the results CSV)");
+    require_regular_file_or_absent(reps, "the repetitions file beside --out");
+    const auto has_rows = [](const std::string& p) { return fs::exists(p) && fs::file_size(p) > 0; };
+    if (!options.resume && has_rows(plan.out))
         throw UsageError("'" + plan.out + "' exists: pass --resume to continue it, or choose another --out");
+    // Repetitions without their results file (deleted, or another run's): a new run would
+    // append its samples to them. Refused; --resume drops them (they have no results rows).
+    if (!options.resume && has_rows(reps))
+        throw UsageError("'" + reps + "' exists without results in '" + plan.out + "': its samples are another run's; "
+                         "remove it, pass --resume (which drops repetitions without a results row), or choose another --out");
+    plan.lock = OutputLock({plan.out, reps});
     if (options.resume) plan.done = prepare_resume(plan.out, result_columns(), repetition_columns());
     for (const Combination* c : plan.selected)
         if (!plan.done.count(c->id)) plan.to_do.push_back(c);

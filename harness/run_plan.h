@@ -11,6 +11,7 @@
 #include "combinations.h"
 #include "config.h"
 #include "model_registry.h"
+#include "output_lock.h"
 
 namespace accelbench {
 
@@ -37,6 +38,7 @@ struct RunPlan {
     std::string out;                        // the results CSV (its repetitions beside it)
     std::set<std::string> done;             // combo_ids already in `out` (--resume)
     std::vector<const Combination*> to_do;  // selected minus done
+    OutputLock lock;                        // `out` and its repetitions, for the whole run
 };
 
 // The config (ConfigError lists its issues), its combinations and this shard's. Throws
@@ -49,7 +51,10 @@ void print_dry_run(const RunPlan& plan);
 
 // The results file: --out, else with --resume the newest results/runs/<name>-*.csv of
 // this shard, else results/runs/<name>-<timestamp>[-shardIofN].csv. Refuses (UsageError)
-// an existing non-empty file without --resume. With --resume, prepares the file
+// an existing non-empty file, or repetitions without their results file, without
+// --resume; refuses (std::runtime_error) a path that is not a regular file and an output
+// that another process is writing (OutputLock, held until the plan is destroyed). With
+// --resume, prepares the file
 // (prepare_resume: a cut last line removed, orphan repetitions dropped) and fills `done`;
 // then `to_do`.
 void choose_output(RunPlan& plan, const RunOptions& options);

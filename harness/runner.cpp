@@ -7,6 +7,7 @@
 #include "accelbench/accel/registry.h"
 #include "loaded_model.h"
 #include "measure.h"
+#include "text.h"
 #include "verdicts.h"
 
 namespace accelbench {
@@ -22,8 +23,8 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // not load is bad input: its combinations get no rows at all.
 class ModelOnDemand {
 public:
-    ModelOnDemand(const ModelSpec& spec, const RunPlan& plan, bool reference_wanted)
-        : spec_(spec), plan_(plan), reference_wanted_(reference_wanted) {
+    ModelOnDemand(const ModelSpec& spec, const RunPlan& plan, bool reference_wanted, bool in_process)
+        : spec_(spec), plan_(plan), reference_wanted_(reference_wanted), in_process_(in_process) {
         triangles = known_triangles(spec, plan.registry);
         if (const ModelEntry* entry = spec.kind == ModelSpec::Kind::Registry ? plan.registry.find(spec.name) : nullptr)
             vertices = entry->vertices;
@@ -48,33 +49,64 @@ public:
     }
 
     // The reference's answers, once per model, before its first measurement (not for a
-    // robustness case, which brings its own). False (and reference_error) when the
-    // reference cannot trace the model.
+    // robustness case, which brings its own). Traced in a child process under the
+    // config's timeout_s, like each measurement (unless --in-process). False (and
+    // reference_error, or reference_timeout) when the reference cannot trace the model.
     bool add_reference() {
         // Ray sets need the reference's answers to be made at all, `errors` or not.
         const bool wanted = reference_wanted_ || plan_.config.ray_sets;
-        if (!wanted || loaded_->robustness_case || loaded_->reference || !reference_error.empty())
-            return reference_error.empty();
+        if (!wanted || loaded_->robustness_case || loaded_->reference || !reference_error.empty() ||
+            !reference_timeout.empty())
+            return reference_error.empty() && reference_timeout.empty();
         try {
+            // Made here, in the parent process (single-threaded), outside anything timed.
             if (plan_.config.ray_sets && !loaded_->ray_sets)
                 add_ray_sets(*loaded_, plan_.config.render, *plan_.config.ray_sets);
-            add_reference_answers(*loaded_, plan_.config.render);
-            std::fprintf(stderr, "accelbench run: reference answers for %s: %zu primary rays in %.2f s\n",
-                         spec_.label.c_str(), loaded_->reference->hits.size(), loaded_->reference->seconds);
+            if (in_process_) add_reference_answers(*loaded_, plan_.config.render);
+            else trace_reference_in_child();
         } catch (const std::exception& e) {
             reference_error = e.what();
-            std::fprintf(stderr, "accelbench run: the reference cannot trace %s: %s\n", spec_.label.c_str(), e.what());
         }
-        return reference_error.empty();
+        if (!reference_timeout.empty())
+            std::fprintf(stderr, "accelbench run: the reference pass of %s: %s\n", spec_.label.c_str(),
+                         reference_timeout.c_str());
+        else if (!reference_error.empty())
+            std::fprintf(stderr, "accelbench run: the reference cannot trace %s: %s\n", spec_.label.c_str(),
+                         reference_error.c_str());
+        else
+            std::fprintf(stderr, "accelbench run: reference answers for %s: %zu primary rays in %.2f s\n",
+                         spec_.label.c_str(), loaded_->reference->hits.size(), loaded_->reference->seconds);
+        return reference_error.empty() && reference_timeout.empty();
     }
 
     std::optional<uint64_t> triangles, vertices;
-    std::string load_error, reference_error;
+    std::string load_error, reference_error, reference_timeout;
 
 private:
+    // The reference pass counts against timeout_s as a combination's measurement does:
+    // a model whose reference cannot finish in time gets timeout rows, not an unbounded wait.
+    void trace_reference_in_child() {
+        const double limit = plan_.config.timeout_s;
+        const ChildOutcome o = run_in_child(
+            [&](const StageFn& stage) -> std::string {
+                stage("the reference pass");
+                try {
+                    add_reference_answers(*loaded_, plan_.config.render);
+                    return concat("A", reference_bytes(*loaded_->reference));
+                } catch (const std::exception& e) {
+                    return concat("E", e.what());
+                }
+            },
+            limit);
+        if (o.timed_out) reference_timeout = time_limit_message(limit, "the reference pass (once per model, before its measurements)");
+        else if (!o.result) reference_error = "the reference process " + o.failure;
+        else if (o.result->rfind("E", 0) == 0) reference_error = o.result->substr(1);
+        else loaded_->reference = reference_from_bytes(o.result->substr(1));
+    }
+
     const ModelSpec& spec_;
     const RunPlan& plan_;
-    const bool reference_wanted_;
+    const bool reference_wanted_, in_process_;
     std::optional<LoadedModel> loaded_;
 };
 
@@ -93,8 +125,10 @@ public:
         } else if (const LoadedModel* loaded = model.load(); !loaded) {
             r.load_error = model.load_error;
         } else if (!model.add_reference()) {
-            r.measurement.status = "error";
-            r.measurement.message = "no error measurement: the reference cannot trace the model: " + model.reference_error;
+            r.measurement.status = model.reference_timeout.empty() ? "error" : "timeout";
+            r.measurement.message = model.reference_timeout.empty()
+                                        ? "no error measurement: the reference cannot trace the model: " + model.reference_error
+                                        : model.reference_timeout;
         } else {
             const auto t0 = Clock::now();
             r.measurement = measure_combination(c, *loaded);
@@ -151,7 +185,7 @@ int run_plan(const RunPlan& plan, const RunOptions& options, const std::vector<R
         std::copy_if(plan.to_do.begin(), plan.to_do.end(), std::back_inserter(mine),
                      [&](const Combination* c) { return c->model == mi; });
         if (mine.empty()) continue;
-        ModelOnDemand model(plan.config.models[mi], plan, reference_wanted);
+        ModelOnDemand model(plan.config.models[mi], plan, reference_wanted, options.in_process);
         for (const Combination* c : mine) {
             for (RunSink* s : sinks) s->starting(*c);
             const CombinationResult result = runner.run_one(*c, model);

@@ -1,12 +1,14 @@
 // SHA-256 (FIPS 180-4), to check model files against the registry's checksums without
-// depending on an external tool.
+// depending on an external tool. The hashing is OpenSSL's libcrypto (EVP digest API);
+// this wraps it in the small interface the registry and the tests use.
 #pragma once
 
-#include <array>
 #include <cstddef>
-#include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
+
+struct evp_md_ctx_st;  // OpenSSL's EVP_MD_CTX, kept out of this header
 
 namespace accelbench {
 
@@ -19,12 +21,10 @@ public:
     std::string hex_digest();
 
 private:
-    void compress(const uint8_t* block);
-
-    std::array<uint32_t, 8> state_;
-    std::array<uint8_t, 64> block_{};
-    size_t block_used_ = 0;
-    uint64_t total_bytes_ = 0;
+    struct FreeContext {
+        void operator()(evp_md_ctx_st* ctx) const;
+    };
+    std::unique_ptr<evp_md_ctx_st, FreeContext> ctx_;
 };
 
 std::string sha256_hex(std::string_view bytes);

@@ -18,8 +18,8 @@ from typing import Callable
 
 import pandas as pd
 
-from .reference import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, reference_value
-from .render import fmt_sig, md_escape
+from .report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
+from .formatting import fmt_sig, md_escape
 from .schema import Results
 from .selection import Picker, setting_spec
 from .tables import METRIC, preferred_variant
@@ -56,8 +56,8 @@ class Missing(Exception):
 class ReportSource:
     name = "report"
 
-    def __init__(self, ref: pd.DataFrame):
-        self.ref = ref
+    def __init__(self, report_nums: pd.DataFrame):
+        self.report_nums = report_nums
 
     def begin(self) -> None:
         pass
@@ -66,7 +66,7 @@ class ReportSource:
         return set()
 
     def primitives(self, model: str) -> float:
-        v = self.ref.loc[self.ref["model"] == model, "primitives"]
+        v = self.report_nums.loc[self.report_nums["model"] == model, "primitives"]
         if v.empty:
             raise Missing(f"#Primitives of {model}")
         return float(v.iloc[0])
@@ -74,7 +74,7 @@ class ReportSource:
     def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
         if metric == "total":
             return self.get(model, structure, "build", setting) + self.get(model, structure, "render", setting)
-        v = reference_value(self.ref, model, structure, setting, METRIC[metric].report)
+        v = report_value(self.report_nums, model, structure, setting, METRIC[metric].report)
         if v is None or math.isnan(v):
             raise Missing(f"report has no {metric} for {structure} {setting} on {model}")
         return v
@@ -83,10 +83,10 @@ class ReportSource:
 class OurSource:
     name = "ours"
 
-    def __init__(self, results: Results, ref: pd.DataFrame):
+    def __init__(self, results: Results, report_nums: pd.DataFrame):
         self.results = results
         self.picker = Picker(results)
-        self.depths = [s.split("=")[1] for s in ref.loc[ref["table"] == 2, "setting"]
+        self.depths = [s.split("=")[1] for s in report_nums.loc[report_nums["table"] == 2, "setting"]
                        if s.startswith("maxDepth=")]
         self._groups: set[str] = set()
         self.variants_used: set[str] = set()
@@ -113,7 +113,7 @@ class OurSource:
         spec = setting_spec(setting, structure, self.picker, ours, self.depths)
         variant = preferred_variant(self.picker.variants([ours], spec))
         pick = self.picker.pick(ours, spec, variant)
-        what = f"{STRUCTURE_SHORT[structure]} ({setting}) on {ours}"
+        what = f"{STRUCTURE_SHORT.get(structure, structure)} ({setting}) on {ours}"
         if not pick.ok:
             raise Missing(f"{what}: {pick.reason}")
         v = pick.value(METRIC[metric].ours)
@@ -441,11 +441,22 @@ class ClaimRow:
     claim: Claim
     report: Finding
     ours: Finding
+    reference: Finding | None = None  # on the committed reference run, when compared with one
+
+    @property
+    def machine_dependent(self) -> bool:
+        """Judged on both runs with opposite verdicts: the same code holds the claim on one
+        machine and not on the other."""
+        return (self.reference is not None and {self.ours.verdict, self.reference.verdict}
+                == {HOLDS, FAILS})
 
 
-def evaluate_all(results: Results, ref: pd.DataFrame) -> tuple[list[ClaimRow], OurSource]:
-    rsrc, osrc = ReportSource(ref), OurSource(results, ref)
-    return [ClaimRow(c, evaluate(c, rsrc), evaluate(c, osrc)) for c in CLAIMS], osrc
+def evaluate_all(results: Results, report_nums: pd.DataFrame,
+                 reference: Results | None = None) -> tuple[list[ClaimRow], OurSource]:
+    rsrc, osrc = ReportSource(report_nums), OurSource(results, report_nums)
+    refsrc = OurSource(reference, report_nums) if reference is not None else None
+    return [ClaimRow(c, evaluate(c, rsrc), evaluate(c, osrc),
+                     evaluate(c, refsrc) if refsrc is not None else None) for c in CLAIMS], osrc
 
 
 def tolerance_text() -> str:
@@ -461,7 +472,8 @@ def tolerance_text() -> str:
             f"= more than half of the models. Our side uses medians.")
 
 
-def claims_markdown(rows: list[ClaimRow], results: Results, osrc: OurSource) -> str:
+def claims_markdown(rows: list[ClaimRow], results: Results, osrc: OurSource,
+                    reference: Results | None = None) -> str:
     out = ["# The report's claims, checked", ""]
     out += [f"> **Warning:** {md_escape(w)}" + "\n" for w in results.warnings]
     counts = {v: sum(r.ours.verdict == v for r in rows) for v in (HOLDS, FAILS, NOT_COMPARABLE)}
@@ -483,17 +495,34 @@ def claims_markdown(rows: list[ClaimRow], results: Results, osrc: OurSource) -> 
     if osrc.variants_used:
         out += [f"Our BVH/LBVH rows use traversal={', '.join(sorted(osrc.variants_used))} "
                 f"(the report's order is preferred where both modes were measured).", ""]
-    out += ["| # | claim | report's evidence | report's data | our evidence | verdict (ours) |",
-            "|:---|:---|:---|:---|:---|:---|"]
+    if reference is None:
+        out += ["| # | claim | report's evidence | report's data | our evidence | verdict (ours) |",
+                "|:---|:---|:---|:---|:---|:---|"]
+        for r in rows:
+            out.append(f"| {r.claim.id} | {md_escape(r.claim.text)} | {md_escape(r.report.evidence)} | "
+                       f"{r.report.verdict} | {md_escape(r.ours.evidence)} | **{r.ours.verdict}** |")
+        return "\n".join(out) + "\n"
+    dependent = [r.claim.id for r in rows if r.machine_dependent]
+    out += [f"The last columns: the same claim on the committed reference run "
+            f"({'; '.join(g.describe() for g in reference.groups)}). Machine-dependent "
+            f"(holds on one run, not on the other): "
+            f"{', '.join(dependent) if dependent else 'none'}.", ""]
+    out += ["| # | claim | report's evidence | report's data | our evidence | verdict (ours) "
+            "| reference run's evidence | verdict (reference run) | |",
+            "|:---|:---|:---|:---|:---|:---|:---|:---|:---|"]
     for r in rows:
+        ref = r.reference
+        flag = "**machine-dependent**" if r.machine_dependent else ""
         out.append(f"| {r.claim.id} | {md_escape(r.claim.text)} | {md_escape(r.report.evidence)} | "
-                   f"{r.report.verdict} | {md_escape(r.ours.evidence)} | **{r.ours.verdict}** |")
+                   f"{r.report.verdict} | {md_escape(r.ours.evidence)} | **{r.ours.verdict}** | "
+                   f"{md_escape(ref.evidence)} | {ref.verdict} | {flag} |")
     return "\n".join(out) + "\n"
 
 
-def write_claims(results: Results, ref: pd.DataFrame, out_dir: Path) -> tuple[Path, list[ClaimRow]]:
+def write_claims(results: Results, report_nums: pd.DataFrame, out_dir: Path,
+                 reference: Results | None = None) -> tuple[Path, list[ClaimRow]]:
     out_dir.mkdir(parents=True, exist_ok=True)
-    rows, osrc = evaluate_all(results, ref)
+    rows, osrc = evaluate_all(results, report_nums, reference)
     path = out_dir / "claims.md"
-    path.write_text(claims_markdown(rows, results, osrc))
+    path.write_text(claims_markdown(rows, results, osrc, reference))
     return path, rows

@@ -1,6 +1,7 @@
 """Command line: python -m accelbench_analysis {check,tables,claims,figures,report,all} CSV...
-[--out DIR], plus `regress` (the CI regression check) and `grid` / `grid-halve` (parameter
-grid search), both from issue 7, and `robustness` (issue 6's catalogue verdicts)."""
+[--out DIR], plus `regress` (the CI regression check), `grid` / `grid-halve` (parameter
+grid search), `scaling`, `cost-images`, `robustness` (the extreme-case catalogue's verdicts)
+and `reproduce` (the main job: measure into a run directory, then `all` over it)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,8 @@ import shutil
 import sys
 from pathlib import Path
 
-from .reference import DEFAULT_REFERENCE, load_reference
-from .schema import ContractError, load_results
+from .report_numbers import DEFAULT_REPORT_NUMBERS, load_report_numbers
+from .schema import ContractError, Results, load_results
 
 EXIT_BAD_INPUT = 2
 
@@ -20,7 +21,7 @@ COMMANDS = {
     "claims": "write the claims table to OUT/tables/claims.md",
     "figures": "write the PNG figures to OUT/figures/",
     "report": "write OUT/REPORT.md linking what exists",
-    "all": "tables, claims, figures and REPORT.md",
+    "all": "tables, claims, figures, the three-way comparison and REPORT.md",
 }
 
 
@@ -36,12 +37,17 @@ def parser() -> argparse.ArgumentParser:
                        help="harness CSV(s); a NAME.reps.csv beside NAME.csv is read too")
         s.add_argument("--out", type=Path, default=Path("results"),
                        help="output directory (default: results/)")
-        s.add_argument("--reference", type=Path, default=DEFAULT_REFERENCE,
+        s.add_argument("--report-numbers", type=Path, default=DEFAULT_REPORT_NUMBERS,
                        help="the report's numbers (default: results/report/report-tables.csv)")
+        s.add_argument("--reference-run", type=Path, metavar="DIR",
+                       help="a reference run (e.g. results/reference): its csv/ files of the "
+                            "same names as CSV are compared with these (claims, three-way table)")
     add_regress(sub)
     add_grid(sub)
     add_scaling(sub)
     add_robustness(sub)
+    from .reproduce import add_reproduce
+    add_reproduce(sub)
     return p
 
 
@@ -161,27 +167,41 @@ def run_cost_images(args: argparse.Namespace) -> int:
     return 0
 
 
-def copy_reference(reference: Path, out: Path) -> None:
+def copy_report_numbers(report_numbers: Path, out: Path) -> None:
     """Keep OUT/report/ (the report's numbers and their README) beside the outputs that cite it."""
     target = out / "report"
-    src_dir = reference.parent
+    src_dir = report_numbers.parent
     if target.resolve() == src_dir.resolve():
         return
     target.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(reference, target / "report-tables.csv")
+    shutil.copyfile(report_numbers, target / "report-tables.csv")
     if (src_dir / "README.md").is_file():
         shutil.copyfile(src_dir / "README.md", target / "README.md")
+
+
+def load_reference_run(run_dir: Path | None, csvs: list[Path]) -> Results | None:
+    """The reference run's CSVs named like the given ones (like compared with like: its
+    table4.csv beside this run's table4.csv); None when it has none of them."""
+    if run_dir is None:
+        return None
+    mine = [run_dir / "csv" / p.name for p in csvs]
+    if any(m.resolve() == p.resolve() for m, p in zip(mine, csvs)):
+        return None  # this is the reference run
+    present = [m for m in mine if m.is_file()]
+    return load_results(present) if present else None
 
 
 def run(args: argparse.Namespace) -> list[Path]:
     # Imported here so that `check` and --help stay fast (matplotlib is slow to import).
     from .claims import write_claims
+    from .comparison import three_way, write_comparison
     from .figures import write_figures
     from .report import write_report
     from .tables import write_tables
 
     results = load_results(args.csv)
-    ref = load_reference(args.reference)
+    report_nums = load_report_numbers(args.report_numbers)
+    reference = load_reference_run(args.reference_run, args.csv)
     for w in results.warnings:
         print(f"warning: {w}", file=sys.stderr)
     if args.command == "check":
@@ -192,7 +212,7 @@ def run(args: argparse.Namespace) -> list[Path]:
         return []
     out: Path = args.out
     written: list[Path] = []
-    claims = figures = None
+    claims = figures = comparison = None
     # Ray-set and thread-scaling rows (issue 14) have outputs of their own; the report's
     # tables, claims and figures see only the other rows.
     from dataclasses import replace
@@ -203,24 +223,29 @@ def run(args: argparse.Namespace) -> list[Path]:
     if beyond.any() and not beyond.all():
         results = replace(results, rows=results.rows[~beyond])
     if args.command in ("tables", "all"):
-        written += write_tables(results, ref, out / "tables")
+        written += write_tables(results, report_nums, out / "tables")
         if not results.case_rows().empty:
             from .robustness import write_robustness
             written.append(write_robustness(results, out / "tables"))
     if args.command in ("claims", "all", "report"):
-        path, claims = write_claims(results, ref, out / "tables")
+        path, claims = write_claims(results, report_nums, out / "tables", reference)
         if args.command != "report":
             written.append(path)
+    if args.command in ("all", "report"):
+        comparison = three_way(results, reference, report_nums)
+        written.append(write_comparison(comparison, results, reference, args.reference_run,
+                                        out / "tables"))
     if args.command in ("figures", "all"):
-        figures = write_figures(results, ref, out / "figures")
+        figures = write_figures(results, report_nums, out / "figures")
         for name, f in figures.items():
             if isinstance(f, Path):
                 written.append(f)
             else:
                 print(f"figure {name} skipped: {f.reason}", file=sys.stderr)
     if args.command in ("report", "all"):
-        copy_reference(args.reference, out)
-        written.append(write_report(results, out, claims, figures))
+        copy_report_numbers(args.report_numbers, out)
+        written.append(write_report(results, out, claims, figures, comparison, reference,
+                                    args.reference_run))
     return written
 
 
@@ -275,12 +300,17 @@ def run_grid_halve(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_reproduce(args: argparse.Namespace) -> int:
+    from .reproduce import run_reproduce as reproduce
+    return reproduce(args)
+
+
 def main(argv: list[str] | None = None) -> int:
     from .grid_config import GridConfigError
     args = parser().parse_args(argv)
     handlers = {"regress": run_regress, "grid": run_grid, "grid-halve": run_grid_halve,
                 "scaling": run_scaling, "cost-images": run_cost_images,
-                "robustness": run_robustness}
+                "robustness": run_robustness, "reproduce": run_reproduce}
     try:
         if args.command in handlers:
             return handlers[args.command](args)

@@ -1,4 +1,4 @@
-"""How wrong a row is (issue 6): the error columns, labelled and formatted once for every
+"""How wrong a row is: the error columns, labelled and formatted once for every
 table that lists our rows.
 
 The harness traces each combination's primary rays (the `rays` column) through the
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from .render import fmt_count, fmt_sig, is_missing
+from .formatting import fmt_count, fmt_sig, is_missing
 
 NOT_MEASURED = "not measured"
 NOT_APPLICABLE = "n/a"

@@ -24,7 +24,7 @@ import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
 from .errors import wrong_answers  # noqa: E402
-from .reference import REPORT_MODELS, TABLE2_MODEL, our_model, reference_value  # noqa: E402
+from .report_numbers import REPORT_MODELS, TABLE2_MODEL, our_model, report_value  # noqa: E402
 from .schema import Results  # noqa: E402
 from .selection import STRUCTURE, STRUCTURES, Picker, setting_spec  # noqa: E402
 from .tables import preferred_variant, ratio, structure_rows  # noqa: E402
@@ -151,10 +151,10 @@ SWEEP_METRICS = [("nodes", "nodes", "#nodes"), ("prim_tests", "prim_tests", "#in
                  ("render_s_median", "render_s", "render time")]
 
 
-def sweep_frame(results: Results, ref: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, str]]:
+def sweep_frame(results: Results, report_nums: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, str]]:
     picker = Picker(results)
     model = our_model(TABLE2_MODEL, picker.models)
-    t2 = ref[ref["table"] == 2]
+    t2 = report_nums[report_nums["table"] == 2]
     depths = [s.split("=")[1] for s in t2["setting"] if s.startswith("maxDepth=")]
     records, sweeps = [], {}
     for param, report_name in (("max_prims", "maxPrims"), ("max_depth", "maxDepth")):
@@ -192,8 +192,8 @@ def sweep_frame(results: Results, ref: pd.DataFrame) -> tuple[pd.DataFrame, dict
     return df, sweeps
 
 
-def table2_sweeps(results: Results, ref: pd.DataFrame, path: Path) -> Path | Skipped:
-    df, sweeps = sweep_frame(results, ref)
+def table2_sweeps(results: Results, report_nums: pd.DataFrame, path: Path) -> Path | Skipped:
+    df, sweeps = sweep_frame(results, report_nums)
     if df.empty or not (df["source"] == "ours").any():
         return Skipped("no kd-tree sweep rows on the bunny")
     setup()
@@ -350,7 +350,7 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
 
 # ---- relative to BVH --------------------------------------------------------------------------
 
-def relative_frame(results: Results, ref: pd.DataFrame) -> pd.DataFrame:
+def relative_frame(results: Results, report_nums: pd.DataFrame) -> pd.DataFrame:
     picker = Picker(results)
     records = []
     bvh = STRUCTURE["bvh"]
@@ -369,16 +369,16 @@ def relative_frame(results: Results, ref: pd.DataFrame) -> pd.DataFrame:
                     records.append({"model": label, "structure": s.label, "phase": phase,
                                     "source": "ours", "ratio": r})
                 if s.report_accel:
-                    r = ratio(reference_value(ref, rm.key, s.report_accel, "default", rcol),
-                              reference_value(ref, rm.key, "bvh", "default", rcol))
+                    r = ratio(report_value(report_nums, rm.key, s.report_accel, "default", rcol),
+                              report_value(report_nums, rm.key, "bvh", "default", rcol))
                     if r is not None:
                         records.append({"model": label, "structure": s.label, "phase": phase,
                                         "source": "report", "ratio": r})
     return pd.DataFrame.from_records(records)
 
 
-def relative_to_bvh(results: Results, ref: pd.DataFrame, path: Path) -> Path | Skipped:
-    df = relative_frame(results, ref)
+def relative_to_bvh(results: Results, report_nums: pd.DataFrame, path: Path) -> Path | Skipped:
+    df = relative_frame(results, report_nums)
     if df.empty or not (df["source"] == "ours").any():
         return Skipped("no BVH (median) rows to divide by")
     setup()
@@ -404,21 +404,21 @@ def relative_to_bvh(results: Results, ref: pd.DataFrame, path: Path) -> Path | S
 
 FIGURES = {
     "build_vs_render": ("Build vs render time per structure and model (report defaults), "
-                        "medians with 95% CIs", lambda res, ref, p: build_vs_render(res, p)),
+                        "medians with 95% CIs", lambda res, report_nums, p: build_vs_render(res, p)),
     "relative_to_bvh": ("Build and render time relative to the median-split BVH, ours beside "
                         "the report's", relative_to_bvh),
     "table2_sweeps": ("Table 2's kd-tree parameter sweeps on the bunny, each series relative "
                       "to its first setting", table2_sweeps),
     "per_ray": ("Primitive tests and node visits per ray (primary + shadow)",
-                lambda res, ref, p: per_ray(res, p)),
+                lambda res, report_nums, p: per_ray(res, p)),
     "error_pareto": ("Render time vs wrong answers (false misses + false hits + wrong "
                      "primitives) against the reference, with the Pareto front",
-                     lambda res, ref, p: error_pareto(res, p)),
+                     lambda res, report_nums, p: error_pareto(res, p)),
 }
 
 
-def write_figures(results: Results, ref: pd.DataFrame, out_dir: Path) -> dict[str, Path | Skipped]:
+def write_figures(results: Results, report_nums: pd.DataFrame, out_dir: Path) -> dict[str, Path | Skipped]:
     out = {}
     for name, (_, fn) in FIGURES.items():
-        out[name] = fn(results, ref, out_dir / f"{name}.png")
+        out[name] = fn(results, report_nums, out_dir / f"{name}.png")
     return out

@@ -29,16 +29,18 @@ import pandas as pd
 import yaml
 
 from .grid_config import GridConfig, GridConfigError
-from .render import fmt_sig, md_table
+from .formatting import fmt_sig, md_table
 from .errors import COMPACT_HEADER, compact_errors
 from .schema import ERROR_COLUMNS, Results, normalise_value
 from .selection import kd_auto_depth_pbrt, kd_auto_depth_report
 
 
-# ---- the reference points marked on the heatmaps ---------------------------------------------------
+# ---- published default settings, marked on the heatmaps ---------------------------------------------------
 
 @dataclass(frozen=True)
-class Reference:
+class PublishedSetting:
+    """A setting someone published as the default (the report's Table 3, pbrt's), drawn as a
+    marker on the heatmaps so the grid's best can be read against it."""
     label: str
     marker: str
     colour: str
@@ -46,29 +48,29 @@ class Reference:
     note: str
 
 
-def references(accel: str, triangles: float) -> list[Reference]:
+def published_settings(accel: str, triangles: float) -> list[PublishedSetting]:
     """The report's defaults (its Table 3) and pbrt's, for the accelerators that have them."""
     if accel == "kdtree":
         costs = {"isect_cost": 80, "traversal_cost": 1, "empty_bonus": 0.5}
         return [
-            Reference("report", "*", "white",
+            PublishedSetting("report", "*", "white",
                       {"max_prims": 1, "max_depth": kd_auto_depth_report(triangles), **costs},
                       "report Table 3: maxPrims 1, depth round(8 + 1.3 log2 N), pbrt's SAH costs"),
-            Reference("pbrt-v3", "o", "#e7298a",
+            PublishedSetting("pbrt-v3", "o", "#e7298a",
                       {"max_prims": 1, "max_depth": kd_auto_depth_pbrt(triangles), **costs},
                       "pbrt-v3 KdTreeAccel: maxprims 1, maxdepth -1 = round(8 + 1.3 Log2Int(N)), "
                       "isectcost 80, traversalcost 1, emptybonus 0.5"),
         ]
     if accel == "bvh":
         return [
-            Reference("report", "*", "white", {"split": "median", "max_prims": 1, "max_depth": 50},
+            PublishedSetting("report", "*", "white", {"split": "median", "max_prims": 1, "max_depth": 50},
                       "report Table 3: median split, maxPrims 1, depth 50"),
-            Reference("pbrt-v4", "o", "#e7298a", {"split": "sah", "max_prims": 4},
+            PublishedSetting("pbrt-v4", "o", "#e7298a", {"split": "sah", "max_prims": 4},
                       "pbrt-v4 BVHAggregate: SAH over 12 buckets, maxnodeprims 4 by default "
                       "(clamped to at most 255), no depth limit"),
         ]
     if accel == "lbvh":
-        return [Reference("report", "*", "white", {"max_prims": 1, "max_depth": 50},
+        return [PublishedSetting("report", "*", "white", {"max_prims": 1, "max_depth": 50},
                           "report Table 3: maxPrims 1, depth 50, Morton codes")]
     return []
 
@@ -218,7 +220,7 @@ def analyse(results: Results, cfg: GridConfig, cheap: Results | None = None) -> 
     for extra in ("combo_id", "config"):
         if extra in rows.columns:
             out[extra] = rows[extra].values
-    for col in ERROR_COLUMNS:  # how wrong each candidate is (issue 6), constrained or not
+    for col in ERROR_COLUMNS:  # how wrong each candidate is, constrained or not
         out[col] = rows[col].values
     dicts = list(rows["param_dict"])
     names = list(dict.fromkeys([n for n in cfg.given] + sorted({n for d in dicts for n in d})))
@@ -353,7 +355,7 @@ def _slug(text: str) -> str:
 
 
 def marker_position(axis_values: list[str], value) -> float | None:
-    """Where a reference value sits on a heatmap axis (cell index, fractional between two
+    """Where a published setting's value sits on a heatmap axis (cell index, fractional between two
     numeric cells, geometric axes interpolated in log space); None when off the grid."""
     if value is None:
         return None
@@ -369,7 +371,7 @@ def marker_position(axis_values: list[str], value) -> float | None:
     return float(np.interp(f(v), f(np.array(nums)), np.arange(len(nums))))
 
 
-MARKER_HEIGHT = 0.2  # reference markers sit this far up their cell (the number is at 0.5)
+MARKER_HEIGHT = 0.2  # published-setting markers sit this far up their cell (the number is at 0.5)
 
 
 @dataclass
@@ -417,7 +419,7 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     accepted rows (heatmap_data); grey cells have no row, hatched ones only rejected rows.
     With a cheap pass, cells holding a re-measured candidate are outlined and numbers that
     are final-pass values bold: a cheap minimum (one noisy repetition, and the least of
-    several) can sit below every final value. References and the best cell are marked."""
+    several) can sit below every final value. Published default settings and the best cell are marked."""
     import matplotlib.pyplot as plt
     import seaborn as sns
     from matplotlib.lines import Line2D
@@ -469,20 +471,20 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
             f"best: {p}={best[PARAM_COL + p]}, {q}={best[PARAM_COL + q]} "
             f"({fmt_sig(best['objective'])} s at {int(best['repetitions'])} repetitions)")))
     triangles = float(sel["triangles"].iloc[0])
-    for ref in references(a.config.accel, triangles):
-        vx, vy = ref.values.get(p), ref.values.get(q)
+    for mark in published_settings(a.config.accel, triangles):
+        vx, vy = mark.values.get(p), mark.values.get(q)
         px, py = marker_position(xs, vx), marker_position(ys, vy)
         where = (f"{p}={vx if vx is not None else 'not fixed'}, "
                  f"{q}={vy if vy is not None else 'not fixed'}")
-        star = ref.marker == "*"
-        style = dict(marker=ref.marker, ls="none", mfc=ref.colour if star else "none",
-                     mec="black" if star else ref.colour, mew=1.0 if star else 2.0)
+        star = mark.marker == "*"
+        style = dict(marker=mark.marker, ls="none", mfc=mark.colour if star else "none",
+                     mec="black" if star else mark.colour, mew=1.0 if star else 2.0)
         if px is not None and py is not None:
             # Low in the cell, below the cell's number; a star inside a circle when both coincide.
             ax.plot(px + 0.5, py + MARKER_HEIGHT, ms=8 if star else 12, **style)
         else:
             where += " (off this grid)"
-        handles.append(Line2D([], [], ms=9, label=f"{ref.label}: {where}\n  {ref.note}", **style))
+        handles.append(Line2D([], [], ms=9, label=f"{mark.label}: {where}\n  {mark.note}", **style))
     if data.rejected.any().any():
         why = [f"{c} > {v:g}" for c, v in a.config.constraints.items()] + ["a failed run"]
         handles.append(Patch(facecolor="#d0d0d0", hatch="xxx", edgecolor="#707070",

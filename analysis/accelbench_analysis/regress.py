@@ -1,6 +1,6 @@
 """CI regression check: a fresh run of configs/ci.yaml against the committed baseline.
 
-Three tiers, from the strictest to the noisiest (issue 7):
+Three tiers, from the strictest to the noisiest:
 
 1. Deterministic counts. Tree shape (nodes, leaves, max_depth), traversal work
    (prim_tests, node_visits) and results (rays, hits, shadow_rays, shadow_hits) depend only
@@ -31,14 +31,14 @@ from pathlib import Path
 
 import pandas as pd
 
-from .render import fmt_count, fmt_sig, md_table
+from .formatting import fmt_count, fmt_sig, md_table
 from .schema import INSTRUCTIONS_COLUMN, KEY_COLUMNS, ContractError, Results, load_results
 
 EXIT_PASS, EXIT_REGRESSION, EXIT_BAD_INPUT, EXIT_REMEASURE = 0, 1, 2, 3
 
 EXACT_COUNTS = ["nodes", "leaves", "max_depth", "prim_tests", "node_visits", "rays", "hits",
                 "shadow_rays", "shadow_hits"]
-# Hit errors against the reference (issue 6) are as deterministic as the counts: a change is
+# Hit errors against the `reference` accelerator are as deterministic as the counts: a change is
 # a structure answering differently. Compared where the baseline has them (older
 # baselines predate the columns).
 ERROR_COUNTS = ["false_misses", "false_hits", "prim_mismatches", "nan_results"]
@@ -46,7 +46,8 @@ SAH_COLUMN = "sah_cost"
 SAH_RTOL = 1e-9
 INSTRUCTIONS_TOLERANCE = 0.10  # fail above +10%, remind to update the baseline below -10%
 DEFAULT_TIME_FACTOR = 1.5
-REFERENCE_ACCEL = "embree"
+# Render times are divided by this accelerator's in the same run (the baseline row).
+RATIO_DENOMINATOR = "embree"
 # Columns that, where the harness writes them, must agree between a row and the Embree row
 # it is divided by: the same rays must have been traced.
 RENDER_SETTING_COLUMNS = ["ray_source", "width", "height", "spp", "light", "shading", "threads"]
@@ -270,7 +271,7 @@ def tier_instructions(base: dict, cur: dict, name: dict, tolerance: float) -> Ti
 @dataclass
 class EmbreeRatio:
     ratio: float
-    reference: str = ""  # the Embree row divided by, or why there is no ratio
+    denominator: str = ""  # the Embree row divided by, or why there is no ratio
 
 
 def embree_ratios(results: Results, by_id: bool, path: str) -> dict[str, EmbreeRatio]:
@@ -280,14 +281,14 @@ def embree_ratios(results: Results, by_id: bool, path: str) -> dict[str, EmbreeR
     df = results.rows
     settings = [c for c in RENDER_SETTING_COLUMNS if c in df.columns]
     ok = df[(df["status"] == "ok") & (df["render_s_median"] > 0)]
-    ref = ok[ok["accel"] == REFERENCE_ACCEL].sort_values("params")
+    embree = ok[ok["accel"] == RATIO_DENOMINATOR].sort_values("params")
     group = ["model"] + settings
     first: dict[tuple, pd.Series] = {}
-    for _, e in ref.iterrows():
+    for _, e in embree.iterrows():
         first.setdefault(tuple(str(e[c]) for c in group), e)
     out = {}
     for k, r in keyed(df, by_id, path).items():
-        if r["accel"] == REFERENCE_ACCEL:
+        if r["accel"] == RATIO_DENOMINATOR:
             continue
         if r["status"] != "ok" or _missing(r["render_s_median"]):
             out[k] = EmbreeRatio(math.nan, f"status {r['status']}, no render time")
@@ -311,8 +312,8 @@ def tier_time(base: dict[str, EmbreeRatio], cur: dict[str, EmbreeRatio],
         b, c = base[k], cur[k]
         p = prev.get(k) if prev is not None else None
         if _missing(b.ratio) or _missing(c.ratio):
-            verdict = "no ratio: " + (c.reference if _missing(c.ratio) else
-                                      "baseline has " + b.reference)
+            verdict = "no ratio: " + (c.denominator if _missing(c.ratio) else
+                                      "baseline has " + b.denominator)
             counts["no ratio"] += 1
         elif c.ratio <= b.ratio * factor:
             verdict = "pass"

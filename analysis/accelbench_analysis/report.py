@@ -1,14 +1,16 @@
-"""results/REPORT.md: one page that says where the numbers come from and links the tables,
-the claims and the figures, each with a one-line caption."""
+"""A run's REPORT.md (results/reference/, results/runs/<run>/): one page that says where the
+numbers come from, sets them beside the report's and the reference run's, and links the
+tables, the claims and the figures, each with a one-line caption."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow
+from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
 from .figures import FIGURES, Skipped
-from .reference import REPORT_MACHINE, REPORT_MODELS
-from .render import md_escape
+from .report_numbers import REPORT_MACHINE, REPORT_MODELS
+from .formatting import md_escape
 from .schema import Results
 
 TABLE_CAPTIONS = {
@@ -59,6 +61,14 @@ def claims_lines(rows: list[ClaimRow] | None) -> list[str]:
     if fails:
         out.append("  Not holding here: " + "; ".join(f"{r.claim.id} {md_escape(r.claim.text)}"
                                                      for r in fails) + ".")
+    dependent = [r for r in rows if r.machine_dependent]
+    if dependent:
+        out.append("  Machine-dependent (the verdict differs on the committed reference run): "
+                   + "; ".join(f"{r.claim.id} (here {r.ours.verdict}, reference run "
+                               f"{r.reference.verdict})" for r in dependent) + ".")
+    elif any(r.reference is not None for r in rows):
+        out.append("  Every claim judged on both has the same verdict here as on the committed "
+                   "reference run.")
     unsupported = [r for r in rows if r.report.verdict == FAILS]
     if unsupported:
         out.append("  Not supported by the report's own numbers: " + "; ".join(
@@ -89,9 +99,10 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
         out.append("- [Build and render time against triangles, log-log, with fitted slopes per "
                    "structure](figures/scaling.png) ([slopes](tables/scaling.md)): the Stanford "
                    "dragon decimated with OpenMesh and the bunny Loop-subdivided.")
-    # `make robustness` writes results/robustness/; `tables`/`all` write tables/robustness.md
-    # when given a robustness run's CSV.
-    for rel in ("robustness/robustness.md", "tables/robustness.md", "robustness.md"):
+    # `make robustness` writes results/robustness/ (beside results/reference/, the committed
+    # run); `tables`/`all` write tables/robustness.md when given a robustness run's CSV.
+    for rel in ("robustness/robustness.md", "tables/robustness.md", "robustness.md",
+                "../robustness/robustness.md"):
         if (out_dir / rel).is_file():
             out.append(f"- [Robustness]({rel}): a pass/FAIL verdict per extreme case "
                        f"(configs/robustness.yaml) and accelerator, the failures with their "
@@ -114,8 +125,24 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
     return ["", "## Beyond the report", ""] + out if out else []
 
 
+def comparison_lines(comparison: list[ThreeWay] | None, results: Results,
+                     reference: Results | None, reference_dir: Path | None) -> list[str]:
+    """The times of the three-way comparison inline; every metric in tables/comparison.md."""
+    if comparison is None:
+        return []
+    out = ["", "## This run beside the report and the committed reference run", "",
+           "Per structure and model: the report's number, this run's, the committed reference "
+           "run's, and this/report, this/reference. A time ratio this/reference near 1 means "
+           "this machine reproduces ours; compare the report by orderings (its machine and "
+           "implementation were much slower). The counts (primitive tests, nodes), which must "
+           "equal the reference run's: [tables/comparison.md](tables/comparison.md).", ""]
+    return out + comparison_markdown(comparison, results, reference, reference_dir,
+                                     metrics=TIME_METRICS)[:-1]
+
+
 def report_markdown(results: Results, out_dir: Path, claims: list[ClaimRow] | None,
-                    figures: dict | None) -> str:
+                    figures: dict | None, comparison: list[ThreeWay] | None = None,
+                    reference: Results | None = None, reference_dir: Path | None = None) -> str:
     out = ["# accelbench results", "",
            "A reproduction of the report \"Implementation and Analysis of Acceleration Data "
            "Structures in Ray Tracing\" (Freiburg 2022): its Tables 2, 4 and 5 and the claims "
@@ -123,6 +150,7 @@ def report_markdown(results: Results, out_dir: Path, claims: list[ClaimRow] | No
            "BVH, Embree).", ""]
     out += [f"> **Warning:** {md_escape(w)}\n" for w in results.warnings]
     out += ["## Where these numbers come from", ""] + provenance_lines(results)
+    out += comparison_lines(comparison, results, reference, reference_dir)
     out += ["", "## Stand-ins", ""] + stand_in_lines()
     out += ["", "## Tables", ""]
     for name, caption in TABLE_CAPTIONS.items():
@@ -145,14 +173,17 @@ def report_markdown(results: Results, out_dir: Path, claims: list[ClaimRow] | No
             "- Our \"#int. tests\" are primitive tests summed over all rays (primary + shadow); "
             "the report does not define its count.",
             "", "## Regenerate", "",
-            f"`{REGENERATE}` (runs the harness, then `python -m accelbench_analysis all "
-            f"<csv> --out results`; see analysis/README.md).", ""]
+            f"`{REGENERATE}` (measures on this machine into a new results/runs/<time>-<sha>/, "
+            f"then `python -m accelbench_analysis all <csv> --out <that directory>`; see "
+            f"README.md and analysis/README.md).", ""]
     return "\n".join(out)
 
 
 def write_report(results: Results, out_dir: Path, claims: list[ClaimRow] | None = None,
-                 figures: dict | None = None) -> Path:
+                 figures: dict | None = None, comparison: list[ThreeWay] | None = None,
+                 reference: Results | None = None, reference_dir: Path | None = None) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "REPORT.md"
-    path.write_text(report_markdown(results, out_dir, claims, figures))
+    path.write_text(report_markdown(results, out_dir, claims, figures, comparison, reference,
+                                    reference_dir))
     return path

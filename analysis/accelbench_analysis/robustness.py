@@ -1,5 +1,5 @@
 """robustness.md: the extreme-case catalogue and the stiff-parameter runs of
-configs/robustness.yaml (issue 6) as three tables.
+configs/robustness.yaml as three tables.
 
 (a) A verdict per case and accelerator setting. A case's rows have the model label
     `case-<id>:<name>`, status ok, no timings, and the harness's `verdict` (pass/fail) with
@@ -21,7 +21,7 @@ from pathlib import Path
 import pandas as pd
 
 from .errors import ERROR_METRIC, NOT_MEASURED, error_text, shown_metrics
-from .render import fmt_count, fmt_sig, is_missing, md_escape, md_table
+from .formatting import fmt_count, fmt_sig, is_missing, md_escape, md_table
 from .schema import CASE_PREFIX, Results
 
 ACCEL_ORDER = ("brute_force", "bvh", "lbvh", "kdtree", "embree", "reference")

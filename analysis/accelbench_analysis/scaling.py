@@ -1,4 +1,4 @@
-"""Issue 5, beyond the report: how time grows with the triangle count (configs/scaling.yaml)
+"""Beyond the report: how time grows with the triangle count (configs/scaling.yaml)
 and where in the image a structure spends its work (cost images from `accelbench render
 --cost-out`)."""
 
@@ -15,7 +15,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from .figures import DPI, STRUCTURE_COLOURS, plain_log_ticks  # noqa: E402
-from .schema import PARAM_PREFIX, Results  # noqa: E402
+from .schema import PARAM_PREFIX, ContractError, Results, _lines, _scan_records, _to_numbers  # noqa: E402
 
 TIMES = {"build_s_median": "build", "render_s_median": "render"}
 FAMILY_MARKERS = ["o", "s", "^", "D", "v"]
@@ -117,7 +117,7 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
 
 
 def slopes_markdown(slopes: pd.DataFrame, files: list[str]) -> str:
-    """results/tables/scaling.md: one row per structure, build and render slopes per model."""
+    """OUT/tables/scaling.md: one row per structure, build and render slopes per model."""
     families = sorted(slopes["family"].unique())
     head = ["structure"] + [f"{what} slope, {fam}" for fam in families for what in TIMES.values()]
     lines = ["# Scaling: time ~ triangles^slope", "",
@@ -162,18 +162,39 @@ CLIP_PERCENTILE = 99.5
 
 
 def read_cost_csv(path: Path) -> dict[str, np.ndarray]:
-    """A PREFIX-cost.csv of `accelbench render --cost-out` as one 2-D array per metric."""
-    df = pd.read_csv(path)
+    """A PREFIX-cost.csv of `accelbench render --cost-out` as one 2-D array per metric.
+    Refuses (naming the file, line and column) a row cut short, a value that is not a
+    finite count >= 0, a coordinate that is not an integer, and a pixel missing or twice."""
+    path = Path(path)
+    if not path.is_file():
+        raise ContractError(f"{path}: no such file")
+    starts = _scan_records(path)
+    df = pd.read_csv(path, dtype=str, keep_default_na=False)
     missing = {"x", "y", *COST_METRICS} - set(df.columns)
     if missing:
-        raise ValueError(f"{path}: not a cost CSV (missing {', '.join(sorted(missing))})")
-    w, h = int(df["x"].max()) + 1, int(df["y"].max()) + 1
+        raise ContractError(f"{path}: not a cost CSV (missing {', '.join(sorted(missing))})")
+    if df.empty:
+        raise ContractError(f"{path}: no pixels")
+    problems = _to_numbers(df, ["x", "y", *COST_METRICS], starts)
+    for col in ("x", "y"):
+        bad = df[col].isna() | (df[col] != df[col].round())
+        if not problems and bad.any():
+            problems.append(f"column {col!r} has values that are not pixel coordinates on "
+                            f"{_lines(starts, df.index[bad])}")
+    if problems:
+        raise ContractError(f"{path}: " + "; ".join(problems))
+    x, y = df["x"].astype(int).to_numpy(), df["y"].astype(int).to_numpy()
+    w, h = int(x.max()) + 1, int(y.max()) + 1
+    seen = pd.Series(y * w + x).duplicated()
+    if seen.any():
+        raise ContractError(f"{path}: pixel ({x[seen.idxmax()]}, {y[seen.idxmax()]}) a second time on "
+                            f"{_lines(starts, seen.index[seen])}")
     if len(df) != w * h:
-        raise ValueError(f"{path}: {len(df)} rows for a {w}x{h} image")
+        raise ContractError(f"{path}: {len(df)} rows for a {w}x{h} image")
     out = {}
     for m in COST_METRICS:
-        img = np.zeros((h, w))
-        img[df["y"].to_numpy(), df["x"].to_numpy()] = df[m].to_numpy(dtype=float)
+        img = np.full((h, w), np.nan)
+        img[y, x] = df[m].to_numpy(dtype=float)
         out[m] = img
     return out
 

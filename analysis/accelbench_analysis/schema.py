@@ -15,6 +15,7 @@ their group, and a claim that would compare rows of different groups is "not com
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,8 +50,8 @@ PROVENANCE_COLUMNS = [
 REQUIRED_COLUMNS = (IDENTITY_COLUMNS + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
                     + PROVENANCE_COLUMNS)
 
-# Written by the harness once the reference comparison exists (issue 6); every consumer
-# must cope with their absence (has_error_columns()). Counts are over the primary rays
+# Written by the harness when it compares with the `reference` accelerator; every consumer
+# must cope with their absence (older CSVs; has_error_columns()). Counts are over the primary rays
 # (`rays`) against the double-precision `reference` accelerator; empty = not measured.
 ERROR_COLUMNS = [
     "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max",
@@ -64,8 +65,8 @@ VERDICT_COLUMNS = ["verdict", "verdict_counts"]
 VERDICTS = ("pass", "fail")
 # The model label of a catalogue case's rows: `case-<id>:<name>` (e.g. case-2a:closed-...).
 CASE_PREFIX = "case-"
-# Every optional column of issue 6, in the harness's order (after `instructions`).
-ISSUE6_COLUMNS = ERROR_COLUMNS + [PEAK_RSS_COLUMN] + VERDICT_COLUMNS
+# The optional columns after `instructions` in the harness's order: errors, memory, verdicts.
+ERROR_MEMORY_VERDICT_COLUMNS = ERROR_COLUMNS + [PEAK_RSS_COLUMN] + VERDICT_COLUMNS
 
 # Written by the harness for the CI regression runs (tier 2 of `regress`): callgrind's
 # instruction count (Ir) of the measured render, empty where it was not measured.
@@ -95,6 +96,13 @@ PARAM_PREFIX = "param."
 
 # Median of the .reps.csv must reproduce the summary's median to this relative tolerance.
 REPS_MEDIAN_RTOL = 1e-6
+
+# Values every numeric column must hold where it is not empty: a finite number, never
+# negative (counts, sizes, errors, times). Times are more: a measured duration is > 0 (the
+# standard deviation may be 0). A NaN, an infinity, a negative or a zero time is a broken
+# measurement or a corrupted file, never a result: loading refuses it, naming the cell.
+POSITIVE_TIME_COLUMNS = [c for c in TIMING_COLUMNS if not c.endswith("_stddev")]
+REPS_TIME_COLUMNS = ["build_s", "render_s"]
 
 
 class ContractError(ValueError):
@@ -198,20 +206,81 @@ def _rename_param_columns(header: list[str]) -> list[str]:
     return names
 
 
-def _to_numbers(df: pd.DataFrame, columns: list[str], path: Path) -> list[str]:
-    """Converts the columns in place (empty text = missing); returns the problems found."""
+def _scan_records(path: Path) -> list[int]:
+    """The line each data row starts on (1-based, the header is line 1). Refuses, naming the
+    line, a row with more or fewer fields than the header (a row cut short), an empty line,
+    and a file whose last row has no line break (the harness ends every row with one: a
+    file that does not was cut while it was written)."""
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = raw[:e.start].count(b"\n") + 1
+        raise ContractError(f"{path}: line {line}: not UTF-8 text ({e.reason})") from None
+    starts: list[int] = []
+    problems: list[str] = []
+    reader = csv.reader(io.StringIO(text, newline=""), strict=True)
+    try:
+        width = len(next(reader))
+        line = reader.line_num + 1
+        for record in reader:
+            start, line = line, reader.line_num + 1
+            row = len(starts) + 1
+            if not record:
+                problems.append(f"line {start}: an empty line")
+            elif len(record) != width:
+                problems.append(f"line {start} (row {row}): {len(record)} fields but the header has "
+                                f"{width}" + (" (the row is cut short)" if len(record) < width else ""))
+            starts.append(start)
+    except StopIteration:
+        raise ContractError(f"{path}: empty file (no header)") from None
+    except csv.Error as e:
+        raise ContractError(f"{path}: line {reader.line_num}: not a well-formed CSV ({e})") from None
+    if text and not text.endswith("\n"):
+        problems.append(f"line {text.count(chr(10)) + 1} (the last row) has no line break at its end: "
+                        f"the file was cut while it was written")
+    if problems:
+        raise ContractError(f"{path}: " + "; ".join(problems[:5])
+                            + (f"; and {len(problems) - 5} more" if len(problems) > 5 else ""))
+    return starts
+
+
+def _lines(starts: list[int], index) -> str:
+    """"line 3 (row 2)" for up to five data rows (row: counted from 1 after the header)."""
+    picked = [int(i) for i in list(index)[:5]]
+    more = f" and {len(index) - 5} more" if len(index) > 5 else ""
+    return ", ".join(f"line {starts[i]} (row {i + 1})" for i in picked) + more
+
+
+def _to_numbers(df: pd.DataFrame, columns: list[str], starts: list[int],
+                positive: list[str] = ()) -> list[str]:
+    """Converts the columns in place (empty text = missing); returns the problems found,
+    each naming the column, the lines and an example value. Non-empty cells must be finite
+    and not negative; those of `positive` columns greater than 0."""
     problems = []
     for col in columns:
         if col not in df.columns:
             continue
         text = df[col].astype(str).str.strip()
-        nums = pd.to_numeric(text.where(text != ""), errors="coerce")
-        bad = (text != "") & nums.isna() & ~text.str.lower().isin(["nan", "inf", "-inf"])
-        if bad.any():
-            rows = [int(i) + 2 for i in df.index[bad][:5]]  # +2: header line, 1-based
-            problems.append(f"column {col!r} has non-numeric values on lines {rows} "
-                            f"(e.g. {text[bad].iloc[0]!r})")
-        df[col] = nums.astype(float)
+        nums = pd.to_numeric(text.where(text != ""), errors="coerce").astype(float)
+        present = text != ""
+        checks = [
+            (present & nums.isna() & ~text.str.lower().isin(["nan", "-nan", "+nan"]),
+             "non-numeric values", ""),
+            (present & ~np.isfinite(nums.fillna(0.0)) | present & nums.isna()
+             & text.str.lower().isin(["nan", "-nan", "+nan"]),
+             "values that are not finite", ""),
+            (present & np.isfinite(nums.fillna(0.0)) & (nums < 0), "negative values", ""),
+        ]
+        if col in positive:
+            checks.append((present & (nums == 0), "zero times", ": a measured duration is > 0"))
+        for bad, what, note in checks:
+            if bad.any():
+                idx = df.index[bad]
+                problems.append(f"column {col!r} has {what} on {_lines(starts, idx)} "
+                                f"(e.g. {text[bad].iloc[0]!r}){note}")
+                break
+        df[col] = nums
     return problems
 
 
@@ -224,6 +293,7 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         raise ContractError(f"{path}: this is a per-repetition file; pass the summary CSV "
                             f"beside it (its .reps.csv is read automatically)")
     header = _read_header(path)
+    starts = _scan_records(path)
     names = _rename_param_columns(header)
     missing = [c for c in REQUIRED_COLUMNS if c not in names]
     if missing:
@@ -238,19 +308,18 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         raise ContractError(f"{path}: not a well-formed CSV ({e})") from None
     if df.empty:
         raise ContractError(f"{path}: no data rows")
-    problems = _to_numbers(df, NUMERIC_COLUMNS, path)
+    problems = _to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
     if "ray_set" not in df.columns:
         df["ray_set"] = CAMERA_SET
     df["ray_set"] = df["ray_set"].str.strip().replace("", CAMERA_SET)
-    for col in ("render_cpu_s_median",):
-        if col in df.columns:
-            problems += _to_numbers(df, [col], path)
+    if "render_cpu_s_median" in df.columns:
+        problems += _to_numbers(df, ["render_cpu_s_median"], starts)
 
     status = df["status"].str.strip().str.lower()
     bad_status = ~status.isin(STATUSES)
     if bad_status.any():
         problems.append(f"column 'status' must be one of {', '.join(STATUSES)}; found "
-                        f"{sorted(set(df['status'][bad_status]))}")
+                        f"{sorted(set(df['status'][bad_status]))} on {_lines(starts, df.index[bad_status])}")
     df["status"] = status
 
     if "verdict" in df.columns:
@@ -258,14 +327,13 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         bad = ~verdict.isin(VERDICTS + ("",))
         if bad.any():
             problems.append(f"column 'verdict' must be pass, fail or empty; found "
-                            f"{sorted(set(df['verdict'][bad]))} on lines "
-                            f"{[int(i) + 2 for i in df.index[bad][:5]]}")
+                            f"{sorted(set(df['verdict'][bad]))} on {_lines(starts, df.index[bad])}")
         df["verdict"] = verdict
 
     for col in ("model", "accel", "config"):
         empty = df[col].str.strip() == ""
         if empty.any():
-            problems.append(f"column {col!r} is empty on lines {[int(i) + 2 for i in df.index[empty][:5]]}")
+            problems.append(f"column {col!r} is empty on {_lines(starts, df.index[empty])}")
 
     try:
         df["param_dict"] = [parse_params(p) for p in df["params"]]
@@ -275,8 +343,9 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     dirty = df["git_dirty"].str.strip().str.lower()
     dirty = dirty.replace({"1": "true", "0": "false", "yes": "true", "no": "false"})
     if not dirty.isin(["true", "false"]).all():
+        bad = ~dirty.isin(["true", "false"])
         problems.append(f"column 'git_dirty' must be true/false; found "
-                        f"{sorted(set(df['git_dirty'][~dirty.isin(['true', 'false'])]))}")
+                        f"{sorted(set(df['git_dirty'][bad]))} on {_lines(starts, df.index[bad])}")
     df["git_dirty"] = dirty
 
     if problems:
@@ -294,13 +363,16 @@ def read_csv(path: str | Path) -> pd.DataFrame:
 
 
 def read_reps(path: Path) -> pd.DataFrame:
+    """Reads a .reps.csv (one row per timed repetition) with the same checks as read_csv:
+    complete rows, and times that are positive finite numbers."""
     header = [h.strip() for h in _read_header(path)]
     missing = [c for c in REPS_REQUIRED_COLUMNS if c not in header]
     if missing:
         raise ContractError(f"{path}: missing required columns: {', '.join(missing)}")
+    starts = _scan_records(path)
     df = pd.read_csv(path, dtype=str, keep_default_na=False)
     df.columns = [c.strip() for c in df.columns]
-    problems = _to_numbers(df, ["repetition", "build_s", "render_s"], path)
+    problems = _to_numbers(df, ["repetition"] + REPS_TIME_COLUMNS, starts, REPS_TIME_COLUMNS)
     if problems:
         raise ContractError(f"{path}: " + "; ".join(problems))
     df["source"] = str(path)

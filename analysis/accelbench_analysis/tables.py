@@ -21,9 +21,9 @@ import pandas as pd
 
 from .errors import (COMPACT_HEADER, NOT_MEASURED, any_error_values, compact_errors, error_text,
                      note_errors, shown_metrics)
-from .reference import (REPORT_MACHINE, REPORT_MODEL, REPORT_PRIMARY_RAYS, TABLE2_MODEL,
-                        TABLE4_MODELS, TABLE5_MODELS, our_model, reference_value)
-from .render import (Cell, Section, TableDoc, fmt_count, fmt_measure, fmt_sig, is_missing,
+from .report_numbers import (REPORT_MACHINE, REPORT_MODEL, REPORT_PRIMARY_RAYS, TABLE2_MODEL,
+                        TABLE4_MODELS, TABLE5_MODELS, our_model, report_value)
+from .formatting import (Cell, Section, TableDoc, fmt_count, fmt_measure, fmt_sig, is_missing,
                      to_latex, to_markdown)
 from .schema import Results
 from .selection import (AUTO, STRUCTURE, STRUCTURES, Pick, Picker, Spec,
@@ -96,7 +96,7 @@ def tag_of(pick: Pick) -> str:
     return "" if pick.row is None else str(pick.row["prov_group"])
 
 
-# ---- errors against the reference (issue 6) --------------------------------------------
+# ---- errors against the `reference` accelerator --------------------------------------------------
 
 def picked_rows(picks) -> pd.DataFrame:
     """The rows behind a table's cells, for deciding which error metrics it shows."""
@@ -155,8 +155,8 @@ def note_times() -> str:
             f"structures instead (the 'relative to BVH' table).")
 
 
-def note_prim_tests(ref: pd.DataFrame, models: list[str], table: int) -> str:
-    sub = ref[(ref["table"] == table) & ref["model"].isin(models)]
+def note_prim_tests(report_nums: pd.DataFrame, models: list[str], table: int) -> str:
+    sub = report_nums[(report_nums["table"] == table) & report_nums["model"].isin(models)]
     below = sub[sub["prim_tests"] < REPORT_PRIMARY_RAYS]
     text = ("#int. tests: ours are primitive (ray/triangle) tests summed over every ray of "
             "the render, primary and shadow. The report does not define its count")
@@ -168,13 +168,13 @@ def note_prim_tests(ref: pd.DataFrame, models: list[str], table: int) -> str:
     return text + ". Compare how the counts move between structures and settings, not their size."
 
 
-def note_primitives(ref: pd.DataFrame, results: Results, report_models: list[str]) -> str:
+def note_primitives(report_nums: pd.DataFrame, results: Results, report_models: list[str]) -> str:
     same, differ = [], []
     for rm in report_models:
         if REPORT_MODEL[rm].stand_in:
             continue
         tri, vert = model_counts(results, our_model(rm, set(results.rows["model"])))
-        prims = ref.loc[ref["model"] == rm, "primitives"]
+        prims = report_nums.loc[report_nums["model"] == rm, "primitives"]
         if tri is None or prims.empty:
             continue
         (same if int(prims.iloc[0]) == int(vert) else differ).append(
@@ -189,9 +189,9 @@ def note_primitives(ref: pd.DataFrame, results: Results, report_models: list[str
     return text
 
 
-def note_bvh_nodes(ref: pd.DataFrame, report_models: list[str]) -> str | None:
-    sub = ref[(ref["accelerator"] == "bvh") & ref["model"].isin(report_models)
-              & (ref["setting"] == "default")]
+def note_bvh_nodes(report_nums: pd.DataFrame, report_models: list[str]) -> str | None:
+    sub = report_nums[(report_nums["accelerator"] == "bvh") & report_nums["model"].isin(report_models)
+              & (report_nums["setting"] == "default")]
     if sub.empty:
         return None
     exact = sub["nodes"] == 2 * sub["primitives"] - 1
@@ -262,7 +262,7 @@ def structure_rows(picker: Picker, models: list[str]) -> list[StructureRow]:
     return rows
 
 
-def model_table(results: Results, ref: pd.DataFrame, number: int,
+def model_table(results: Results, report_nums: pd.DataFrame, number: int,
                 report_models: list[str]) -> list[TableDoc]:
     picker = Picker(results)
     present = picker.models
@@ -276,7 +276,7 @@ def model_table(results: Results, ref: pd.DataFrame, number: int,
         cells = [Cell(label)]
         for rm, o in zip(report_models, ours):
             ours_v = model_counts(results, o)[idx]
-            rep = ref.loc[(ref["model"] == rm) & (ref["table"] == number), "primitives"]
+            rep = report_nums.loc[(report_nums["model"] == rm) & (report_nums["table"] == number), "primitives"]
             rep_v = None if rep.empty else float(rep.iloc[0])
             cells += [Cell(fmt_count(ours_v)), Cell(fmt_count(rep_v)),
                       Cell(fmt_sig(ratio(ours_v, rep_v)))]
@@ -294,7 +294,7 @@ def model_table(results: Results, ref: pd.DataFrame, number: int,
                 if key not in picks:
                     picks[key] = picker.pick(o, sr.structure.spec, sr.variant)
                 pick = picks[key]
-                rep = (reference_value(ref, rm, sr.structure.report_accel, "default", metric.report)
+                rep = (report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report)
                        if sr.structure.report_accel else None)
                 cells += triple(pick, metric, rep, tag_of(pick))
                 if (sr.structure.key == "embree" and pick.ok and not metric.timed
@@ -310,8 +310,8 @@ def model_table(results: Results, ref: pd.DataFrame, number: int,
         notes += [n + "." for n in pick.notes]
 
     variant_seen = any(sr.variant for sr in srows)
-    fixed = [note_primitives(ref, results, report_models), note_bvh_nodes(ref, report_models),
-             note_prim_tests(ref, report_models, number), note_times()]
+    fixed = [note_primitives(report_nums, results, report_models), note_bvh_nodes(report_nums, report_models),
+             note_prim_tests(report_nums, report_models, number), note_times()]
     fixed += note_structures(variant_seen, embree_missing_counters)
     fixed += [note_errors(picked_rows(picks.values()))]
     fixed += note_stand_ins(report_models, present) + note_tags(results)
@@ -323,10 +323,10 @@ def model_table(results: Results, ref: pd.DataFrame, number: int,
     main = TableDoc(f"table{number}", title, caption, groups, header, rows,
                     notes=[n for n in fixed if n] + notes, warnings=list(results.warnings),
                     show_tags=results.mixed)
-    return [main, relative_table(results, ref, number, report_models, picker, srows, ours)]
+    return [main, relative_table(results, report_nums, number, report_models, picker, srows, ours)]
 
 
-def relative_table(results: Results, ref: pd.DataFrame, number: int, report_models: list[str],
+def relative_table(results: Results, report_nums: pd.DataFrame, number: int, report_models: list[str],
                    picker: Picker, srows: list[StructureRow], ours: list[str]) -> TableDoc:
     """Times relative to the median-split BVH on the same model: survives a change of machine."""
     bvh = STRUCTURE["bvh"]
@@ -358,8 +358,8 @@ def relative_table(results: Results, ref: pd.DataFrame, number: int, report_mode
                 r_ours = ratio(pick.value(metric.ours), den.value(metric.ours))
                 r_rep = None
                 if sr.structure.report_accel:
-                    r_rep = ratio(reference_value(ref, rm, sr.structure.report_accel, "default", metric.report),
-                                  reference_value(ref, rm, "bvh", "default", metric.report))
+                    r_rep = ratio(report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report),
+                                  report_value(report_nums, rm, "bvh", "default", metric.report))
                 tag = tag_of(pick) if tag_of(pick) == tag_of(den) else f"{tag_of(pick)}/{tag_of(den)}"
                 cells += [Cell(fmt_sig(r_ours), tag if r_ours is not None else ""), Cell(fmt_sig(r_rep))]
             rows.append(cells)
@@ -381,11 +381,11 @@ def relative_table(results: Results, ref: pd.DataFrame, number: int, report_mode
 
 # ---- Table 2 ----------------------------------------------------------------------------
 
-def table2(results: Results, ref: pd.DataFrame) -> list[TableDoc]:
+def table2(results: Results, report_nums: pd.DataFrame) -> list[TableDoc]:
     picker = Picker(results)
     present = picker.models
     model = our_model(TABLE2_MODEL, present)
-    sub = ref[ref["table"] == 2]
+    sub = report_nums[report_nums["table"] == 2]
     settings = list(sub["setting"])
     depths = [s.split("=")[1] for s in settings if s.startswith("maxDepth=")]
     metrics = [METRIC["nodes"], METRIC["prim_tests"], METRIC["build"], METRIC["render"]]
@@ -403,7 +403,7 @@ def table2(results: Results, ref: pd.DataFrame) -> list[TableDoc]:
         row_picks.append(pick)
         rows.append([Cell(setting), Cell(kd_params_text(pick, spec))] +
                     [c for m in metrics for c in
-                     triple(pick, m, reference_value(ref, TABLE2_MODEL, "kdtree", setting, m.report), tag_of(pick))])
+                     triple(pick, m, report_value(report_nums, TABLE2_MODEL, "kdtree", setting, m.report), tag_of(pick))])
         if not pick.ok:
             notes.append(f"{setting} ({spec.describe()}): {pick.reason}.")
         notes += [n + "." for n in pick.notes]
@@ -435,13 +435,13 @@ def table2(results: Results, ref: pd.DataFrame) -> list[TableDoc]:
              + (f"max_prims={fixed_mp}, the value our depth sweep was run with (the report does "
                 f"not state the maxPrims of its depth sweep)." if fixed_mp else
                 "whatever max_prims our depth sweep used (none found).")]
-    kd_default = reference_value(ref, TABLE2_MODEL, "kdtree", "default", "nodes")
-    mp1 = reference_value(ref, TABLE2_MODEL, "kdtree", "maxPrims=1", "nodes")
+    kd_default = report_value(report_nums, TABLE2_MODEL, "kdtree", "default", "nodes")
+    mp1 = report_value(report_nums, TABLE2_MODEL, "kdtree", "maxPrims=1", "nodes")
     if kd_default is not None and mp1 is not None and kd_default != mp1:
         fixed.append(f"The report's maxPrims=1 row ({int(mp1):,} nodes) and its Table 4 kd-tree "
                      f"on the same bunny with the same maxPrims=1 default ({int(kd_default):,} "
                      f"nodes) differ: the report's two runs were not identical.")
-    fixed += [note_prim_tests(ref, [TABLE2_MODEL], 2), note_times(),
+    fixed += [note_prim_tests(report_nums, [TABLE2_MODEL], 2), note_times(),
               note_errors(picked_rows(row_picks))] + note_tags(results)
     doc = TableDoc("table2", "Table 2: kd-tree parameters on the Stanford bunny", caption,
                    groups, header, rows, notes=fixed + notes, warnings=list(results.warnings),
@@ -472,16 +472,16 @@ def kd_params_text(pick: Pick, spec: Spec) -> str:
 
 # ---- output -----------------------------------------------------------------------------
 
-def build_tables(results: Results, ref: pd.DataFrame) -> dict[str, list[TableDoc]]:
-    return {"table2": table2(results, ref),
-            "table4": model_table(results, ref, 4, TABLE4_MODELS),
-            "table5": model_table(results, ref, 5, TABLE5_MODELS)}
+def build_tables(results: Results, report_nums: pd.DataFrame) -> dict[str, list[TableDoc]]:
+    return {"table2": table2(results, report_nums),
+            "table4": model_table(results, report_nums, 4, TABLE4_MODELS),
+            "table5": model_table(results, report_nums, 5, TABLE5_MODELS)}
 
 
-def write_tables(results: Results, ref: pd.DataFrame, out_dir: Path) -> list[Path]:
+def write_tables(results: Results, report_nums: pd.DataFrame, out_dir: Path) -> list[Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, docs in build_tables(results, ref).items():
+    for name, docs in build_tables(results, report_nums).items():
         md = out_dir / f"{name}.md"
         md.write_text("\n".join(to_markdown(d) for d in docs))
         tex = out_dir / f"{name}.tex"

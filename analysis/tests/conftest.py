@@ -2,14 +2,14 @@ from pathlib import Path
 
 import pytest
 
-from accelbench_analysis.reference import load_reference
+from accelbench_analysis.report_numbers import load_report_numbers
 from accelbench_analysis.schema import load_results
 from synthetic import realistic_rows, write_csv
 
 
 @pytest.fixture(scope="session")
-def ref():
-    return load_reference()
+def report_nums():
+    return load_report_numbers()
 
 
 @pytest.fixture(scope="session")

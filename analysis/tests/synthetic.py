@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accelbench_analysis.schema import (COUNT_COLUMNS, IDENTITY_COLUMNS, ISSUE6_COLUMNS,
+from accelbench_analysis.schema import (COUNT_COLUMNS, IDENTITY_COLUMNS, ERROR_MEMORY_VERDICT_COLUMNS,
                                         PROVENANCE_COLUMNS, STATUS_COLUMNS, TIMING_COLUMNS)
 
 # The harness's per-parameter columns, in the order the contract lists them.
@@ -34,11 +34,11 @@ MODELS = {  # name: (triangles, vertices)
 
 def header(with_errors: bool = False) -> list[str]:
     """The harness's header: note that max_depth and threads occur twice (parameter and
-    statistic/provenance), which the loader resolves by position. with_errors adds issue 6's
-    columns (errors vs the reference, peak_rss_bytes, verdict, verdict_counts)."""
+    statistic/provenance), which the loader resolves by position. with_errors adds the
+    optional columns (errors vs the reference, peak_rss_bytes, verdict, verdict_counts)."""
     cols = IDENTITY_COLUMNS + PARAM_NAMES + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
     if with_errors:
-        cols += ISSUE6_COLUMNS
+        cols += ERROR_MEMORY_VERDICT_COLUMNS
     return cols + PROVENANCE_COLUMNS
 
 
@@ -48,7 +48,7 @@ def row(model: str, accel: str, params: dict, *, build=None, render=None, nodes=
         tree_depth=None, sah_cost=None, extra: dict | None = None, **provenance) -> dict:
     """One CSV row as a dict keyed by the header's positions (see write_csv). `extra` holds
     the values of write_csv's extra_columns (combo_id, instructions, ...); `errors` the
-    values of issue 6's columns (written with write_csv(with_errors=True))."""
+    values of the error, memory and verdict columns (written with write_csv(with_errors=True))."""
     tri, vert = MODELS.get(model, (1000, 600))
     canon = ";".join(f"{k}={v}" for k, v in params.items())
     r = {"config": config, "model": model, "triangles": tri, "vertices": vert, "accel": accel,
@@ -95,7 +95,7 @@ def write_csv(path: Path, rows: list[dict], with_errors: bool = False,
         vals += [r[c] for c in STATUS_COLUMNS + TIMING_COLUMNS]
         vals += [r["stat_max_depth"] if c == "max_depth" else r[c] for c in COUNT_COLUMNS]
         if with_errors:
-            vals += [r["errors"].get(c, "") for c in ISSUE6_COLUMNS]
+            vals += [r["errors"].get(c, "") for c in ERROR_MEMORY_VERDICT_COLUMNS]
         vals += [r["extra"].get(c, "") for c in extra_columns]
         vals += [r["prov"][c] for c in PROVENANCE_COLUMNS]
         lines.append(vals)

@@ -16,27 +16,27 @@ CLAIM = {c.id: c for c in CLAIMS}
 REPORT_FAILS = {"5.1-b", "5.3-b"}
 
 
-def verdict(ref, claim_id):
-    return evaluate(CLAIM[claim_id], ReportSource(ref))
+def verdict(report_nums, claim_id):
+    return evaluate(CLAIM[claim_id], ReportSource(report_nums))
 
 
-def test_every_claim_on_the_report_numbers(ref):
+def test_every_claim_on_the_report_numbers(report_nums):
     for c in CLAIMS:
-        f = evaluate(c, ReportSource(ref))
+        f = evaluate(c, ReportSource(report_nums))
         assert f.verdict == (FAILS if c.id in REPORT_FAILS else HOLDS), (c.id, f.evidence)
 
 
-def setv(ref, model, accel, setting, column, value):
-    sel = (ref["model"] == model) & (ref["accelerator"] == accel) & (ref["setting"] == setting)
+def setv(report_nums, model, accel, setting, column, value):
+    sel = (report_nums["model"] == model) & (report_nums["accelerator"] == accel) & (report_nums["setting"] == setting)
     assert sel.sum() == 1
-    ref.loc[sel, column] = value
+    report_nums.loc[sel, column] = value
 
 
-def scale(ref, models, accel, column, factor, like=None):
+def scale(report_nums, models, accel, column, factor, like=None):
     for m in models:
         src = like or accel
-        base = ref.loc[(ref["model"] == m) & (ref["accelerator"] == src) & (ref["setting"] == "default"), column].iloc[0]
-        setv(ref, m, accel, "default", column, base * factor)
+        base = report_nums.loc[(report_nums["model"] == m) & (report_nums["accelerator"] == src) & (report_nums["setting"] == "default"), column].iloc[0]
+        setv(report_nums, m, accel, "default", column, base * factor)
 
 
 B, I, D, H, T, C = "stanford-bunny", "igea", "asian-dragon", "happy-buddha", "trees", "sci-fi-city"
@@ -79,22 +79,22 @@ def test_every_claim_has_a_flip():
 
 
 @pytest.mark.parametrize("claim_id", sorted(FLIPS))
-def test_crafted_change_flips_the_verdict(ref, claim_id):
-    before = verdict(ref, claim_id).verdict
-    changed = ref.copy()
+def test_crafted_change_flips_the_verdict(report_nums, claim_id):
+    before = verdict(report_nums, claim_id).verdict
+    changed = report_nums.copy()
     FLIPS[claim_id](changed)
     after = evaluate(CLAIM[claim_id], ReportSource(changed))
     assert {before, after.verdict} == {HOLDS, FAILS}, after.evidence
 
 
-def test_missing_number_is_not_comparable(ref):
-    cut = ref[~((ref["model"] == "trees") & (ref["accelerator"] == "kdtree"))]
+def test_missing_number_is_not_comparable(report_nums):
+    cut = report_nums[~((report_nums["model"] == "trees") & (report_nums["accelerator"] == "kdtree"))]
     f = evaluate(CLAIM["5.3-a"], ReportSource(cut))
     assert f.verdict == NOT_COMPARABLE and "kdtree" in f.evidence and "trees" in f.evidence
 
 
-def test_failed_premise_is_not_comparable(ref):
-    changed = ref.copy()
+def test_failed_premise_is_not_comparable(report_nums):
+    changed = report_nums.copy()
     changed.loc[changed["model"] == "sci-fi-city", "primitives"] = 200000
     f = evaluate(CLAIM["5.3-f"], ReportSource(changed))
     assert f.verdict == NOT_COMPARABLE and "premise" in f.evidence
@@ -110,9 +110,9 @@ def test_approx_tolerance():
 
 # ---- our side ------------------------------------------------------------------------------
 
-def ours(tmp_path, rows, ref, name="o.csv", more=()):
+def ours(tmp_path, rows, report_nums, name="o.csv", more=()):
     res = load_results([write_csv(tmp_path / name, rows)] + list(more))
-    return OurSource(res, ref)
+    return OurSource(res, report_nums)
 
 
 def bunny_igea_rows(**prov):
@@ -124,39 +124,39 @@ def bunny_igea_rows(**prov):
     return out
 
 
-def test_ours_holds_and_fails(tmp_path, ref):
-    src = ours(tmp_path, bunny_igea_rows(), ref)
+def test_ours_holds_and_fails(tmp_path, report_nums):
+    src = ours(tmp_path, bunny_igea_rows(), report_nums)
     assert evaluate(CLAIM["5.2-a"], src).verdict == HOLDS
     assert evaluate(CLAIM["5.2-c"], src).verdict == HOLDS   # LBVH/BVH build exactly 2
     assert evaluate(CLAIM["5.2-f"], src).verdict == HOLDS
     rows = bunny_igea_rows()
     rows[1] = row("stanford-bunny", "lbvh", LBVH, build=0.05, render=1.0)  # LBVH fastest on the bunny
-    f = evaluate(CLAIM["5.2-a"], ours(tmp_path, rows, ref, "o2.csv"))
+    f = evaluate(CLAIM["5.2-a"], ours(tmp_path, rows, report_nums, "o2.csv"))
     assert f.verdict == FAILS and "bunny ✗" in f.evidence
 
 
-def test_ours_missing_row_names_the_reason(tmp_path, ref):
+def test_ours_missing_row_names_the_reason(tmp_path, report_nums):
     rows = bunny_igea_rows()
     rows[2] = row("stanford-bunny", "kdtree", KD, status="timeout", message="600 s")
-    f = evaluate(CLAIM["5.2-b"], ours(tmp_path, rows, ref))
+    f = evaluate(CLAIM["5.2-b"], ours(tmp_path, rows, report_nums))
     assert f.verdict == NOT_COMPARABLE and "timeout" in f.evidence and "stanford-bunny" in f.evidence
 
 
-def test_ours_mixed_provenance_is_not_comparable(tmp_path, ref):
+def test_ours_mixed_provenance_is_not_comparable(tmp_path, report_nums):
     rows = bunny_igea_rows()
     other = write_csv(tmp_path / "other.csv", [row("igea", "kdtree", dict(KD, threads="2"), build=9, render=9,
                                                    cpu="Other CPU")])
-    src = ours(tmp_path, rows[:5] + rows[6:], ref, more=[other])  # Igea's kd-tree only from the other machine
+    src = ours(tmp_path, rows[:5] + rows[6:], report_nums, more=[other])  # Igea's kd-tree only from the other machine
     f = evaluate(CLAIM["5.2-a"], src)
     assert f.verdict == NOT_COMPARABLE and "provenance groups (A, B)" in f.evidence
     # A claim that touches only one machine's rows is still judged.
     assert evaluate(CLAIM["5.2-c"], src).verdict == HOLDS
 
 
-def test_ours_prefers_report_traversal(tmp_path, ref):
+def test_ours_prefers_report_traversal(tmp_path, report_nums):
     rows = bunny_igea_rows()
     rows[0] = row("stanford-bunny", "bvh", dict(BVH, traversal="ordered"), build=0.1, render=0.5)
     rows.append(row("stanford-bunny", "bvh", dict(BVH, traversal="report"), build=0.1, render=2.0))
-    src = ours(tmp_path, rows, ref)
+    src = ours(tmp_path, rows, report_nums)
     assert src.get("stanford-bunny", "bvh", "render") == 2.0
     assert src.variants_used == {"report"}

@@ -1,4 +1,4 @@
-"""Issue 6's columns: loading them (or their absence), the error rows and columns of every
+"""The error columns: loading them (or their absence), the error rows and columns of every
 table, and the error Pareto figure on zero and non-zero errors."""
 
 import math
@@ -9,7 +9,7 @@ import pytest
 
 from accelbench_analysis import figures
 from accelbench_analysis.errors import NOT_MEASURED
-from accelbench_analysis.render import Section, to_latex, to_markdown
+from accelbench_analysis.formatting import Section, to_latex, to_markdown
 from accelbench_analysis.schema import ContractError, load_results, read_csv
 from accelbench_analysis.selection import STRUCTURE, Picker
 from accelbench_analysis.tables import NOT_MEASURED_SECTION, model_table, table2
@@ -75,7 +75,7 @@ def test_verdict_rows_need_no_timings_and_unknown_verdicts_are_rejected(tmp_path
     assert df["build_s_median"].isna().all() and df["repetitions"].isna().all()
     text = path.read_text().replace(",pass,", ",maybe,")
     path.write_text(text)
-    with pytest.raises(ContractError, match=r"'verdict' must be pass, fail or empty; found \['maybe'\] on lines \[3\]"):
+    with pytest.raises(ContractError, match=r"'verdict' must be pass, fail or empty; found \['maybe'\] on line 3 \(row 2\)"):
         read_csv(path)
 
 
@@ -89,8 +89,8 @@ def test_case_rows_never_fill_a_report_cell(tmp_path):
 
 # ---- tables -------------------------------------------------------------------------------
 
-def test_table4_error_rows(with_errors, ref):
-    doc, rel = model_table(with_errors, ref, 4, [BUNNY, "igea"])
+def test_table4_error_rows(with_errors, report_nums):
+    doc, rel = model_table(with_errors, report_nums, 4, [BUNNY, "igea"])
     misses = section_rows(doc, "False misses (primary rays, vs the reference)")
     by = {r[0]: r[1:] for r in misses}
     assert by["BVH (median)"] == ["3", "—", "—", "no row", "—", "—"]
@@ -115,8 +115,8 @@ def test_table4_error_rows(with_errors, ref):
     assert compact["LBVH"][0] == "0 / 0 / 2 / 0" and compact["kd-tree"][0] == NOT_MEASURED
 
 
-def test_table2_error_columns(with_errors, ref):
-    doc = table2(with_errors, ref)[0]
+def test_table2_error_columns(with_errors, report_nums):
+    doc = table2(with_errors, report_nums)[0]
     assert doc.groups[-1] == ("Error vs the reference (ours; the report measured none)", 6)
     assert doc.header[-6:] == ["false misses", "false hits", "wrong prims", "NaN", "t ulp p50",
                                "t ulp max"]
@@ -128,29 +128,29 @@ def test_table2_error_columns(with_errors, ref):
     assert {ln.count("|") for ln in md.splitlines() if ln.startswith("|")} == {len(doc.header) + 1}
 
 
-def test_tables_without_error_values_say_not_measured(without_errors, ref):
-    doc, rel = model_table(without_errors, ref, 4, [BUNNY])
+def test_tables_without_error_values_say_not_measured(without_errors, report_nums):
+    doc, rel = model_table(without_errors, report_nums, 4, [BUNNY])
     assert any(isinstance(r, Section) and r.label == NOT_MEASURED_SECTION for r in doc.rows)
     assert any(isinstance(r, Section) and r.label == NOT_MEASURED_SECTION for r in rel.rows)
     assert any(n.startswith("Error against the reference: not measured.") for n in doc.notes)
-    t2 = table2(without_errors, ref)[0]
+    t2 = table2(without_errors, report_nums)[0]
     assert t2.header[-1] == "errors"
     assert cells_of(t2, "maxPrims=10")[-1] == NOT_MEASURED
     assert cells_of(t2, "maxPrims=100")[-1] == "no row"
 
 
-def test_image_metrics_appear_when_measured(tmp_path, ref):
+def test_image_metrics_appear_when_measured(tmp_path, report_nums):
     errs = dict(ZERO_ERRORS, image_rmse=0.0123, hole_pixels=4)
     res = load_results([write_csv(tmp_path / "img.csv", [
         row(BUNNY, "bvh", BVH, build=0.5, render=2.0, errors=errs),
         row(BUNNY, "lbvh", LBVH, build=0.5, render=2.0, errors=ZERO_ERRORS),
         row(BUNNY, "bvh", SAH, build=0.5, render=1.0, errors=errs)], with_errors=True)])
-    doc = model_table(res, ref, 4, [BUNNY])[0]
+    doc = model_table(res, report_nums, 4, [BUNNY])[0]
     rmse = {r[0]: r[1] for r in section_rows(doc, "Image RMSE vs the reference image")}
     assert rmse["BVH (median)"] == "0.0123" and rmse["LBVH"] == "n/a"
     holes = {r[0]: r[1] for r in section_rows(doc, "Hole pixels vs the reference image")}
     assert holes["BVH (median)"] == "4"
-    t2 = table2(res, ref)[0]  # the binned-SAH BVH is its only row with values
+    t2 = table2(res, report_nums)[0]  # the binned-SAH BVH is its only row with values
     assert t2.header[-2:] == ["image RMSE", "hole pixels"]
     assert cells_of(t2, "BVH (binned SAH)")[-2:] == ["0.0123", "4"]
 
@@ -190,30 +190,30 @@ def test_error_pareto_draws(zero, tmp_path):
     assert not math.isnan(float(np.asarray(img).mean()))
 
 
-def test_harness_column_order_loads(tmp_path, ref):
-    """The committed table4 run with issue 6's columns where the harness writes them (after
-    `instructions`, before `width`), filled: the errors reach Table 4."""
+def test_harness_column_order_loads(tmp_path, report_nums):
+    """The committed table4 run with the error, memory and verdict columns where the harness
+    writes them (after `instructions`, before `width`), filled: the errors reach Table 4."""
     import csv
     from pathlib import Path
 
-    from accelbench_analysis.schema import ISSUE6_COLUMNS
-    src = Path(__file__).resolve().parents[2] / "results" / "csv" / "table4.csv"
+    from accelbench_analysis.schema import ERROR_MEMORY_VERDICT_COLUMNS
+    src = Path(__file__).resolve().parents[2] / "results" / "reference" / "csv" / "table4.csv"
     rows = list(csv.reader(src.open(newline="")))
     # Whatever the committed run has in these columns, replace it with known values.
-    keep = [i for i, c in enumerate(rows[0]) if c not in ISSUE6_COLUMNS]
+    keep = [i for i, c in enumerate(rows[0]) if c not in ERROR_MEMORY_VERDICT_COLUMNS]
     rows = [[r[i] for i in keep] for r in rows]
     head = rows[0]
     at = head.index("instructions") + 1
     status = head.index("status")
     filled = ["4", "0", "1", "0", "3", "0", "", "", str(200 << 20), "", ""]
-    rows = [head[:at] + ISSUE6_COLUMNS + head[at:]] + [
+    rows = [head[:at] + ERROR_MEMORY_VERDICT_COLUMNS + head[at:]] + [
         r[:at] + (filled if r[status] == "ok" else [""] * len(filled)) + r[at:]
         for r in rows[1:]]
     path = tmp_path / "table4.csv"
     csv.writer(path.open("w", newline="")).writerows(rows)
     res = load_results([path])
     assert res.has_error_columns() and res.case_rows().empty
-    doc = model_table(res, ref, 4, ["stanford-bunny"])[0]
+    doc = model_table(res, report_nums, 4, ["stanford-bunny"])[0]
     misses = section_rows(doc, "False misses (primary rays, vs the reference)")
     assert misses and all(r[1] == "4" for r in misses if r[1] not in ("no row", "timeout", "error"))
     assert any(r[1] == "4" for r in misses)

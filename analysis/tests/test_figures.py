@@ -13,8 +13,8 @@ PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
 @pytest.fixture(scope="module")
-def drawn(realistic, ref, tmp_path_factory):
-    return figures.write_figures(realistic, ref, tmp_path_factory.mktemp("figures"))
+def drawn(realistic, report_nums, tmp_path_factory):
+    return figures.write_figures(realistic, report_nums, tmp_path_factory.mktemp("figures"))
 
 
 @pytest.mark.parametrize("name", list(figures.FIGURES))
@@ -28,7 +28,7 @@ def test_figure_is_a_non_empty_png(drawn, name):
     assert img[..., :3].std() > 0.05
 
 
-def test_error_figure_skips_without_error_columns(tmp_path, ref):
+def test_error_figure_skips_without_error_columns(tmp_path, report_nums):
     res = load_results([write_csv(tmp_path / "e.csv", [row("igea", "bvh", BVH, build=1, render=1)])])
     out = figures.error_pareto(res, tmp_path / "e.png")
     assert isinstance(out, figures.Skipped) and "false_misses" in out.reason
@@ -41,8 +41,8 @@ def test_pareto_front():
     assert list(front["t"]) == [1.0, 2.0, 4.0]
 
 
-def test_sweep_frame_is_relative_to_first_setting(realistic, ref):
-    df, sweeps = figures.sweep_frame(realistic, ref)
+def test_sweep_frame_is_relative_to_first_setting(realistic, report_nums):
+    df, sweeps = figures.sweep_frame(realistic, report_nums)
     first = df.sort_values("x").groupby(["sweep", "metric", "source"]).first()
     assert (first["relative"] == 1.0).all()
     assert set(df["source"]) == {"ours", "report"}

@@ -14,7 +14,7 @@ from PIL import Image
 
 from accelbench_analysis.cli import main
 from accelbench_analysis.grid import (CHEAP, FINAL, analyse, heatmap_data, marker_position,
-                                      references)
+                                      published_settings)
 from accelbench_analysis.grid_config import (GridConfigError, expand_range, load_grid_config,
                                              parse_objective)
 from accelbench_analysis.schema import load_results, parse_params
@@ -214,15 +214,15 @@ def test_marker_positions():
     assert marker_position(["1", "2"], None) is None
 
 
-def test_reference_points():
-    kd = {r.label: r.values for r in references("kdtree", 69451)}
+def test_published_settings():
+    kd = {r.label: r.values for r in published_settings("kdtree", 69451)}
     assert kd["report"]["max_depth"] == 29 and kd["pbrt-v3"]["max_depth"] == 29
     assert kd["pbrt-v3"]["isect_cost"] == 80 and kd["report"]["empty_bonus"] == 0.5
-    assert {r.label: r.values for r in references("kdtree", 35947)}["report"]["max_depth"] == 28
-    bvh = {r.label: r for r in references("bvh", 1000)}
+    assert {r.label: r.values for r in published_settings("kdtree", 35947)}["report"]["max_depth"] == 28
+    bvh = {r.label: r for r in published_settings("bvh", 1000)}
     assert bvh["pbrt-v4"].values == {"split": "sah", "max_prims": 4}
     assert "255" in bvh["pbrt-v4"].note
-    assert references("embree", 1000) == []
+    assert published_settings("embree", 1000) == []
 
 
 # ---- the command line: outputs ---------------------------------------------------------------
@@ -279,7 +279,7 @@ def test_ranked_csv(outputs):
     first = ranked.iloc[0]
     assert (first["rank"], first["param:max_prims"], first["param:max_depth"]) == (1, 2, 20)
     assert ranked["rejected"].sum() == 2 and ranked["rank"].isna().sum() == 2
-    # Every candidate says how wrong it is (issue 6): D's two false misses, the others none.
+    # Every candidate says how wrong it is: D's two false misses, the others none.
     assert {"false_hits", "prim_mismatches", "t_err_ulp_max"} <= set(ranked.columns)
     d = ranked[(ranked["param:max_prims"] == 4) & (ranked["param:max_depth"] == 30)
                & (ranked["param:empty_bonus"] == 0.5)].iloc[0]

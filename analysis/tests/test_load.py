@@ -45,7 +45,7 @@ def test_non_numeric_value_is_rejected_with_column_and_line(tmp_path):
     text = path.read_text().splitlines()
     text[2] = text[2].replace(",0.1,", ",fast,", 1)
     path.write_text("\n".join(text) + "\n")
-    with pytest.raises(ContractError, match=r"'build_s_median' has non-numeric values on lines \[3\]"):
+    with pytest.raises(ContractError, match=r"run.csv: column 'build_s_median' has non-numeric values on line 3 \(row 2\) \(e.g. 'fast'\)"):
         read_csv(path)
 
 
@@ -119,5 +119,119 @@ def test_error_columns_optional(tmp_path, realistic):
 def test_ragged_csv_is_a_contract_error(tmp_path):
     path = minimal(tmp_path)
     path.write_text(path.read_text() + "a,b,c" + ",x" * 200 + "\n")
-    with pytest.raises(ContractError, match="well-formed"):
+    with pytest.raises(ContractError, match=r"line 4 \(row 3\): 203 fields but the header has 54"):
         read_csv(path)
+
+
+# ---- hostile input: every loader refuses it, naming the file, the line/row and the column ----
+
+def _edit_cell(path, line, column, value):
+    """Sets one cell (line: 1-based, header = 1) of a CSV written by write_csv."""
+    import csv
+    with path.open(newline="") as fh:
+        rows = list(csv.reader(fh))
+    rows[line - 1][rows[0].index(column)] = value
+    with path.open("w", newline="") as fh:
+        csv.writer(fh).writerows(rows)
+    return path
+
+
+@pytest.mark.parametrize("column", ["build_s_median", "render_s_median", "render_s_mean",
+                                    "build_s_ci_lo", "render_s_ci_hi"])
+@pytest.mark.parametrize("value, what", [
+    ("nan", "values that are not finite"), ("NaN", "values that are not finite"),
+    ("inf", "values that are not finite"), ("-inf", "values that are not finite"),
+    ("-0.5", "negative values"), ("0", "zero times"), ("0.0e0", "zero times")])
+def test_broken_times_are_refused_naming_file_line_and_column(tmp_path, column, value, what):
+    path = _edit_cell(minimal(tmp_path), 3, column, value)
+    with pytest.raises(ContractError) as e:
+        load_results([path])
+    msg = str(e.value)
+    assert msg.startswith(f"{path}: column {column!r} has {what} on line 3 (row 2)"), msg
+    assert repr(value) in msg
+
+
+def test_zero_stddev_is_a_time_but_negative_or_nan_is_not(tmp_path):
+    assert read_csv(_edit_cell(minimal(tmp_path), 2, "render_s_stddev", "0")).loc[0, "render_s_stddev"] == 0
+    with pytest.raises(ContractError, match=r"'render_s_stddev' has negative values on line 2 \(row 1\)"):
+        read_csv(_edit_cell(minimal(tmp_path), 2, "render_s_stddev", "-1e-9"))
+    with pytest.raises(ContractError, match=r"'nodes' has values that are not finite on line 2"):
+        read_csv(_edit_cell(minimal(tmp_path), 2, "nodes", "inf"))
+    with pytest.raises(ContractError, match=r"'rays' has negative values on line 3 \(row 2\)"):
+        read_csv(_edit_cell(minimal(tmp_path), 3, "rays", "-307200"))
+
+
+@pytest.mark.parametrize("cut", [1, 5, 17, 40])
+def test_a_last_row_cut_short_is_refused(tmp_path, cut):
+    path = minimal(tmp_path)
+    data = path.read_bytes()
+    path.write_bytes(data[:len(data) - cut])
+    with pytest.raises(ContractError) as e:
+        read_csv(path)
+    msg = str(e.value)
+    assert msg.startswith(f"{path}: line 3 "), msg
+    assert "cut short" in msg or "no line break at its end" in msg, msg
+
+
+def test_a_row_with_fields_missing_or_extra_is_refused(tmp_path):
+    path = minimal(tmp_path)
+    lines = path.read_text().splitlines()
+    short = lines[:2] + [lines[2].rsplit(",", 3)[0]]
+    path.write_text("\n".join(short) + "\n")
+    with pytest.raises(ContractError, match=r"line 3 \(row 2\): \d+ fields but the header has \d+ \(the row is cut short\)"):
+        read_csv(path)
+    path.write_text("\n".join(lines[:2] + [lines[2] + ",extra"]) + "\n")
+    with pytest.raises(ContractError, match=r"line 3 \(row 2\): \d+ fields but the header has"):
+        read_csv(path)
+    path.write_text("\n".join(lines[:2] + [""] + lines[2:]) + "\n")
+    with pytest.raises(ContractError, match=r"line 3: an empty line"):
+        read_csv(path)
+
+
+def test_rows_are_counted_by_record_not_by_physical_line(tmp_path):
+    """A message with a line break in it (quoted) takes two lines; the row after it is
+    still named by the line it starts on."""
+    rows = [row("igea", "bvh", BUNNY_BVH, status="error", message="line one\nline two"),
+            row("igea", "embree", {"threads": "1"}, build=0.1, render=-0.5)]
+    path = write_csv(tmp_path / "m.csv", rows)
+    with pytest.raises(ContractError, match=r"'render_s_median' has negative values on line 4 \(row 2\)"):
+        read_csv(path)
+
+
+def _with_reps(tmp_path, reps_text):
+    path = minimal(tmp_path)
+    (tmp_path / "run.reps.csv").write_text(reps_text)
+    return path
+
+
+REPS_HEADER = "config,model,accel,params,repetition,build_s,render_s\n"
+BVH_KEY = "table4,stanford-bunny,bvh,split=median;max_prims=1;max_depth=50;threads=1"
+
+
+@pytest.mark.parametrize("value, what", [("nan", "not finite"), ("inf", "not finite"),
+                                         ("-2.0", "negative"), ("0", "zero times"), ("x", "non-numeric")])
+def test_reps_with_broken_times_are_refused(tmp_path, value, what):
+    path = _with_reps(tmp_path, REPS_HEADER + f"{BVH_KEY},1,0.5,2.0\n{BVH_KEY},2,0.5,{value}\n")
+    with pytest.raises(ContractError) as e:
+        load_results([path])
+    msg = str(e.value)
+    assert msg.startswith(f"{tmp_path / 'run.reps.csv'}: column 'render_s' has "), msg
+    assert what in msg and "line 3 (row 2)" in msg, msg
+
+
+def test_reps_cut_short_is_refused(tmp_path):
+    path = _with_reps(tmp_path, REPS_HEADER + f"{BVH_KEY},1,0.5,2.0\n{BVH_KEY},2,0.5")
+    with pytest.raises(ContractError, match=r"run.reps.csv: line 3 \(row 2\): 6 fields but the header has 7"):
+        load_results([path])
+
+
+def test_check_refuses_with_exit_2_and_names_the_cell(tmp_path, capsys):
+    from accelbench_analysis.cli import main
+    path = _edit_cell(minimal(tmp_path), 3, "render_s_median", "nan")
+    assert main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: column 'render_s_median' has values that are not finite on line 3 (row 2)" in err
+    data = minimal(tmp_path).read_bytes()
+    path.write_bytes(data[:-3])
+    assert main(["check", str(path)]) == 2
+    assert f"{path}: line 3 (the last row) has no line break at its end" in capsys.readouterr().err

@@ -219,7 +219,7 @@ def test_a_failure_outranks_a_pending_time_measurement(run, capsys):
     assert regress(run("base"), run("cur", both), capsys=capsys)[0] == 1
 
 
-def test_embree_reference_is_same_model_and_render_settings(tmp_path):
+def test_embree_denominator_is_same_model_and_render_settings(tmp_path):
     rows = ci_rows()
     robust = copy.deepcopy(find(rows, "stanford-bunny", "embree"))
     robust["params"] = robust["params"].replace("robust=false", "robust=true")
@@ -241,8 +241,8 @@ def test_embree_reference_is_same_model_and_render_settings(tmp_path):
     ratios = embree_ratios(res, True, str(path))
     bunny_bvh = ratios["00aa55aa55aa55aa"]
     assert bunny_bvh.ratio == pytest.approx(0.30 / 0.06)  # robust=false sorts first
-    assert "robust=false" in bunny_bvh.reference
-    assert ratios["dddddddddddddddd"].reference == "no Embree row with this model and render settings"
+    assert "robust=false" in bunny_bvh.denominator
+    assert ratios["dddddddddddddddd"].denominator == "no Embree row with this model and render settings"
     assert set(keyed(res.rows, True, "x")) >= set(ratios)
 
 

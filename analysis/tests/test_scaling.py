@@ -96,6 +96,22 @@ def test_read_cost_csv_places_pixels(tmp_path):
         read_cost_csv(bad)
 
 
+@pytest.mark.parametrize("edit, message", [
+    (lambda t: t[:-4], r"line 13 \(the last row\) has no line break at its end"),
+    (lambda t: t.replace("\n2,1,", "\n2,1,nan,", 1), r"line 8 \(row 7\): 5 fields but the header has 4"),
+    (lambda t: t.replace("\n2,1,12,", "\n2,1,inf,", 1), r"column 'node_visits' has values that are not finite on line 8 \(row 7\)"),
+    (lambda t: t.replace("\n2,1,12,", "\n2,1,-12,", 1), r"column 'node_visits' has negative values on line 8 \(row 7\)"),
+    (lambda t: t.replace("\n2,1,12,", "\n2,1,twelve,", 1), r"column 'node_visits' has non-numeric values on line 8 \(row 7\)"),
+    (lambda t: t.replace("\n2,1,", "\n2.5,1,", 1), r"column 'x' has values that are not pixel coordinates on line 8 \(row 7\)"),
+    (lambda t: t.replace("\n2,1,", "\n1,1,", 1), r"pixel \(1, 1\) a second time on line 8 \(row 7\)"),
+])
+def test_read_cost_csv_refuses_broken_files(tmp_path, edit, message):
+    p = write_cost(tmp_path / "a-cost.csv", 4, 3, lambda x, y: 10 * y + x, lambda x, y: 7)
+    p.write_text(edit(p.read_text()))
+    with pytest.raises(ValueError, match=message):
+        read_cost_csv(p)
+
+
 def test_cost_images_command(tmp_path):
     w, h = 40, 30
     a = write_cost(tmp_path / "bunny-bvh-cost.csv", w, h, lambda x, y: x, lambda x, y: 2)

@@ -4,7 +4,7 @@ import re
 
 import pytest
 
-from accelbench_analysis.render import (Cell, Section, TableDoc, fmt_measure, fmt_sig, tex_escape,
+from accelbench_analysis.formatting import (Cell, Section, TableDoc, fmt_measure, fmt_sig, tex_escape,
                                         to_latex, to_markdown)
 from accelbench_analysis.schema import load_results
 from accelbench_analysis.selection import AUTO, kd_auto_depths, param_matches
@@ -46,8 +46,8 @@ def small(tmp_path):
     return load_results([write_csv(tmp_path / "small.csv", rows)])
 
 
-def test_table4_exact_cells(small, ref):
-    doc, rel = model_table(small, ref, 4, ["stanford-bunny", "igea", "asian-dragon", "happy-buddha"])
+def test_table4_exact_cells(small, report_nums):
+    doc, rel = model_table(small, report_nums, 4, ["stanford-bunny", "igea", "asian-dragon", "happy-buddha"])
     # #primitives as both triangles and vertices, against the report's single number.
     assert cells_of(doc, "#triangles (ours)")[:3] == ["69,451", "35,947", "1.93"]
     assert cells_of(doc, "#vertices (ours)")[:3] == ["35,947", "35,947", "1.00"]
@@ -74,10 +74,10 @@ def test_table4_exact_cells(small, ref):
     assert lbvh[1:3] == ["2.00", "1.50"]
 
 
-def test_traversal_modes_become_labelled_rows(tmp_path, ref):
+def test_traversal_modes_become_labelled_rows(tmp_path, report_nums):
     rows = [row("stanford-bunny", "bvh", dict(BVH, traversal=t), build=0.5, render=r, nodes=138901,
                 prim_tests=1000) for t, r in (("ordered", 1.0), ("report", 1.5))]
-    doc = model_table(load_results([write_csv(tmp_path / "t.csv", rows)]), ref, 4,
+    doc = model_table(load_results([write_csv(tmp_path / "t.csv", rows)]), report_nums, 4,
                       ["stanford-bunny"])[0]
     render = section_rows(doc, "Render time (s)")
     assert [r[0] for r in render][:2] == ["BVH (median) [traversal=ordered]",
@@ -86,7 +86,7 @@ def test_traversal_modes_become_labelled_rows(tmp_path, ref):
     assert any("[traversal=...] rows" in n for n in doc.notes)
 
 
-def test_table2_maps_settings_to_kdtree_parameters(tmp_path, ref):
+def test_table2_maps_settings_to_kdtree_parameters(tmp_path, report_nums):
     rows = [row("stanford-bunny", "kdtree", dict(KD, max_prims=mp), build=1.0, render=2.0,
                 nodes=n, prim_tests=t, config="table2")
             for mp, n, t in (("1", 400000, 100), ("10", 20000, 1000), ("100", 1500, 10000))]
@@ -96,7 +96,7 @@ def test_table2_maps_settings_to_kdtree_parameters(tmp_path, ref):
     # A stray row at another max_prims that covers only one depth must not be chosen.
     rows.append(row("stanford-bunny", "kdtree", dict(KD, max_prims="2", max_depth="5"), build=9,
                     render=9, nodes=1, prim_tests=1, config="table2"))
-    doc = table2(load_results([write_csv(tmp_path / "t2.csv", rows)]), ref)[0]
+    doc = table2(load_results([write_csv(tmp_path / "t2.csv", rows)]), report_nums)[0]
     mp10 = cells_of(doc, "maxPrims=10")
     assert mp10[0] == "max_prims=10, max_depth=auto"
     assert mp10[1:4] == ["20,000", "19,229", "1.04"]
@@ -116,11 +116,11 @@ def test_kd_auto_depth():
     assert param_matches({}, 69451, "max_depth", "50")  # no such parameter: cannot differ
 
 
-def test_mixed_provenance_tags_cells(tmp_path, ref):
+def test_mixed_provenance_tags_cells(tmp_path, report_nums):
     a = write_csv(tmp_path / "a.csv", [row("stanford-bunny", "bvh", BVH, build=0.5, render=2.0)])
     b = write_csv(tmp_path / "b.csv", [row("stanford-bunny", "lbvh", LBVH, build=1.0, render=2.0,
                                            git_sha="e" * 40)])
-    doc = model_table(load_results([a, b]), ref, 4, ["stanford-bunny"])[0]
+    doc = model_table(load_results([a, b]), report_nums, 4, ["stanford-bunny"])[0]
     md = to_markdown(doc)
     assert md.count("> **Warning:** MIXED PROVENANCE") == 1
     assert "0.500 [0.490, 0.510] ⁽A⁾" in md and "1.00 [0.98, 1.02] ⁽B⁾" in md

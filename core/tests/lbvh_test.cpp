@@ -207,6 +207,28 @@ TEST(Lbvh, TreeIsIdenticalForAnyThreadCount) {
     test::expect_agrees_with_embree(scene, *tiny_tasks, test::probe_rays(scene, 1000), "lbvh threads=2");
 }
 
+// build_tasks is a property of the tree and the parameters, not of scheduling: the
+// hand-offs follow a thread budget split down the recursion. Repeated builds (which used
+// to report 1 or 2 tasks for threads=2 depending on which thread finished first) report
+// the same count, and the count is exact where the budget allows no choice.
+TEST(Lbvh, BuildTasksDoNotDependOnScheduling) {
+    Scene scene = random_soup(5000, 4);
+    for (const char* threads : {"2", "3", "4", "7"}) {
+        auto first = build_lbvh(scene, {{"threads", threads}, {"task_threshold", "10"}});
+        const double tasks = first->build_stats().extra.at("build_tasks");
+        // A budget of t threads is handed off at most t - 1 times.
+        EXPECT_GE(tasks, 1.0) << threads;
+        EXPECT_LE(tasks, std::stod(threads) - 1) << threads;
+        for (int repeat = 0; repeat < 200; ++repeat) {
+            auto again = build_lbvh(scene, {{"threads", threads}, {"task_threshold", "10"}});
+            ASSERT_EQ(again->build_stats().extra.at("build_tasks"), tasks) << "threads=" << threads << " build " << repeat;
+        }
+    }
+    // threads=2: exactly one hand-off (at the root, whose second child is large), then
+    // both sides have a budget of one thread.
+    EXPECT_EQ(build_lbvh(scene, {{"threads", "2"}})->build_stats().extra.at("build_tasks"), 1.0);
+}
+
 TEST(Lbvh, IdenticalTrianglesSplitInTheMiddle) {
     Scene scene;
     scene.name = "identical";

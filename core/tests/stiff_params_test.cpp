@@ -1,4 +1,4 @@
-// Stiff parameters (issue 6): extreme values must either build a tree that terminates
+// Stiff parameters: extreme values must either build a tree that terminates
 // with bounded depth and memory and still answers correctly, or be refused up front with
 // a message naming the parameter. On a dense cluster — thousands of overlapping
 // triangles in a 1e-3 box — where a split criterion that never gives up would recurse to
@@ -134,7 +134,7 @@ TEST_P(StiffParams, TerminatesWithBoundedMemoryOrRefusesClearly) {
     EXPECT_EQ(e.nan_results, 0u);
 }
 
-INSTANTIATE_TEST_SUITE_P(Issue6, StiffParams, ::testing::ValuesIn(stiff_settings()), [](const auto& info) {
+INSTANTIATE_TEST_SUITE_P(ExtremeValues, StiffParams, ::testing::ValuesIn(stiff_settings()), [](const auto& info) {
     std::string name = info.param.accelerator;
     for (const auto& [k, v] : info.param.params) name += "_" + k + "_" + v;
     for (char& c : name)

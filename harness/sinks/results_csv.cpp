@@ -12,7 +12,6 @@ namespace {
 Row identification_row(const Config& config, const CombinationResult& result) {
     const Combination& c = result.combination;
     const ModelSpec& model = result.model;
-    const Provenance& p = provenance();
     Row r;
     r["config"] = config.name;
     r["combo_id"] = c.id;
@@ -36,13 +35,8 @@ Row identification_row(const Config& config, const CombinationResult& result) {
         r["light"] = config.render.light ? "true" : "false";
         r["shading"] = config.render.shading ? "true" : "false";
     }
-    r["git_sha"] = p.git_sha;
-    r["git_dirty"] = p.git_dirty ? "true" : "false";
-    r["compiler"] = p.compiler;
-    r["build_type"] = p.build_type;
-    r["cpu"] = p.cpu;
+    for (const auto& [name, value] : provenance_values()) r[name] = value;
     r["threads"] = std::to_string(c.threads);
-    r["embree_version"] = p.embree_version;
     r["timestamp"] = result.timestamp;
     return r;
 }

@@ -46,7 +46,7 @@ void VerdictTable::add(const std::string& case_label, const Combination& c, cons
 }
 
 void VerdictTable::print(std::FILE* out) const {
-    std::fprintf(out, "\nRobustness verdicts (issue 6; requirements in core/accelbench/robustness_cases.h):\n");
+    std::fprintf(out, "\nRobustness verdicts (requirements in core/accelbench/verify/robustness_cases.h):\n");
     for (size_t j = 0; j < columns_.size(); ++j) std::fprintf(out, "  [%zu] %s\n", j + 1, columns_[j].c_str());
     size_t label_width = 4;
     for (const auto& r : rows_) label_width = std::max(label_width, r.size());

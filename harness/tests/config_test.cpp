@@ -1,6 +1,7 @@
 // The config loader: a valid config read completely, and every kind of error reported with
 // its file, line, column and key path — all of them at once.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include "accelbench/verify/robustness_cases.h"
 #include "config.h"
@@ -186,6 +187,17 @@ accelerators: [{name: embree}]
     EXPECT_TRUE(has_issue(e, 4, 18, "models[2].procedural", "unknown procedural scene 'forrest'"));
     EXPECT_TRUE(has_issue(e, 5, 35, "models[3].triangles", "out of range"));
     EXPECT_TRUE(has_issue(e, 5, 38, "models[3].colour", "procedural scene 'soup' has no parameter 'colour'"));
+}
+
+// A directory or a FIFO named as a mesh is there but cannot be read as one: the config
+// says so, rather than calling it missing.
+TEST_F(ConfigTest, AMeshPathThatIsNotARegularFile) {
+    std::filesystem::create_directory(dir.path() / "folder.obj");
+    ASSERT_EQ(mkfifo((dir.path() / "pipe.ply").c_str(), 0600), 0);
+    const ConfigError e = load_error(write("a.yaml", "models: [{path: folder.obj}, {path: pipe.ply}]\naccelerators: [{name: embree}]\n"));
+    EXPECT_EQ(e.issues().size(), 2u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 1, 17, "models[0].path", "not a regular file (a mesh file is needed)")) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 1, 37, "models[1].path", "not a regular file (a mesh file is needed)")) << all_issues(e);
 }
 
 TEST_F(ConfigTest, ModelTransformsMakeDistinctModels) {

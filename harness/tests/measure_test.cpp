@@ -50,7 +50,7 @@ ParamSet defaults(const AcceleratorInfo& info) { return resolve_params(info.name
 // of bug (uninitialised memory, a data race) the determinism check exists for.
 class DriftingBuild final : public Accelerator {
 public:
-    DriftingBuild() : inner_(defaults(BruteForce::info())) {}
+    DriftingBuild() : inner_(BruteForce::Config::from(defaults(BruteForce::info()))) {}
     void build(const Scene& s) override { inner_.build(s); }
     void closest_hits(std::span<const Ray> r, std::span<Hit> h, std::span<RayStats> st) const override {
         inner_.closest_hits(r, h, st);
@@ -163,7 +163,7 @@ TEST(MeasureTest, InProcessTimeLimitIsCheckedBetweenStages) {
     const LoadedModel model = box_model();
     const AcceleratorInfo info = test_accel("slow", [] {
         std::this_thread::sleep_for(std::chrono::milliseconds(60));
-        return std::make_unique<BruteForce>(defaults(BruteForce::info()));
+        return std::make_unique<BruteForce>(BruteForce::Config::from(defaults(BruteForce::info())));
     });
     MeasureSettings s = quick();
     s.timeout_s = 0.1;

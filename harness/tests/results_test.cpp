@@ -1,11 +1,13 @@
 // The results CSV: quoting, the column list, appending, what --resume keeps, and merge.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "accelbench/accel/registry.h"
 #include "csv.h"
 #include "harness_test_util.h"
+#include "provenance.h"
 #include "results.h"
 
 namespace accelbench {
@@ -156,6 +158,22 @@ TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
     EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
     const auto twice = write_file(dir.path(), "twice.csv", header + "1,ok,100" + prov + "1,ok,101" + prov);
     EXPECT_THROW(take_column(out(), timed, twice, "instructions", false), std::runtime_error);
+}
+
+// The values every row records are the columns merge and the analysis compare, in the
+// header's order: `accelbench provenance` (which the reproduce driver asks before resuming
+// a run) then names exactly what the rows carry.
+TEST(ProvenanceTest, ValuesAreTheProvenanceColumnsInHeaderOrder) {
+    std::vector<std::string> names;
+    for (const auto& [name, value] : provenance_values()) {
+        names.push_back(name);
+        EXPECT_FALSE(value.empty()) << name;
+    }
+    EXPECT_EQ(names, provenance_columns());
+    std::vector<std::string> in_header;
+    for (const auto& c : result_columns())
+        if (std::find(names.begin(), names.end(), c) != names.end()) in_header.push_back(c);
+    EXPECT_EQ(in_header, names);
 }
 
 }  // namespace

@@ -1,15 +1,15 @@
-// SHA-256 against the FIPS 180-4 example vectors (NIST "SHA256.pdf" examples).
+// SHA-256 against the FIPS 180-4 example vectors (NIST "SHA256.pdf" examples): the
+// wrapper around OpenSSL's EVP digest, fed whole and in pieces, and from a file.
 #include "sha256.h"
 
 #include <gtest/gtest.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <string>
 
-#include <unistd.h>
+#include "accelbench/base/temp_dir.h"
 
 namespace accelbench {
 namespace {
@@ -42,7 +42,8 @@ TEST(Sha256, MillionAInUnevenPieces) {
 }
 
 TEST(Sha256, FileMatchesString) {
-    const auto path = std::filesystem::temp_directory_path() / ("sha256_test_" + std::to_string(getpid()));
+    TempDir dir("accelbench-sha256-test-");
+    const auto path = dir.path() / "abc.txt";
     std::ofstream(path, std::ios::binary) << "abc";
     EXPECT_EQ(sha256_file(path.string()), sha256_hex("abc"));
     std::filesystem::remove(path);

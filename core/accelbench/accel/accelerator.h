@@ -94,11 +94,24 @@ public:
 // What the factory and the harness know of a structure: its name, its declared
 // parameters and how to make one. Each structure's static info() returns it; only the
 // registry (accel/registry.cpp) lists them all.
+//
+// The capabilities after `create` are what the harness and the tests ask of a structure
+// (never its name); their defaults are those of every structure of ours.
 struct AcceleratorInfo {
     std::string name;
     std::string description;
     std::vector<ParamSpec> params;
     std::function<std::unique_ptr<Accelerator>(const ParamSet&)> create;
+    // Whether closest_hits/any_hits fill RayStats (node visits, box and primitive tests).
+    // When not, the count columns stay missing and cost images cannot be made.
+    bool counts_traversal = true;
+    // Whether its ray/triangle test is watertight with these resolved parameters: no ray
+    // leaks through an edge or vertex two triangles share. Robustness cases require that
+    // of watertight structures and only count such leaks for the others.
+    std::function<bool(const ParamSet&)> watertight = [](const ParamSet&) { return true; };
+    // Code that is not ours (a production library as baseline): a robustness failure is a
+    // finding to report, not a bug the tests hold against it.
+    bool third_party = false;
 };
 
 }  // namespace accelbench

@@ -1,5 +1,5 @@
-// The process's memory high-water mark, for the harness column `peak_rss_bytes` (issue 6:
-// extreme parameters must terminate with bounded memory, and the CSV shows how much).
+// The process's memory high-water mark, for the harness column `peak_rss_bytes` (extreme
+// parameters must terminate with bounded memory, and the CSV shows how much).
 #pragma once
 
 #include <cstdint>

@@ -1,17 +1,22 @@
 // Loading triangle meshes from files: OBJ, PLY (ASCII and binary), OFF and STL (ASCII
 // and binary), each optionally gzip-compressed (".ply.gz").
 //
-// Parsing is OpenMesh's (its IO readers), but the result never goes through a half-edge
-// mesh: OpenMesh's TriMesh/PolyMesh refuse faces that would make an edge non-manifold
-// ("complex edge") and duplicate vertices to repair others, so a scanned model would lose
-// faces or gain vertices and no longer be the model the report measured. Our importer
-// takes vertices and faces straight into flat arrays, in file order, triangulating
-// polygons as a fan, and the loader then checks that the triangles match what the file
-// declares: a mesh is loaded whole or not at all.
+// The readers are our own, strict, and follow each format's specification (the rules and
+// limits are listed in docs/configs.md, "Mesh files"): a file is loaded whole and exactly
+// as written, or refused with a message naming the file, the place (line, or face / vertex
+// number) and the cause — never loaded differently. Vertices and faces go straight into
+// flat arrays in file order (no half-edge mesh, which would refuse or split non-manifold
+// faces), polygons become a fan around their first corner.
+//
+// Places in messages: "line N" counts lines from 1 (a line ends at LF, CR LF or a lone
+// CR); "face N" is the file's N-th face counting from 1, before triangulation (STL:
+// "triangle N"); "byte N" is an offset from the file's start (binary files); a vertex is
+// named by the index the file's faces use for it (OBJ counts from 1, PLY and OFF from 0).
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/scene/scene.h"
@@ -22,23 +27,29 @@ namespace accelbench {
 struct MeshLoadInfo {
     std::string format;           // "obj", "ply", "off" or "stl" (the inner format of a .gz)
     bool compressed = false;      // the file was gzip-compressed
-    uint64_t file_faces = 0;      // faces (polygons) the file declares or contains
+    uint64_t file_faces = 0;      // faces (polygons) the file holds
     uint64_t polygons = 0;        // of those, faces with more than three corners
     uint64_t triangles = 0;       // after fan triangulation; equals the scene's count
     uint64_t vertices = 0;        // equals the file's vertex count (STL: distinct positions)
-    uint64_t reader_messages = 0; // lines OpenMesh's reader printed (collected, not shown)
 };
 
+// The largest (decompressed) file load_mesh reads: files are read into memory whole.
+constexpr uint64_t kMaxMeshFileBytes = uint64_t(4) << 30;
+
 // Loads every triangle of the file at `path` into a finalized Scene named after the file's
-// stem ("dragon_vrip" for "dragon_vrip.ply.gz"). Throws std::runtime_error naming the path
-// and the reason for: a missing or unreadable file, an unsupported extension, a corrupt or
-// truncated file, a face the reader dropped or that refers to a vertex that does not
-// exist, and a mesh with no triangles.
-//
-// OpenMesh's readers report through its global log streams; load_mesh collects those
-// lines and prints at most one summary line to stderr. It serialises concurrent calls
-// (those streams are process-wide), so loads do not run in parallel.
+// stem ("dragon_vrip" for "dragon_vrip.ply.gz"). Throws std::runtime_error
+// "cannot load mesh 'PATH': PLACE: CAUSE" for: a missing file or one that is not a regular
+// file, an unsupported extension, corrupt gzip data, anything the format does not allow or
+// that is cut short, a vertex that is not finite or has a coordinate of magnitude
+// kMaxCoordinate or more, a face referring to a vertex that does not exist, and a mesh
+// with no triangles.
 Scene load_mesh(const std::string& path, MeshLoadInfo* info = nullptr);
+
+// The reader behind load_mesh, on a file's (uncompressed) bytes: `format` is "obj", "ply",
+// "off" or "stl"; `shown` names the file in messages and its stem names the scene. Throws
+// as load_mesh does.
+Scene parse_mesh(std::string_view bytes, const std::string& format, const std::string& shown,
+                 MeshLoadInfo* info = nullptr);
 
 // Writes the scene as a binary little-endian PLY (float x, y, z; uchar-counted int
 // indices), with one `comment` header line per entry of `comments` (no newlines in them),

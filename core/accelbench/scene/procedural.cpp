@@ -16,9 +16,9 @@ constexpr float kPi = 3.14159265358979f;
 
 // Appends triangles, each with its own colour, to a ProceduralScene. Vertices are not
 // shared between calls: scenes are triangle soups as far as the structures care.
-class MeshBuilder {
+class ColouredSoupBuilder {
 public:
-    explicit MeshBuilder(ProceduralScene& out) : scene_(out.scene), albedo_(out.albedo) {}
+    explicit ColouredSoupBuilder(ProceduralScene& out) : scene_(out.scene), albedo_(out.albedo) {}
 
     size_t triangles() const { return scene_.triangles.size(); }
 
@@ -169,7 +169,7 @@ ProceduralScene make_forest(const ParamSet& p) {
     SplitMix64 rng(mix_seed(uint64_t(p.get_int("seed")), 0xF0235Full));
     ProceduralScene out;
     out.scene.name = scene_name("forest", p);
-    MeshBuilder mesh(out);
+    ColouredSoupBuilder mesh(out);
 
     // About one tree per 10k triangles, so leaves stay small and dense at any size.
     const int trees = std::clamp(int(std::lround(double(target) / 10000.0)), 2, 60);
@@ -360,7 +360,7 @@ size_t facade_triangles(const Facade& f, float scale) {
     return nx ? kWindowTriangles * size_t(nx) * size_t(ny) : 2;  // a plain wall otherwise
 }
 
-void build_facade(MeshBuilder& mesh, const Facade& f, float scale) {
+void build_facade(ColouredSoupBuilder& mesh, const Facade& f, float scale) {
     const Vec3 up{0, 1, 0};
     auto at = [&](float x, float y, float depth) { return f.o + f.right * x + up * y + f.out * depth; };
     const auto [nx, ny] = window_grid(f, scale);
@@ -389,7 +389,7 @@ void build_facade(MeshBuilder& mesh, const Facade& f, float scale) {
 }
 
 // A palm: a curved trunk of four segments and a crown of drooping fronds.
-void build_palm(MeshBuilder& mesh, SplitMix64& rng, Vec3 base) {
+void build_palm(ColouredSoupBuilder& mesh, SplitMix64& rng, Vec3 base) {
     const float h = rng.uniform(6, 10), lean_az = rng.uniform(0, 2 * kPi), lean = rng.uniform(0.05f, 0.18f) * h;
     const Vec3 lean_dir{std::cos(lean_az), 0, std::sin(lean_az)};
     Vec3 prev = base;
@@ -418,7 +418,7 @@ ProceduralScene make_city(const ParamSet& p) {
     SplitMix64 rng(mix_seed(seed, 0xC17Cull));
     ProceduralScene out;
     out.scene.name = scene_name("city", p);
-    MeshBuilder mesh(out);
+    ColouredSoupBuilder mesh(out);
 
     // About 6k triangles per block of four buildings at any size.
     const int blocks = std::clamp(int(std::lround(std::sqrt(double(target) / 6000.0))), 2, 12);
@@ -527,10 +527,10 @@ ProceduralScene make_city(const ParamSet& p) {
         const float ry = roof.upper.y + 0.3f;
         const Vec3 c{extras.uniform(roof.lower.x + 1.0f, roof.upper.x - 1.0f), ry,
                      extras.uniform(roof.lower.z + 1.0f, roof.upper.z - 1.0f)};
-        if (left >= MeshBuilder::kBoxNoBottomTriangles) {
+        if (left >= ColouredSoupBuilder::kBoxNoBottomTriangles) {
             const float s = extras.uniform(0.4f, 1.0f);
             mesh.box({{c.x - s, ry, c.z - s}, {c.x + s, ry + extras.uniform(0.4f, 1.2f), c.z + s}}, kMetal, false);
-            left -= MeshBuilder::kBoxNoBottomTriangles;
+            left -= ColouredSoupBuilder::kBoxNoBottomTriangles;
         } else if (left >= 2) {
             mesh.quad(c + Vec3{-0.8f, 0.2f, -0.5f}, c + Vec3{0.8f, 0.2f, -0.5f}, c + Vec3{0.8f, 0.8f, 0.5f},
                       c + Vec3{-0.8f, 0.8f, 0.5f}, kSolar);
@@ -560,7 +560,7 @@ ProceduralScene make_soup(const ParamSet& p) {
     SplitMix64 rng(mix_seed(uint64_t(p.get_int("seed")), 0x5002ull));
     ProceduralScene out;
     out.scene.name = scene_name("soup", p);
-    MeshBuilder mesh(out);
+    ColouredSoupBuilder mesh(out);
     // Equilateral, edge length `size`: circumradius size / sqrt(3).
     const float r = size / std::sqrt(3.0f);
     for (int64_t i = 0; i < n; ++i) {

@@ -1,5 +1,5 @@
-// How wrong an accelerator's answers are, measured against the reference (issue 6):
-// the error columns of every measured row.
+// How wrong an accelerator's answers are, measured against the reference structure
+// (accel/baseline/reference.h): the error columns of every measured row.
 //
 // Inputs are what the renderer keeps with TraceRequest::keep_hits (TraceOutput::
 // primary_hits): one Hit per primary ray, in the same order for the accelerator and for

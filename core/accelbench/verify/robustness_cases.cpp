@@ -25,7 +25,7 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 // Builds a triangle mesh whose vertices are shared by exact position, so neighbouring
 // triangles reference the same vertex indices (what makes a mesh closed).
-class MeshBuilder {
+class WeldedMeshBuilder {
 public:
     uint32_t vertex(Vec3 p) {
         auto key = std::make_tuple(bits(p.x), bits(p.y), bits(p.z));
@@ -69,7 +69,7 @@ Vec3 on_plane(int axis, float level, float u, float v) {
 // An n x n grid of unit cells on an axis-aligned plane, origin at (0, 0), each cell split
 // along its diagonal into triangle 0 (below the diagonal, fu > fv) and 1 (above). Returns
 // the id of the first triangle; cell (i, j) holds first + 2 (j n + i) + {0, 1}.
-uint32_t add_grid(MeshBuilder& m, int axis, float level, int n, float cell = 1.0f, Vec3 offset = {}) {
+uint32_t add_grid(WeldedMeshBuilder& m, int axis, float level, int n, float cell = 1.0f, Vec3 offset = {}) {
     const uint32_t first = m.count();
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) {
@@ -122,7 +122,7 @@ Scene icosphere(int levels) {
 
 // The surface of the cube [0, n]^3 as a closed mesh of integer-coordinate unit squares.
 Scene grid_box(int n) {
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     const float fn = float(n);
     for (int axis = 0; axis < 3; ++axis)
         for (float level : {0.0f, fn}) add_grid(m, axis, level, n);
@@ -200,7 +200,7 @@ RobustnessCase closed_meshes(std::string id, std::string name, float scale, floa
     c.requirement =
         "closed meshes seen from inside: every ray aimed at a vertex or at a point on an edge hits (zero leaks "
         "for watertight structures; counted for the others); no NaN";
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     struct Part {
         Scene mesh;
         Vec3 shift;
@@ -256,7 +256,7 @@ FloorRoof floor_and_roof(std::string id, std::string name, std::string requireme
     f.c.name = std::move(name);
     f.c.requirement = std::move(requirement);
     f.n = n;
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     f.floor_first = add_grid(m, 2, 0.0f, n);
     f.roof_first = add_grid(m, 2, 2.0f, n);
     f.c.scene = std::move(m.scene());
@@ -364,7 +364,7 @@ RobustnessCase degenerate_triangles() {
         "zero-area triangles (collinear, coincident vertices, a single point) are never hit: axis-aligned rays "
         "through them reach the floor triangle below; needles (valid, 1e-6 wide) and oblique rays: no NaN";
     const int n = 4;
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     const uint32_t floor_first = add_grid(m, 2, 0.0f, n);
     std::vector<std::pair<float, float>> through;  // (dx, dy) inside a cell, on a degenerate triangle
     for (int j = 0; j < n; ++j)
@@ -402,7 +402,7 @@ RobustnessCase copies_and_equal_centroids() {
         "64 copies of one triangle (32 sharing vertices, 32 with their own) and 48 triangles whose bounds are all "
         "the same box (equal centroids): builders terminate with bounded depth; a ray at the copies hits one of "
         "them; rays through the box agree with the reference (informational), no NaN";
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     const Vec3 a{5, 0, 0}, b{6, 0, 0}, d{5, 1, 0};
     for (int i = 0; i < 32; ++i) m.triangle(a, b, d);
     for (int i = 0; i < 32; ++i) m.unshared_triangle(a, b, d);
@@ -442,7 +442,7 @@ RobustnessCase flat_scene() {
         "extent; rays along +-x at a centroid, and oblique rays through it, hit that triangle; in-plane rays: "
         "no NaN";
     const int n = 8;
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     add_grid(m, 0, 2.0f, n);
     c.scene = std::move(m.scene());
     const uint32_t count = 2 * uint32_t(n * n);
@@ -467,7 +467,7 @@ RobustnessCase cluster_and_outlier() {
         "the outlier hit those triangles";
     const int n = 16;
     const float cell = 1e-3f / float(n);
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     uint32_t layer_first[3];
     for (int l = 0; l < 3; ++l) layer_first[l] = add_grid(m, 2, float(l) * 1e-3f, n, cell);
     const uint32_t outlier = m.triangle(Vec3{1e6f, 1e6f, 1e6f}, Vec3{1e6f + 1, 1e6f, 1e6f}, Vec3{1e6f, 1e6f + 1, 1e6f});
@@ -492,7 +492,7 @@ RobustnessCase coplanar_split_planes() {
         "grids of triangles lying in the planes x, y, z = 0..3 (every candidate split plane holds flat "
         "triangles): a ray perpendicular to a triangle at its centroid, from either side, returns that triangle";
     const int n = 4;
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     std::vector<std::pair<uint32_t, int>> planes;  // first triangle, axis
     for (int axis = 0; axis < 3; ++axis)
         for (int level = 0; level < 4; ++level) planes.push_back({add_grid(m, axis, float(level), n), axis});
@@ -516,7 +516,7 @@ RobustnessCase overlapping_coplanar() {
     c.requirement =
         "32 coplanar triangles (z = 1) that all cover the unit disk: every ray into the disk hits one of them at "
         "t = 1, the same one on every trace and every rebuild (the reference returns the smallest id)";
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     for (int k = 0; k < 32; ++k) {
         const float phase = float(k) * 0.0654f, radius = 2.5f + 0.01f * float(k);
         Vec3 p[3];
@@ -543,7 +543,7 @@ RobustnessCase bad_input(std::string id, std::string name, std::string requireme
     c.name = std::move(name);
     c.requirement = std::move(requirement);
     const int n = 4;
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     const uint32_t first = add_grid(m, 2, 0.0f, n);
     Scene& s = m.scene();
     const uint32_t bad = 5;
@@ -611,7 +611,7 @@ RobustnessCase nested_shells() {
         "three concentric spheres 4e-5 apart (about 670 float ulps): rays from the centre hit the innermost "
         "shell, rays from outside the outermost";
     const Scene sphere = icosphere(2);
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     const uint32_t per_shell = uint32_t(sphere.triangle_count());
     for (int s = 0; s < 3; ++s) {
         const float r = 1.0f + 4e-5f * float(s);
@@ -658,7 +658,7 @@ RobustnessCase deep_tree() {
         "300 triangles in a geometric progression (position and size 0.9^i, down to 2e-15): a builder that "
         "splits off one triangle per level would make a 300-deep tree; depth must stay within the structure's "
         "limit and traversal must not overflow its stack; a ray at each centroid hits that triangle";
-    MeshBuilder m;
+    WeldedMeshBuilder m;
     float x = 1.0f;
     for (int i = 0; i < 300; ++i, x *= 0.9f) {
         const float s = 0.1f * x;
@@ -680,7 +680,8 @@ namespace {
 RobustnessCase with_reference(RobustnessCase c) {
     if (c.expects_rejection()) return c;
     if (c.scene.prim_bounds.size() != c.scene.triangle_count()) c.scene.finalize();
-    ReferenceAccel reference(resolve_params("reference", ReferenceAccel::info().params, {}));
+    const ParamSet defaults = resolve_params("reference", ReferenceAccel::info().params, {});
+    ReferenceAccel reference(ReferenceAccel::Config::from(defaults));
     reference.build(c.scene);
     c.reference_hits.resize(c.rays.size());
     reference.closest_hits(c.rays, c.reference_hits);
@@ -757,10 +758,10 @@ std::vector<RobustnessCase> robustness_catalogue() {
     return cases;
 }
 
-JudgeOptions judge_options(const std::string& accelerator, const ParamSet& params) {
+JudgeOptions judge_options(const AcceleratorInfo& accelerator, const ParamSet& params) {
     JudgeOptions o;
+    o.watertight = accelerator.watertight(params);
     for (const auto& [name, value] : params.items()) {
-        if (accelerator == "embree" && name == "robust") o.watertight = value == "true";
         if (name == "max_depth") {
             uint64_t depth = 0;
             auto [p, ec] = std::from_chars(value.data(), value.data() + value.size(), depth);
@@ -880,7 +881,8 @@ CaseVerdict judge_case(const RobustnessCase& c, const std::string& accelerator,
                        const std::map<std::string, std::string>& params) {
     ParamSet resolved;
     make_accelerator(accelerator, params, &resolved);  // validates now, so errors are not taken for build failures
-    return judge_case(c, [&] { return make_accelerator(accelerator, params); }, judge_options(accelerator, resolved));
+    return judge_case(c, [&] { return make_accelerator(accelerator, params); },
+                      judge_options(*find_accelerator(accelerator), resolved));
 }
 
 }  // namespace accelbench

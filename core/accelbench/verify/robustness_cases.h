@@ -1,4 +1,4 @@
-// The extreme-case catalogue of issue 6: small procedural scenes with ray sets that break
+// The extreme-case catalogue: small procedural scenes with ray sets that break
 // ray tracers in practice, each with what a correct implementation must do, and a
 // verdict per accelerator.
 //
@@ -10,7 +10,7 @@
 // a rule, e.g. "a ray through the edge shared by two triangles hits one of them"); the
 // reference structure passes every case, which the tests check.
 //
-// Cases (ids as in issue 6; a letter for variants):
+// Cases (ids are numbers, a letter for variants; configs name them as `{case: ID}`):
 //   1  closed meshes, rays from inside at vertices and edge points   (leaks)
 //   2  the same translated by 1.5e5 (a), 1e6 (b), 1e7 (c)             (leaks)
 //   3  the same scaled by 1e-6 (a), 2^-64 (b), 2^-90 (c)              (leaks)
@@ -63,7 +63,7 @@ struct RayExpectation {
 };
 
 struct RobustnessCase {
-    std::string id;           // "1", "2a", ... (issue 6's numbering)
+    std::string id;           // "1", "2a", ... (the numbering of the list above)
     std::string name;         // short, for tables: "closed-meshes", ...
     std::string requirement;  // what a correct implementation must do
     Scene scene;              // finalized, except for cases that expect rejection
@@ -103,10 +103,10 @@ struct JudgeOptions {
     std::optional<uint64_t> depth_limit;
 };
 
-// Every structure of ours uses triangle.h's watertight test; Embree is watertight only
-// with robust=true. The depth limit is the structure's own `max_depth` parameter when it
-// has a numeric one.
-JudgeOptions judge_options(const std::string& accelerator, const ParamSet& params);
+// Watertight as the structure's info says for these parameters (every structure of ours
+// uses triangle.h's watertight test; Embree only with robust=true). The depth limit is
+// the structure's own `max_depth` parameter when it has a numeric one.
+JudgeOptions judge_options(const AcceleratorInfo& accelerator, const ParamSet& params);
 
 // BuildStats.memory_bytes must stay below this for a case's scene: 4 KiB per triangle
 // plus 1 MiB, far above any sane structure (a node or a reference costs tens of bytes).

@@ -13,17 +13,18 @@ AcceleratorInfo BruteForce::info() {
                 {"max_triangles", ParamType::Int, "20000", {}, 0, 1e12, "largest scene it builds without force"},
                 {"force", ParamType::Bool, "false", {}, 0, 1, "build even above max_triangles"},
             },
-            [](const ParamSet& p) { return std::make_unique<BruteForce>(p); }};
+            [](const ParamSet& p) { return std::make_unique<BruteForce>(Config::from(p)); }};
 }
 
-BruteForce::BruteForce(const ParamSet& params)
-    : max_triangles_(params.get_int("max_triangles")), force_(params.get_bool("force")) {}
+BruteForce::Config BruteForce::Config::from(const ParamSet& p) {
+    return {.max_triangles = p.get_int("max_triangles"), .force = p.get_bool("force")};
+}
 
 void BruteForce::build(const Scene& scene) {
-    if (!force_ && int64_t(scene.triangle_count()) > max_triangles_)
+    if (!config_.force && int64_t(scene.triangle_count()) > config_.max_triangles)
         throw std::runtime_error("brute_force refuses scene '" + scene.name + "' with " +
                                  std::to_string(scene.triangle_count()) + " triangles (limit max_triangles=" +
-                                 std::to_string(max_triangles_) + "; pass force=true to run it anyway)");
+                                 std::to_string(config_.max_triangles) + "; pass force=true to run it anyway)");
     scene_ = &scene;
 }
 

@@ -10,8 +10,15 @@ namespace accelbench {
 
 class BruteForce final : public AcceleratorBase<BruteForce> {
 public:
+    // The parameters, each as declared in info() (the defaults live there only).
+    struct Config {
+        int64_t max_triangles = 0;  // largest scene it builds without `force`
+        bool force = false;         // build even above max_triangles
+        static Config from(const ParamSet& params);
+    };
+
     static AcceleratorInfo info();
-    explicit BruteForce(const ParamSet& params);
+    explicit BruteForce(const Config& config) : config_(config) {}
 
     void build(const Scene& scene) override;
     BuildStats build_stats() const override;
@@ -20,9 +27,8 @@ public:
     template <class C> bool occluded(const Ray& ray, C& counters) const;
 
 private:
+    Config config_;
     const Scene* scene_ = nullptr;
-    int64_t max_triangles_;
-    bool force_;
 };
 
 }  // namespace accelbench

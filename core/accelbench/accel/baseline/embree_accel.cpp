@@ -6,16 +6,31 @@
 namespace accelbench {
 
 AcceleratorInfo EmbreeAccel::info() {
-    return {"embree",
-            "Intel Embree 3 (rtcIntersect1/rtcOccluded1), the production baseline",
-            {
-                {"threads", ParamType::Int, "1", {}, 0, 1024,
-                 "device build threads (0 = all cores); 1 for single-thread comparisons"},
-                {"quality", ParamType::Enum, "medium", {"low", "medium", "high"}, 0, 0, "RTC_BUILD_QUALITY_*"},
-                {"robust", ParamType::Bool, "false", {}, 0, 1, "RTC_SCENE_FLAG_ROBUST (watertight, slower)"},
-                {"compact", ParamType::Bool, "false", {}, 0, 1, "RTC_SCENE_FLAG_COMPACT (less memory)"},
-            },
-            [](const ParamSet& p) { return std::make_unique<EmbreeAccel>(p); }};
+    return {.name = "embree",
+            .description = "Intel Embree 3 (rtcIntersect1/rtcOccluded1), the production baseline",
+            .params =
+                {
+                    {"threads", ParamType::Int, "1", {}, 0, 1024,
+                     "device build threads (0 = all cores); 1 for single-thread comparisons"},
+                    {"quality", ParamType::Enum, "medium", {"low", "medium", "high"}, 0, 0, "RTC_BUILD_QUALITY_*"},
+                    {"robust", ParamType::Bool, "false", {}, 0, 1, "RTC_SCENE_FLAG_ROBUST (watertight, slower)"},
+                    {"compact", ParamType::Bool, "false", {}, 0, 1, "RTC_SCENE_FLAG_COMPACT (less memory)"},
+                },
+            .create = [](const ParamSet& p) { return std::make_unique<EmbreeAccel>(Config::from(p)); },
+            // Embree's kernels keep their traversal to themselves: no per-ray counts.
+            .counts_traversal = false,
+            // Without RTC_SCENE_FLAG_ROBUST its triangle test may leak through shared
+            // edges and vertices (Embree's documentation of the flag).
+            .watertight = [](const ParamSet& p) { return Config::from(p).robust; },
+            .third_party = true};
+}
+
+EmbreeAccel::Config EmbreeAccel::Config::from(const ParamSet& p) {
+    const std::string& q = p.get_enum("quality");
+    return {.threads = int(p.get_int("threads")),
+            .quality = q == "low" ? RTC_BUILD_QUALITY_LOW : q == "high" ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM,
+            .robust = p.get_bool("robust"),
+            .compact = p.get_bool("compact")};
 }
 
 namespace {
@@ -34,13 +49,10 @@ void check(RTCDevice device, const char* what) {
 
 }  // namespace
 
-EmbreeAccel::EmbreeAccel(const ParamSet& params)
-    : robust_(params.get_bool("robust")), compact_(params.get_bool("compact")) {
-    const std::string& q = params.get_enum("quality");
-    quality_ = q == "low" ? RTC_BUILD_QUALITY_LOW : q == "high" ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM;
-    const std::string config = "threads=" + std::to_string(params.get_int("threads"));
-    device_ = rtcNewDevice(config.c_str());
-    if (!device_) throw std::runtime_error("embree: rtcNewDevice(\"" + config + "\") failed");
+EmbreeAccel::EmbreeAccel(const Config& config) : config_(config) {
+    const std::string device_config = "threads=" + std::to_string(config_.threads);
+    device_ = rtcNewDevice(device_config.c_str());
+    if (!device_) throw std::runtime_error("embree: rtcNewDevice(\"" + device_config + "\") failed");
     rtcSetDeviceErrorFunction(device_, error_callback, nullptr);
 }
 
@@ -58,13 +70,13 @@ void EmbreeAccel::build(const Scene& scene) {
     if (scene_) rtcReleaseScene(scene_);
     scene_ = rtcNewScene(device_);
     int flags = RTC_SCENE_FLAG_NONE;
-    if (robust_) flags |= RTC_SCENE_FLAG_ROBUST;
-    if (compact_) flags |= RTC_SCENE_FLAG_COMPACT;
+    if (config_.robust) flags |= RTC_SCENE_FLAG_ROBUST;
+    if (config_.compact) flags |= RTC_SCENE_FLAG_COMPACT;
     rtcSetSceneFlags(scene_, RTCSceneFlags(flags));
-    rtcSetSceneBuildQuality(scene_, quality_);
+    rtcSetSceneBuildQuality(scene_, config_.quality);
 
     RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geom, quality_);
+    rtcSetGeometryBuildQuality(geom, config_.quality);
     // Embree reads vertices with 16-byte loads: the buffer gets one float of padding
     // past the last vertex (rtcSetNewGeometryBuffer allocates it so).
     auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,

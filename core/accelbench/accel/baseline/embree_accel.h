@@ -10,8 +10,17 @@ namespace accelbench {
 
 class EmbreeAccel final : public Accelerator {
 public:
+    // The parameters, each as declared in info() (the defaults live there only).
+    struct Config {
+        int threads = 0;                               // device build threads (0: all cores)
+        RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;  // RTC_BUILD_QUALITY_*
+        bool robust = false;                           // RTC_SCENE_FLAG_ROBUST: watertight, slower
+        bool compact = false;                          // RTC_SCENE_FLAG_COMPACT: less memory
+        static Config from(const ParamSet& params);
+    };
+
     static AcceleratorInfo info();
-    explicit EmbreeAccel(const ParamSet& params);
+    explicit EmbreeAccel(const Config& config);
     ~EmbreeAccel() override;
     EmbreeAccel(const EmbreeAccel&) = delete;
     EmbreeAccel& operator=(const EmbreeAccel&) = delete;
@@ -29,9 +38,7 @@ public:
 private:
     RTCDevice device_ = nullptr;
     RTCScene scene_ = nullptr;
-    RTCBuildQuality quality_;
-    bool robust_;
-    bool compact_;
+    Config config_;
 };
 
 }  // namespace accelbench

@@ -14,11 +14,15 @@ namespace accelbench {
 AcceleratorInfo ReferenceAccel::info() {
     return {"reference",
             "ground truth for the error columns: object-median BVH, double precision, exact hit/miss decision, "
-            "conservative box tests (issue 6); never timed",
+            "conservative box tests; never timed",
             {
                 {"leaf_size", ParamType::Int, "4", {}, 1, 64, "largest number of triangles in a leaf"},
             },
-            [](const ParamSet& p) { return std::make_unique<ReferenceAccel>(p); }};
+            [](const ParamSet& p) { return std::make_unique<ReferenceAccel>(Config::from(p)); }};
+}
+
+ReferenceAccel::Config ReferenceAccel::Config::from(const ParamSet& p) {
+    return {.leaf_size = uint32_t(p.get_int("leaf_size"))};
 }
 
 namespace {
@@ -123,8 +127,6 @@ bool reference_intersect_triangle(const Ray& ray, Vec3 p0, Vec3 p1, Vec3 p2, Ref
     return r.valid && intersect_triangle_double(r, p0, p1, p2, hit);
 }
 
-ReferenceAccel::ReferenceAccel(const ParamSet& params) : leaf_size_(uint32_t(params.get_int("leaf_size"))) {}
-
 void ReferenceAccel::build(const Scene& scene) {
     const size_t n = scene.triangle_count();
     if (scene.prim_bounds.size() != n)
@@ -144,7 +146,7 @@ void ReferenceAccel::build(const Scene& scene) {
     for (size_t i = 0; i < n; ++i)
         for (int a = 0; a < 3; ++a)
             centroids[3 * i + a] = 0.5 * (double(scene.prim_bounds[i].lower[a]) + double(scene.prim_bounds[i].upper[a]));
-    nodes_.reserve(2 * (n / leaf_size_ + 1));
+    nodes_.reserve(2 * (n / config_.leaf_size + 1));
     build_node(0, uint32_t(n), 0, centroids);
     if (depth_ >= uint32_t(kStackSize))  // cannot happen with median splits; guards the stack
         throw std::logic_error("reference: depth " + std::to_string(depth_) + " exceeds the traversal stack");
@@ -164,7 +166,7 @@ uint32_t ReferenceAccel::build_node(uint32_t begin, uint32_t end, uint32_t depth
             hi[a] = std::max(hi[a], centroids[3 * prim + a]);
         }
     }
-    if (end - begin <= leaf_size_) {
+    if (end - begin <= config_.leaf_size) {
         nodes_[index] = {bounds, begin, end - begin};
         ++leaves_;
         return index;

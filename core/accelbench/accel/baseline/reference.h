@@ -1,4 +1,4 @@
-// The reference: the ground truth every structure's error is measured against (issue 6).
+// The reference: the ground truth every structure's error columns are measured against.
 //
 // What makes it a reference rather than one more structure:
 // - Everything is computed in double from the float inputs, which convert exactly: the
@@ -55,8 +55,14 @@ bool reference_intersect_triangle(const Ray& ray, Vec3 p0, Vec3 p1, Vec3 p2, Ref
 
 class ReferenceAccel final : public AcceleratorBase<ReferenceAccel> {
 public:
+    // The parameters, each as declared in info() (the defaults live there only).
+    struct Config {
+        uint32_t leaf_size = 0;  // largest number of triangles in a leaf
+        static Config from(const ParamSet& params);
+    };
+
     static AcceleratorInfo info();
-    explicit ReferenceAccel(const ParamSet& params);
+    explicit ReferenceAccel(const Config& config) : config_(config) {}
 
     // Needs a finalized scene (reads prim_bounds). Throws if the scene has more
     // triangles than 32-bit primitive ids can name.
@@ -81,8 +87,8 @@ private:
     };
     uint32_t build_node(uint32_t begin, uint32_t end, uint32_t depth, const std::vector<double>& centroids);
 
+    Config config_;
     const Scene* scene_ = nullptr;
-    uint32_t leaf_size_;
     std::vector<Node> nodes_;
     std::vector<uint32_t> prim_ids_;
     uint32_t depth_ = 0;

@@ -1,7 +1,6 @@
 #include "accelbench/accel/bvh/lbvh.h"
 
 #include <algorithm>
-#include <atomic>
 #include <bit>
 #include <future>
 #include <stdexcept>
@@ -65,22 +64,31 @@ namespace {
 
 // Builds the tree over primitives sorted by Morton code. One builder serves all threads;
 // what a thread writes (its node buffer, its counts) is passed down the recursion.
+//
+// Which subtrees go to other threads is decided by a thread budget passed down the
+// recursion (the root has `threads`; a hand-off splits a node's budget between its
+// children by their primitive counts), not by which threads happen to be free: so the
+// hand-offs, and the build_tasks count reported, are a property of the tree and the
+// parameters, the same in every build (the harness checks that builds are reproducible).
+// At most `threads` threads are live, as the budgets of live subtrees sum to it.
 template <class Code>
 class LbvhBuilder {
 public:
     // `sorted_bounds[i]` is the box of the primitive sorted_[i] refers to.
     LbvhBuilder(const std::vector<KeyValue<Code>>& sorted, const std::vector<Bounds3>& sorted_bounds,
                 const Lbvh::Config& config)
-        : sorted_(sorted), sorted_bounds_(sorted_bounds), config_(config), free_threads_(config.threads - 1) {}
+        : sorted_(sorted), sorted_bounds_(sorted_bounds), config_(config) {}
 
     // Builds the subtree over sorted_[begin, end) at `depth`, appending its nodes to `out`
     // in depth-first order (its root first). Node indices are relative to out's start.
-    // Returns the subtree's bounds. Small enough to be inlined into build_inner, so that
-    // the leaves — half of all nodes — cost no call of their own.
-    Bounds3 build(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts) {
+    // Returns the subtree's bounds. `threads`: the subtree's thread budget, its own thread
+    // included. Small enough to be inlined into build_inner, so that the leaves — half of
+    // all nodes — cost no call of their own.
+    Bounds3 build(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts,
+                  int threads) {
         const uint32_t count = end - begin;
         if (count <= config_.max_prims || depth >= config_.max_depth) return build_leaf(begin, end, out, counts);
-        return build_inner(begin, end, depth, out, counts);
+        return build_inner(begin, end, depth, out, counts, threads);
     }
 
 private:
@@ -100,7 +108,7 @@ private:
     }
 
     Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out,
-                        Lbvh::Counts& counts) {
+                        Lbvh::Counts& counts, int threads) {
         const uint32_t self = uint32_t(out.size());
         out.emplace_back();  // written once the children's bounds are known
         const Split split = find_split(begin, end);
@@ -108,30 +116,29 @@ private:
 
         Bounds3 left, right;
         uint32_t second;
-        if (end - split.index > config_.task_threshold && acquire_thread()) {
+        if (threads > 1 && end - split.index > config_.task_threshold) {
             // The second child's subtree goes to another thread, into its own buffer; this
             // thread builds the first child meanwhile, then appends the second's nodes
-            // right after the first's: the order a one-thread build produces.
+            // right after the first's: the order a one-thread build produces. Each side
+            // keeps at least one thread of the budget, the rest by primitive count.
+            const int task_threads = std::clamp(
+                int(int64_t(threads) * (end - split.index) / (end - begin)), 1, threads - 1);
             ++counts.tasks;
             std::vector<BvhNode> task_nodes;
             Lbvh::Counts task_counts;
             auto task = std::async(std::launch::async, [&] {
-                struct Release {
-                    LbvhBuilder* b;
-                    ~Release() { b->release_thread(); }
-                } release{this};
                 task_nodes.reserve(2 * size_t(end - split.index) - 1);
-                return build(split.index, end, depth + 1, task_nodes, task_counts);
+                return build(split.index, end, depth + 1, task_nodes, task_counts, task_threads);
             });
-            left = build(begin, split.index, depth + 1, out, counts);
+            left = build(begin, split.index, depth + 1, out, counts, threads - task_threads);
             right = task.get();
             second = uint32_t(out.size());
             append_relocated(out, task_nodes);
             counts += task_counts;
         } else {
-            left = build(begin, split.index, depth + 1, out, counts);
+            left = build(begin, split.index, depth + 1, out, counts, threads);
             second = uint32_t(out.size());
-            right = build(split.index, end, depth + 1, out, counts);
+            right = build(split.index, end, depth + 1, out, counts, threads);
         }
         const Bounds3 b = merge(left, right);
         out[self] = BvhNode::inner(b, second, split.axis >= 0 ? split.axis : b.largest_axis());
@@ -178,19 +185,9 @@ private:
             if (!out[i].is_leaf()) out[i].index += base;
     }
 
-    // A bounded number of live threads: `threads` in all, this one included.
-    bool acquire_thread() {
-        int free = free_threads_.load(std::memory_order_relaxed);
-        while (free > 0)
-            if (free_threads_.compare_exchange_weak(free, free - 1, std::memory_order_acq_rel)) return true;
-        return false;
-    }
-    void release_thread() { free_threads_.fetch_add(1, std::memory_order_acq_rel); }
-
     const std::vector<KeyValue<Code>>& sorted_;
     const std::vector<Bounds3>& sorted_bounds_;
     const Lbvh::Config& config_;
-    std::atomic<int> free_threads_;
 };
 
 }  // namespace
@@ -239,7 +236,7 @@ void Lbvh::build_with(const Scene& scene) {
             // means no reallocation during the build (task buffers reserve theirs likewise).
             bvh_.nodes.reserve(2 * n - 1);
             LbvhBuilder<Code> builder(sorted, sorted_bounds_, config_);
-            builder.build(0, uint32_t(n), 0, bvh_.nodes, counts_);
+            builder.build(0, uint32_t(n), 0, bvh_.nodes, counts_, config_.threads);
         }
         bvh_.finalize(scene);
     } catch (...) {

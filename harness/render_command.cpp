@@ -1,21 +1,17 @@
-// `accelbench render`, `accelbench list` and `accelbench models`: the interactive side of
-// the harness — one model, one accelerator, one image, with everything it measured.
+// `accelbench render`: the interactive side of the harness — one model, one accelerator,
+// one image, with everything it measured.
 #include "cli.h"
 
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include "accelbench/accel/baseline/embree_accel.h"
 #include "accelbench/scene/mesh_io.h"
-#include "accelbench/scene/procedural.h"
 #include "accelbench/accel/registry.h"
-#include "accelbench/verify/robustness_cases.h"
 #include "accelbench/render/renderer.h"
 #include "cost_image.h"
 #include "model_registry.h"
@@ -117,8 +113,9 @@ int render_command(int argc, char** argv) {
         return usage_error(e.what());
     }
     if (model.empty() || accel_name.empty()) return usage_error("--model and --accel are required");
-    if (!cost_out.empty() && accel_name == "embree")
-        return usage_error("--cost-out needs traversal counters, which Embree does not expose");
+    const AcceleratorInfo* info = find_accelerator(accel_name);
+    if (!cost_out.empty() && info && !info->counts_traversal)
+        return usage_error("--cost-out needs traversal counters, which " + accel_name + " does not expose");
     req.settings.shading = !out.empty();  // no image asked for: no shading work
 
     std::unique_ptr<Accelerator> accel;
@@ -169,8 +166,8 @@ int render_command(int argc, char** argv) {
                     opt(bs.leaves).c_str(), opt(bs.max_depth).c_str(), opt(bs.memory_bytes).c_str());
         if (bs.sah_cost) std::printf("sah cost   %.4f\n", *bs.sah_cost);
         for (const auto& [k, v] : bs.extra) std::printf("extra      %s = %g\n", k.c_str(), v);
-        if (accel_name == "embree") {
-            std::printf("counters   n/a (Embree does not expose traversal statistics)\n");
+        if (!info->counts_traversal) {
+            std::printf("counters   n/a (%s does not expose traversal statistics)\n", accel_name.c_str());
         } else {
             const RayStats& p = c.primary_stats;
             const RayStats& s = c.shadow_stats;
@@ -195,75 +192,6 @@ int render_command(int argc, char** argv) {
         return 2;
     }
     return 0;
-}
-
-int list_command(int, char**) {
-    auto print_params = [](const std::vector<ParamSpec>& specs) {
-        for (const auto& p : specs) {
-            std::string domain;
-            if (p.type == ParamType::Enum) {
-                for (const auto& c : p.choices) domain += (domain.empty() ? "{" : ", ") + c;
-                domain += "}";
-            } else if (p.type != ParamType::Bool) {
-                char buf[96];
-                std::snprintf(buf, sizeof buf, "[%g, %g]", p.min, p.max);
-                domain = buf;
-            }
-            std::printf("    %-16s %-5s default %-8s %-28s %s\n", p.name.c_str(), to_string(p.type),
-                        p.default_value.c_str(), domain.c_str(), p.help.c_str());
-        }
-    };
-    std::printf("accelerators:\n");
-    for (const auto& info : accelerator_registry()) {
-        std::printf("  %s — %s\n", info.name.c_str(), info.description.c_str());
-        print_params(info.params);
-    }
-    std::printf("\nprocedural scenes (--model procedural:KIND,k=v,...):\n");
-    for (const auto& kind : procedural_registry()) {
-        std::printf("  %s — %s\n", kind.name.c_str(), kind.description.c_str());
-        print_params(kind.params);
-    }
-    // Generating a case takes microseconds to milliseconds; its requirement is part of it.
-    std::printf("\nrobustness cases (configs: models: [{case: ID}] or [{case: all}]):\n");
-    for (const auto& entry : robustness_case_list()) {
-        const RobustnessCase c = entry.make();
-        std::printf("  %-4s %s — %zu triangles, %zu rays: %s\n", c.id.c_str(), c.name.c_str(), c.scene.triangle_count(),
-                    c.rays.size(), c.requirement.c_str());
-    }
-    return 0;
-}
-
-int models_command(int argc, char** argv) {
-    bool fetch = false;
-    for (int i = 0; i < argc; ++i) {
-        if (std::strcmp(argv[i], "--fetch") == 0) fetch = true;
-        else {
-            std::fprintf(stderr, "accelbench models: unknown option '%s'\nusage: accelbench models [--fetch]\n", argv[i]);
-            return 2;
-        }
-    }
-    int missing = 0;
-    try {
-        ModelRegistry registry = ModelRegistry::load_default();
-        std::printf("%-20s %10s %10s  %-10s %s\n", "model", "triangles", "vertices", "found", "path");
-        for (const auto& e : registry.entries()) {
-            ModelLocation loc;
-            try {
-                loc = fetch ? registry.fetch(e) : registry.locate(e);
-            } catch (const std::exception& ex) {
-                loc = {"", std::string("error: ") + ex.what()};
-            }
-            if (loc.path.empty()) ++missing;
-            std::printf("%-20s %10llu %10llu  %-10s %s\n", e.name.c_str(), (unsigned long long)e.triangles,
-                        (unsigned long long)e.vertices, loc.path.empty() ? "missing" : loc.where.c_str(),
-                        loc.path.empty() ? (loc.where == "missing" ? "(run `make models`)" : loc.where.c_str())
-                                         : loc.path.c_str());
-        }
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "accelbench models: %s\n", e.what());
-        return 2;
-    }
-    return missing == 0 ? 0 : 1;
 }
 
 }  // namespace accelbench

@@ -16,9 +16,9 @@ import pandas as pd
 from .schema import ContractError
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
-DEFAULT_REFERENCE = REPO_ROOT / "results" / "report" / "report-tables.csv"
+DEFAULT_REPORT_NUMBERS = REPO_ROOT / "results" / "report" / "report-tables.csv"
 
-REFERENCE_COLUMNS = ["table", "model", "accelerator", "setting", "primitives", "nodes",
+REPORT_NUMBERS_COLUMNS = ["table", "model", "accelerator", "setting", "primitives", "nodes",
                      "prim_tests", "build_s", "render_s"]
 
 # The report's Table 1: the machine and image its numbers come from.
@@ -71,13 +71,13 @@ def our_model(report_model: str, present: set[str]) -> str:
     return cands[0]
 
 
-def load_reference(path: str | Path = DEFAULT_REFERENCE) -> pd.DataFrame:
+def load_report_numbers(path: str | Path = DEFAULT_REPORT_NUMBERS) -> pd.DataFrame:
     path = Path(path)
     if not path.is_file():
         raise ContractError(f"{path}: reference table not found (expected a copy of "
                             f"shared/reference/report-tables.csv)")
     df = pd.read_csv(path)
-    missing = [c for c in REFERENCE_COLUMNS if c not in df.columns]
+    missing = [c for c in REPORT_NUMBERS_COLUMNS if c not in df.columns]
     if missing:
         raise ContractError(f"{path}: missing required columns: {', '.join(missing)}")
     unknown = sorted(set(df["model"]) - set(REPORT_MODEL))
@@ -86,9 +86,9 @@ def load_reference(path: str | Path = DEFAULT_REFERENCE) -> pd.DataFrame:
     return df
 
 
-def reference_value(ref: pd.DataFrame, model: str, accel: str, setting: str,
+def report_value(report_nums: pd.DataFrame, model: str, accel: str, setting: str,
                     column: str) -> float | None:
-    sel = ref[(ref["model"] == model) & (ref["accelerator"] == accel) & (ref["setting"] == setting)]
+    sel = report_nums[(report_nums["model"] == model) & (report_nums["accelerator"] == accel) & (report_nums["setting"] == setting)]
     if sel.empty:
         return None
     return float(sel.iloc[0][column])

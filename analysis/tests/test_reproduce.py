@@ -1,0 +1,293 @@
+"""The main job's driver (reproduce.py): a run directory per invocation, resuming only an
+unfinished run of the same build, the job's progress line, the reference run's clean-tree
+rule; and the three-way comparison (report / this run / reference run) with the claims'
+machine-dependent verdicts."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+from datetime import datetime, timedelta, timezone
+from pathlib import Path
+
+import pytest
+
+from accelbench_analysis.claims import FAILS, HOLDS, evaluate_all
+from accelbench_analysis.cli import main
+from accelbench_analysis.comparison import three_way
+from accelbench_analysis.reproduce import (RUN_JSON, Job, Progress, csv_rows, decide,
+                                           provenance_differences, reproduce, tree_changes)
+from accelbench_analysis.schema import load_results
+from synthetic import BVH, KD, LBVH, row, write_csv
+
+REPO = Path(__file__).resolve().parents[2]
+ACCELBENCH = REPO / "build" / "accelbench"
+NOW = datetime(2026, 12, 1, 20, 0, 0, tzinfo=timezone.utc)
+PROV = {"git_sha": "a" * 40, "git_dirty": "false", "compiler": "gcc 12.2.0",
+        "build_type": "RelWithDebInfo", "cpu": "AMD EPYC", "embree_version": "3.13.5"}
+JOB = {"configs": ["tiny.yaml"], "tag": ""}
+
+
+# ---- the resume decision on crafted run directories ------------------------------------------
+
+def make_run(runs: Path, name: str, *, complete: bool, prov=PROV, job=JOB, started="") -> Path:
+    d = runs / name
+    (d / "csv").mkdir(parents=True)
+    (d / RUN_JSON).write_text(json.dumps({"job": job, "provenance": prov, "complete": complete,
+                                          "started": started or name, "continued": []}))
+    return d
+
+
+def test_provenance_differences_name_fields_and_absent_ones():
+    assert provenance_differences(PROV, dict(PROV)) == []
+    newer = dict(PROV, isa="avx2", cpu="Intel Xeon")
+    assert provenance_differences(PROV, newer) == ["cpu: AMD EPYC -> Intel Xeon",
+                                                   "isa: (absent) -> avx2"]
+    assert provenance_differences(dict(PROV, isa="sse2"), PROV) == ["isa: sse2 -> (absent)"]
+
+
+def test_decide_resumes_only_an_unfinished_run_of_the_same_build_and_job(tmp_path):
+    runs = tmp_path / "runs"
+    d = decide(runs, JOB, PROV, False, NOW)
+    assert not d.resume and "no earlier run" in d.reason
+    assert d.run_dir.name == "20261201T200000Z-aaaaaaa"
+
+    old = make_run(runs, "20261130T100000Z-aaaaaaa", complete=True)
+    d = decide(runs, JOB, PROV, False, NOW)
+    assert not d.resume and "complete" in d.reason and d.run_dir != old
+
+    unfinished = make_run(runs, "20261201T100000Z-aaaaaaa", complete=False)
+    d = decide(runs, JOB, PROV, False, NOW)
+    assert d.resume and d.run_dir == unfinished and "provenance matches" in d.reason
+    assert not decide(runs, JOB, PROV, True, NOW).resume  # FRESH=1
+
+    # Another build (the dirty flag, or a column only one build records) starts afresh.
+    for other, said in ((dict(PROV, git_dirty="true"), "git_dirty: false -> true"),
+                        (dict(PROV, isa="avx2"), "isa: (absent) -> avx2")):
+        d = decide(runs, JOB, other, False, NOW)
+        assert not d.resume and said in d.reason and d.run_dir != unfinished
+
+    # A newer run of another job (QUICK's configs) does not hide this job's unfinished run.
+    make_run(runs, "20261201T150000Z-aaaaaaa-quick", complete=False,
+             job={"configs": ["quick.yaml"], "tag": "quick"})
+    assert decide(runs, JOB, PROV, False, NOW).run_dir == unfinished
+    # The newest run of the job decides: a finished one after the unfinished one wins.
+    make_run(runs, "20261201T160000Z-aaaaaaa", complete=True)
+    assert not decide(runs, JOB, PROV, False, NOW).resume
+
+
+def test_progress_line_counts_over_all_configs():
+    p = Progress(total=40, done_before=10)
+    p.start -= 30  # 30 s into this invocation
+    assert p.line(10) == "reproduce: 10/40 combinations (25%) over all configs, elapsed 0:30"
+    # 10 combinations in 30 s here, 20 to go: about a minute.
+    assert p.line(20) == ("reproduce: 20/40 combinations (50%) over all configs, elapsed 0:30, "
+                          "about 1:00 left")
+    assert "left" not in p.line(40)
+
+
+def test_csv_rows_ignores_a_cut_line(tmp_path):
+    f = tmp_path / "r.csv"
+    f.write_text('a,b\n1,"x\ny"\n2,z\n3,')
+    assert csv_rows(f) == 2
+    assert csv_rows(tmp_path / "none.csv") == 0
+
+
+# ---- the driver with the real harness ------------------------------------------------------
+
+needs_binary = pytest.mark.skipif(not ACCELBENCH.is_file(), reason=f"{ACCELBENCH} not built")
+
+TINY = """name: {name}
+repetitions: 1
+warmup: 1
+timeout_s: 60
+render: {{width: 32, height: 24, spp: 1, light: true, shading: false, threads: 1}}
+models:
+  - {model}
+accelerators:
+  - {{name: bvh}}
+  - {{name: lbvh}}
+"""
+# Two triangles: a valid mesh; MESH_BAD refers to a vertex the file does not have, so the
+# harness refuses the model at load, writes no rows and exits 2 (an interrupted job).
+MESH_GOOD = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n"
+MESH_BAD = "v 0 0 0\nv 1 0 0\nf 1 2 9\n"
+
+
+def tiny_job(tmp_path: Path, broken: bool = False) -> Job:
+    first = tmp_path / "tiny.yaml"
+    first.write_text(TINY.format(name="tiny", model="{procedural: soup, triangles: 200, seed: 1}"))
+    mesh = tmp_path / "mesh.obj"
+    mesh.write_text(MESH_BAD if broken else MESH_GOOD)
+    second = tmp_path / "second.yaml"
+    second.write_text(TINY.format(name="second", model=f"{{path: {mesh}}}"))
+    return Job(accelbench=ACCELBENCH, configs=[first, second], runs=tmp_path / "runs",
+               latest=tmp_path / "latest", analyse=False)
+
+
+def run_json(d: Path) -> dict:
+    return json.loads((d / RUN_JSON).read_text())
+
+
+def timestamps(csv: Path) -> list[str]:
+    return sorted(load_results([csv]).rows["timestamp"])
+
+
+@needs_binary
+def test_every_invocation_measures_into_a_new_run_directory(tmp_path, capfd):
+    rc, first = reproduce(tiny_job(tmp_path), NOW)
+    assert rc == 0
+    assert csv_rows(first / "csv" / "tiny.csv") == 2 and csv_rows(first / "csv" / "second.csv") == 2
+    meta = run_json(first)
+    assert meta["complete"] and meta["job"] == {"configs": ["tiny.yaml", "second.yaml"], "tag": ""}
+    assert meta["provenance"]["git_sha"] == load_results([first / "csv" / "tiny.csv"]).rows["git_sha"].iloc[0]
+    assert (tmp_path / "latest").resolve() == first.resolve()
+    err = capfd.readouterr().err
+    assert "reproduce: 4/4 combinations (100%) over all configs" in err
+    assert "reproduce: 1/4 combinations" in err and "[1/2] " in err  # the harness's lines too
+
+    rc, second = reproduce(tiny_job(tmp_path), NOW + timedelta(seconds=1))
+    assert rc == 0 and second != first
+    assert "is complete" in capfd.readouterr().err
+    assert csv_rows(second / "csv" / "tiny.csv") == 2  # measured again, not resumed
+    assert (tmp_path / "latest").resolve() == second.resolve()
+
+
+@needs_binary
+def test_an_interrupted_run_continues_with_the_same_build_only(tmp_path, capfd):
+    rc, run = reproduce(tiny_job(tmp_path, broken=True), NOW)
+    assert rc == 2 and not run_json(run)["complete"] and not (tmp_path / "latest").exists()
+    measured = timestamps(run / "csv" / "tiny.csv")
+    capfd.readouterr()
+
+    # Same build, same machine: the unfinished run is continued, its rows kept.
+    rc, again = reproduce(tiny_job(tmp_path), NOW + timedelta(minutes=1))
+    assert rc == 0 and again == run
+    err = capfd.readouterr().err
+    assert "continuing" in err and "provenance matches" in err
+    assert "2 already in" in err
+    assert timestamps(run / "csv" / "tiny.csv") == measured
+    assert csv_rows(run / "csv" / "second.csv") == 2 and run_json(run)["complete"]
+
+    # An unfinished run recorded by another build is not continued.
+    rc, other = reproduce(tiny_job(tmp_path, broken=True), NOW + timedelta(minutes=2))
+    assert rc == 2
+    meta = run_json(other)
+    meta["provenance"]["git_sha"] = "0" * 40
+    (other / RUN_JSON).write_text(json.dumps(meta))
+    capfd.readouterr()
+    rc, fresh = reproduce(tiny_job(tmp_path), NOW + timedelta(minutes=3))
+    assert rc == 0 and fresh not in (run, other)
+    assert "git_sha: " + "0" * 40 in capfd.readouterr().err
+    assert csv_rows(fresh / "csv" / "tiny.csv") == 2
+
+
+# ---- the reference run's clean-tree rule ------------------------------------------------------
+
+def git(repo: Path, *args: str) -> None:
+    subprocess.run(["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t", *args],
+                   check=True, capture_output=True)
+
+
+def test_reference_run_refuses_a_dirty_tree(tmp_path, monkeypatch, capsys):
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    git(repo, "init", "-q")
+    (repo / "code.cpp").write_text("int main() {}\n")
+    git(repo, "add", "code.cpp")
+    git(repo, "commit", "-q", "-m", "code")
+    config = repo / "c.yaml"
+    config.write_text("name: c\n")  # untracked: not a change to committed code
+    assert tree_changes(repo) == []
+    (repo / "code.cpp").write_text("int main() { return 1; }\n")
+    assert tree_changes(repo) == [" M code.cpp"]
+
+    monkeypatch.chdir(repo)
+    rc = main(["reproduce", str(config), "--into", str(repo / "reference"), "--require-clean-tree",
+               "--accelbench", str(repo / "no-such-binary")])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert "uncommitted changes" in err and "code.cpp" in err
+    assert not (repo / "reference").exists()  # refused before anything was written
+    with pytest.raises(RuntimeError, match="not a git work tree"):
+        tree_changes(tmp_path)
+
+
+# ---- the three-way comparison and the claims' second verdict ---------------------------------
+
+def bvh_lbvh_kd(render_bvh: float, render_kd: float, cpu: str) -> list[dict]:
+    return [row("stanford-bunny", "bvh", BVH, build=0.1, render=render_bvh, nodes=1001, cpu=cpu),
+            row("stanford-bunny", "lbvh", LBVH, build=0.2, render=1.0, nodes=999, cpu=cpu),
+            row("stanford-bunny", "kdtree", KD, build=0.9, render=render_kd, nodes=5000, cpu=cpu)]
+
+
+def test_three_way_values_and_ratios(tmp_path, report_nums):
+    (tmp_path / "this").mkdir()
+    (tmp_path / "ref" / "csv").mkdir(parents=True)
+    this = load_results([write_csv(tmp_path / "this" / "table4.csv",
+                                   bvh_lbvh_kd(2.0, 0.5, "This CPU"))])
+    ref = load_results([write_csv(tmp_path / "ref" / "csv" / "table4.csv",
+                                  bvh_lbvh_kd(1.0, 0.8, "Reference CPU"))])
+    rows = {(r.metric, r.model, r.structure): r for r in three_way(this, ref, report_nums)}
+    bvh = rows[("render", "Stanford bunny", "BVH (median)")]
+    report_bvh = float(report_nums.query("model == 'stanford-bunny' and accelerator == 'bvh' "
+                                         "and setting == 'default'")["render_s"].iloc[0])
+    assert (bvh.report, bvh.this, bvh.reference) == (report_bvh, 2.0, 1.0)
+    assert bvh.this_over_reference == pytest.approx(2.0)
+    assert bvh.this_over_report == pytest.approx(2.0 / report_bvh)
+    kd_nodes = rows[("nodes", "Stanford bunny", "kd-tree")]
+    assert (kd_nodes.this, kd_nodes.reference, kd_nodes.this_over_reference) == (5000, 5000, 1.0)
+    # Only cells someone measured: Igea has no rows in either run.
+    assert not any(m.startswith("Igea") for _, m, _ in rows)
+    # Without a reference run the reference column is empty, the report's still there.
+    alone = {(r.metric, r.model, r.structure): r for r in three_way(this, None, report_nums)}
+    assert alone[("render", "Stanford bunny", "BVH (median)")].reference is None
+    assert alone[("render", "Stanford bunny", "BVH (median)")].report == report_bvh
+
+    # Through the command line: REPORT.md shows the three values and ratios, comparison.md
+    # the counts, claims.md the reference run's verdict and the machine-dependent flag.
+    out = tmp_path / "out"
+    assert main(["report", str(tmp_path / "this" / "table4.csv"), "--out", str(out),
+                 "--reference-run", str(tmp_path / "ref")]) == 0
+    report = (out / "REPORT.md").read_text()
+    assert "| Stanford bunny | BVH (median) | " + f"{report_bvh:.3g}" + " | 2.00 | 1.00 |" in report
+    assert "Reference CPU" in report
+    assert "| Stanford bunny | kd-tree | " in (out / "tables" / "comparison.md").read_text()
+
+
+def table4_rows(lbvh_build: float, cpu: str) -> list[dict]:
+    out = []
+    for m, f in (("stanford-bunny", 1.0), ("igea", 4.0), ("stanford-dragon", 12), ("happy-buddha-100k", 2)):
+        out += [row(m, "bvh", BVH, build=0.1 * f, render=1.0 * f, cpu=cpu),
+                row(m, "lbvh", LBVH, build=lbvh_build * f, render=1.05 * f, cpu=cpu),
+                row(m, "kdtree", KD, build=0.9 * f, render=0.8 * f, cpu=cpu)]
+    return out
+
+
+def test_claims_flag_verdicts_that_differ_between_machines(tmp_path, report_nums):
+    # 5.2-a, "BVH builds fastest": it holds here (LBVH builds in twice BVH's time) and not
+    # in the reference run's rows, where the LBVH builds in half of it.
+    this = load_results([write_csv(tmp_path / "a.csv", table4_rows(0.2, "This CPU"))])
+    ref = load_results([write_csv(tmp_path / "b.csv", table4_rows(0.05, "Reference CPU"))])
+    rows, _ = evaluate_all(this, report_nums, ref)
+    by_id = {r.claim.id: r for r in rows}
+    a = by_id["5.2-a"]
+    assert (a.ours.verdict, a.reference.verdict, a.machine_dependent) == (HOLDS, FAILS, True)
+    # 5.2-f (kd-tree spends the most build + render time) holds on both: not flagged.
+    f = by_id["5.2-f"]
+    assert (f.ours.verdict, f.reference.verdict, f.machine_dependent) == (HOLDS, HOLDS, False)
+    # Not comparable on one side is no machine dependence.
+    assert not any(r.machine_dependent for r in rows if FAILS not in
+                   (r.ours.verdict, r.reference.verdict))
+    alone, _ = evaluate_all(this, report_nums)
+    assert all(r.reference is None and not r.machine_dependent for r in alone)
+
+    out = tmp_path / "out"
+    a_csv, b_dir = tmp_path / "a.csv", tmp_path / "refrun"
+    (b_dir / "csv").mkdir(parents=True)
+    (b_dir / "csv" / "a.csv").write_text((tmp_path / "b.csv").read_text())
+    assert main(["claims", str(a_csv), "--out", str(out), "--reference-run", str(b_dir)]) == 0
+    claims = (out / "tables" / "claims.md").read_text()
+    line = next(x for x in claims.splitlines() if x.startswith("| 5.2-a |"))
+    assert line.endswith("| does not hold | **machine-dependent** |")
+    assert "Machine-dependent (holds on one run, not on the other): 5.2-a" in claims

@@ -1,0 +1,260 @@
+// Hostile inputs to `accelbench run` and `merge`, each generated here: outputs that are
+// not files, a second writer of one output, configs that would expand without bound or
+// whose reference cannot fit, a second YAML document, long model lists, repetitions left
+// without their results, and results files that merge must refuse. Every one must be a
+// clear refusal (exit 2 and a message naming the cause), never a crash, a hang or data
+// of two runs mixed.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+
+#include "csv.h"
+#include "harness_test_util.h"
+#include "output_lock.h"
+#include "results.h"
+#include "run_command.h"
+
+namespace accelbench {
+namespace {
+
+using namespace testing_util;
+namespace fs = std::filesystem;
+
+struct Outcome {
+    int code;
+    std::string err;
+};
+
+Outcome run(std::vector<std::string> args, bool merge = false) {
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    ::testing::internal::CaptureStderr();
+    ::testing::internal::CaptureStdout();
+    const int code = merge ? merge_command(int(argv.size()), argv.data()) : run_command(int(argv.size()), argv.data());
+    ::testing::internal::GetCapturedStdout();
+    return {code, ::testing::internal::GetCapturedStderr()};
+}
+
+size_t data_rows(const std::string& path) { return read_csv(path).rows.size(); }
+
+class HostileInputTest : public ::testing::Test {
+protected:
+    TempDir dir{"accelbench-hostile-test-"};
+    std::string config, out;
+
+    void SetUp() override {
+        write_triangle_case(dir.path());
+        config = write_file(dir.path(), "tiny.yaml", R"(name: tiny
+repetitions: 2
+warmup: 0
+models:
+  - {path: tri.obj, rays: {file: tri.rays.csv}}
+accelerators:
+  - {name: brute_force}
+  - {name: bvh}
+)");
+        out = (dir.path() / "tiny.csv").string();
+    }
+    std::string path(const std::string& name) const { return (dir.path() / name).string(); }
+};
+
+TEST_F(HostileInputTest, AnOutputThatIsNotARegularFileIsRefused) {
+    fs::create_directories(path("a-directory"));
+    ASSERT_EQ(mkfifo(path("a-fifo").c_str(), 0600), 0);
+    for (const auto& [target, kind] : std::vector<std::pair<std::string, std::string>>{
+             {"/dev/null", "a device"}, {path("a-directory"), "a directory"}, {path("a-fifo"), "a FIFO"}}) {
+        const Outcome o = run({config, "--out", target});
+        EXPECT_EQ(o.code, 2) << target;
+        EXPECT_NE(o.err.find("'" + target + "' is " + kind), std::string::npos) << o.err;
+        const Outcome resumed = run({config, "--out", target, "--resume"});
+        EXPECT_EQ(resumed.code, 2) << target;
+    }
+    // The repetitions file is an output too.
+    fs::create_directories(path("r.reps.csv"));
+    const Outcome o = run({config, "--out", path("r.csv")});
+    EXPECT_EQ(o.code, 2);
+    EXPECT_NE(o.err.find("r.reps.csv' is a directory"), std::string::npos) << o.err;
+    // merge's output likewise.
+    ASSERT_EQ(run({config, "--out", out}).code, 0);
+    const Outcome m = run({"/dev/null", out}, true);
+    EXPECT_EQ(m.code, 2);
+    EXPECT_NE(m.err.find("'/dev/null' is a device"), std::string::npos) << m.err;
+}
+
+TEST_F(HostileInputTest, ASecondWriterOfOneOutputIsRefused) {
+    ASSERT_EQ(run({config, "--out", out}).code, 0);
+    const std::string before = read_file(out), reps_before = read_file(repetitions_path(out));
+    for (const std::string& held : {out, repetitions_path(out)}) {
+        OutputLock other({held});  // another process's run: flock conflicts across open files
+        const Outcome o = run({config, "--out", out, "--resume"});
+        EXPECT_EQ(o.code, 2);
+        EXPECT_NE(o.err.find("is being written by another process"), std::string::npos) << o.err;
+        fs::remove(path("copy.csv"));
+        fs::remove(path("copy.reps.csv"));
+        EXPECT_EQ(run({path("copy.csv"), out}, true).code, 0);  // reading a locked output is fine
+        const Outcome into = run({out, path("copy.csv")}, true);
+        EXPECT_EQ(into.code, 2);
+        EXPECT_NE(into.err.find("is being written by another process"), std::string::npos) << into.err;
+    }
+    EXPECT_EQ(read_file(out), before);
+    EXPECT_EQ(read_file(repetitions_path(out)), reps_before);
+    // The lock ends with its holder: the same resume now succeeds and finds nothing to do.
+    const Outcome after = run({config, "--out", out, "--resume"});
+    EXPECT_EQ(after.code, 0) << after.err;
+    EXPECT_EQ(read_file(out), before);
+}
+
+TEST_F(HostileInputTest, RepetitionsWithoutTheirResultsAreNeverMixedWithANewRun) {
+    ASSERT_EQ(run({config, "--out", out}).code, 0);
+    ASSERT_EQ(data_rows(repetitions_path(out)), 4u);  // 2 combinations x 2 repetitions
+    fs::remove(out);
+    const Outcome fresh = run({config, "--out", out});
+    EXPECT_EQ(fresh.code, 2);
+    EXPECT_NE(fresh.err.find("exists without results"), std::string::npos) << fresh.err;
+    EXPECT_FALSE(fs::exists(out));
+    // --resume drops them (no results row), then measures everything once.
+    ASSERT_EQ(run({config, "--out", out, "--resume"}).code, 0);
+    EXPECT_EQ(data_rows(out), 2u);
+    EXPECT_EQ(data_rows(repetitions_path(out)), 4u);
+    // merge never leaves an older OUT.reps.csv beside a new OUT.
+    const std::string merged = path("merged.csv");
+    write_file(dir.path(), "merged.reps.csv", "config,combo_id\nold,deadbeef\n");
+    const std::string bare = path("bare.csv");
+    fs::copy_file(out, bare);  // results without repetitions
+    ASSERT_EQ(run({merged, bare}, true).code, 0);
+    EXPECT_TRUE(fs::exists(merged));
+    EXPECT_FALSE(fs::exists(repetitions_path(merged)));
+}
+
+// Minimal result files in the shape merge reads (combo_id, status, a measured column and
+// provenance), each with one hostile row.
+TEST_F(HostileInputTest, MergeRefusesRowsThatAreNotResults) {
+    const std::string header = "combo_id,params,status,rays,render_s_median,git_sha,git_dirty,compiler,build_type,cpu,"
+                               "embree_version\n";
+    const std::string prov = ",abc,false,gcc,Release,cpu,3\n";
+    const std::string good = "a1,,ok,10,0.5" + prov;
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {",,ok,10,0.5" + prov, "row 2: empty combo_id"},
+        {"b2,,okay,10,0.5" + prov, "row 2: unknown status 'okay'"},
+        {"b2,,ok,10x,0.5" + prov, "row 2, column rays: '10x' is not a finite number"},
+        {"b2,,ok,10,nan" + prov, "row 2, column render_s_median: 'nan' is not a finite number"},
+        {"b2,,ok,10,inf" + prov, "row 2, column render_s_median: 'inf' is not a finite number"},
+        {"b2,,ok, 10,0.5" + prov, "row 2, column rays: ' 10' is not a finite number"},
+    };
+    for (const auto& [row, message] : cases) {
+        const std::string in = write_file(dir.path(), "in.csv", header + good + row);
+        try {
+            merge_results(path("m.csv"), {in}, false);
+            ADD_FAILURE() << "merged " << row;
+        } catch (const std::runtime_error& e) {
+            EXPECT_NE(std::string(e.what()).find(in + ", " + message), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(fs::exists(path("m.csv")));
+    }
+    // A parameter column named like a measured one (kdtree max_depth "auto") is not a number.
+    const std::string with_param = "combo_id,params,max_depth,status,max_depth\n";
+    write_file(dir.path(), "p.csv", with_param + "a1,,auto,ok,12\n");
+    EXPECT_EQ(merge_results(path("p-out.csv"), {path("p.csv")}, true), 1u);
+    // A repetition whose combination has no results row.
+    write_file(dir.path(), "r.csv", header + good);
+    write_file(dir.path(), "r.reps.csv", "combo_id,repetition,render_s\na1,1,0.5\nzz,1,0.5\n");
+    try {
+        merge_results(path("rm.csv"), {path("r.csv")}, false);
+        ADD_FAILURE() << "merged an orphan repetition";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("r.reps.csv, row 2: repetition of combination 'zz', which has no row"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+TEST_F(HostileInputTest, TheProductOfAxesIsBoundedBeforeExpansion) {
+    // Three ranges of 100 values: 10^6 combinations, refused by load_config (and so by
+    // --dry-run) in well under a second.
+    const std::string big = write_file(dir.path(), "big.yaml", R"(models: [stanford-bunny]
+accelerators:
+  - {name: kdtree, params: {max_prims: {from: 1, to: 100, step: 1}, max_depth: {from: 1, to: 100, step: 1},
+                            traversal_cost: {from: 1, to: 100, step: 1}}}
+)");
+    const auto t0 = std::chrono::steady_clock::now();
+    EXPECT_TRUE(has_issue(load_error(big), 3, 3, "accelerators", "expands to 1000000 combinations"));
+    const Outcome dry = run({"--dry-run", big});
+    EXPECT_EQ(dry.code, 2);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 10.0);
+    // Exactly the limit is accepted; one more is refused (across models and entries).
+    const std::string at = write_file(dir.path(), "at.yaml", R"(models: [stanford-bunny, igea]
+accelerators:
+  - {name: kdtree, params: {max_prims: {from: 1, to: 100, step: 1}, traversal_cost: {from: 1, to: 250, step: 1}}}
+  - {name: kdtree, params: {max_prims: {from: 1, to: 100, step: 1}, isect_cost: {from: 1, to: 250, step: 1}}}
+)");
+    EXPECT_NO_THROW(load_config(at, registry()));
+    const std::string over = write_file(dir.path(), "over.yaml", read_file(at) + "  - {name: embree}\n");
+    EXPECT_TRUE(has_issue(load_error(over), 3, 3, "accelerators", "expands to 100002 combinations (2 models x 50001"));
+}
+
+TEST_F(HostileInputTest, ASecondYamlDocumentIsRefused) {
+    const std::string base = read_file(config);
+    for (const std::string& rest : {std::string("---\nname: other\n"), std::string("---\n"),
+                                    std::string("...\n---\nmodels: []\n")}) {
+        const std::string two = write_file(dir.path(), "two.yaml", base + rest);
+        const ConfigError e = load_error(two);
+        ASSERT_EQ(e.issues().size(), 1u) << rest;
+        EXPECT_NE(e.issues()[0].message.find("a second YAML document"), std::string::npos) << all_issues(e);
+        EXPECT_GE(e.issues()[0].mark.line, 8) << rest;  // the config's own 8 lines come first
+    }
+    // A leading `---` and a closing `...` are one document.
+    EXPECT_NO_THROW(load_config(write_file(dir.path(), "one.yaml", "---\n" + base + "...\n"), registry()));
+}
+
+TEST_F(HostileInputTest, LongModelListsAreValidatedInLinearTime) {
+    // 50,000 copies of one model: every copy after the first is an issue. Comparing all
+    // pairs took minutes; one pass with maps takes well under a second.
+    std::string text = "models:\n";
+    for (int i = 0; i < 50000; ++i) text += "  - stanford-bunny\n";
+    text += "accelerators: [{name: bvh}]\n";
+    const std::string many = write_file(dir.path(), "many.yaml", text);
+    const auto t0 = std::chrono::steady_clock::now();
+    const ConfigError e = load_error(many);
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 20.0);
+    EXPECT_EQ(e.issues().size(), 49999u);
+    EXPECT_TRUE(has_issue(e, 50001, 5, "models[49999]", "the same model as models[0]"));
+}
+
+TEST_F(HostileInputTest, AnImageTooLargeForTheReferenceIsRefusedAtLoad) {
+    const std::string large = write_file(dir.path(), "large.yaml", R"(render: {width: 8192, height: 8192, spp: 1}
+models: [stanford-bunny]
+accelerators: [{name: bvh}]
+)");
+    EXPECT_TRUE(has_issue(load_error(large), 2, 10, "models[0]", "width x height x spp = 67108864 primary rays"));
+    // Without error columns nothing keeps a hit per ray: accepted.
+    EXPECT_NO_THROW(load_config(write_file(dir.path(), "noerr.yaml", read_file(large) + "errors: false\n"), registry()));
+}
+
+TEST_F(HostileInputTest, TimeoutBoundsTheReferencePassToo) {
+    // The reference pass (once per model, in a child process like a measurement) gets the
+    // same limit: rows with status timeout naming it, not an unbounded wait in the parent.
+    const std::string slow = write_file(dir.path(), "slow.yaml", R"(name: slow
+timeout_s: 0.001
+render: {width: 320, height: 240}
+models: [{procedural: soup, triangles: 20000, seed: 1}]
+accelerators: [{name: bvh}, {name: embree}]
+)");
+    const Outcome o = run({slow, "--out", path("slow.csv")});
+    EXPECT_EQ(o.code, 0) << o.err;  // timeouts are rows; the run goes on
+    const CsvData d = read_csv(path("slow.csv"));
+    ASSERT_EQ(d.rows.size(), 2u);
+    const size_t status = size_t(std::find(d.header.begin(), d.header.end(), "status") - d.header.begin());
+    for (const auto& r : d.rows) {
+        EXPECT_EQ(r[status], "timeout");
+        EXPECT_NE(r[status + 1].find("exceeded the time limit (timeout_s = 0.001 s) during the reference pass"),
+                  std::string::npos)
+            << r[status + 1];
+    }
+    EXPECT_EQ(data_rows(repetitions_path(path("slow.csv"))), 0u);
+}
+
+}  // namespace
+}  // namespace accelbench
