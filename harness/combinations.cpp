@@ -34,6 +34,26 @@ std::string combination_key(const ModelSpec& model, const RenderSettings& r, con
     return model.key + "|" + render + "|" + accel + "|" + params.canonical();
 }
 
+RenderSettings render_of(const Config& config, const Combination& c) {
+    RenderSettings r = config.render;
+    r.threads = c.threads;
+    return r;
+}
+
+std::string ray_set_key(RaySetKind kind, const RaySetParams& p) {
+    // Appended piece by piece: GCC 12's -Wrestrict misreads `"literal" + std::string`.
+    std::string k = "ray_set=";
+    k.append(ray_set_name(kind));
+    switch (kind) {
+        case RaySetKind::Primary:
+        case RaySetKind::Shadow: return k;
+        case RaySetKind::Ao: k += ";samples=" + std::to_string(p.ao_samples) + ";distance=" + number_text(p.ao_distance); break;
+        case RaySetKind::Diffuse: k += ";bounces=" + std::to_string(p.diffuse_bounces); break;
+        case RaySetKind::Random: k += ";rays=" + std::to_string(p.random_rays); break;
+    }
+    return k + ";seed=" + std::to_string(p.seed);
+}
+
 namespace {
 
 // `max_depth: auto` names the structure's own scene-dependent default: not a given value.
@@ -74,19 +94,30 @@ std::vector<Combination> expand(const Config& config) {
                         if (!is_scene_dependent_default(*info, name, value)) c.given[name] = value;
                     }
                 }
-                if (has_threads && !c.given.count("threads"))
-                    c.given["threads"] = std::to_string(config.render.threads);
-                c.params = resolve_params(a.name, info->params, c.given);
-                c.key = combination_key(model, config.render, a.name, c.params);
-                c.hash = fnv1a64(c.key);
-                c.id = hex16(c.hash);
-                c.name = model.label + "/" + a.name + (shown.empty() ? "" : ":" + shown);
-                const std::string where = model.key_path + " x " + a.key_path;
-                if (auto [it, fresh] = seen.emplace(c.key, where); !fresh)
-                    issues.push_back({a.mark, a.key_path,
-                                      "combination " + c.name + " (" + where + ") repeats " + it->second +
-                                          ": every combination must be measured once"});
-                else out.push_back(std::move(c));
+                const bool threads_given = c.given.count("threads") > 0;
+                std::vector<std::optional<RaySetKind>> sets = {std::nullopt};
+                if (config.ray_sets) sets.assign(config.ray_sets->sets.begin(), config.ray_sets->sets.end());
+                for (int threads : config.thread_counts)
+                    for (const auto& set : sets) {
+                        Combination t = c;
+                        t.threads = threads;
+                        t.ray_set = set;
+                        if (has_threads && !threads_given) t.given["threads"] = std::to_string(threads);
+                        t.params = resolve_params(a.name, info->params, t.given);
+                        t.key = combination_key(model, render_of(config, t), a.name, t.params);
+                        if (set) t.key.append("|").append(ray_set_key(*set, config.ray_sets->params));
+                        t.hash = fnv1a64(t.key);
+                        t.id = hex16(t.hash);
+                        t.name = model.label + "/" + a.name + (shown.empty() ? "" : ":" + shown);
+                        if (config.thread_counts.size() > 1) t.name += "/threads=" + std::to_string(threads);
+                        if (set) t.name.append("/").append(ray_set_name(*set));
+                        const std::string where = model.key_path + " x " + a.key_path;
+                        if (auto [it, fresh] = seen.emplace(t.key, where); !fresh)
+                            issues.push_back({a.mark, a.key_path,
+                                              "combination " + t.name + " (" + where + ") repeats " + it->second +
+                                                  ": every combination must be measured once"});
+                        else out.push_back(std::move(t));
+                    }
 
                 size_t k = a.axes.size();
                 while (k > 0 && ++pos[k - 1] == a.axes[k - 1].values.size()) pos[--k] = 0;

@@ -20,7 +20,11 @@ struct Combination {
     std::string accel;       // accelerator name
     std::map<std::string, std::string> given;  // values the config gives (canonical text)
     ParamSet params;         // every parameter: given or default
-    std::string key;         // canonical identity: model key, render settings, accel, params
+    int threads = 1;         // render threads (one of Config::thread_counts)
+    // The ray set this row times (Config::ray_sets); nullopt: the camera row, primary and
+    // shadow rays together as the report timed them (`ray_set` = camera).
+    std::optional<RaySetKind> ray_set;
+    std::string key;         // canonical identity: model key, render settings, accel, params, ray set
     uint64_t hash = 0;       // FNV-1a 64 of key
     std::string id;          // hash as 16 hex digits: the CSV's combo_id
     std::string name;        // for people: "stanford-bunny/kdtree:max_prims=1,max_depth=28"
@@ -28,7 +32,8 @@ struct Combination {
 
 // Expansion: for each model (outer loop) and each accelerator entry, the cartesian
 // product of that accelerator's own axes (the first axis varies slowest; a zipped group
-// is one axis of tuples; a scalar is a one-value axis). An accelerator that declares a
+// is one axis of tuples; a scalar is a one-value axis), then of the thread counts and the
+// ray sets (innermost). An accelerator that declares a
 // `threads` parameter and is not given one gets the render thread count (Embree's
 // device then uses as many threads as the renderer). Throws ConfigError when two entries
 // produce the same combination.
@@ -40,6 +45,13 @@ std::vector<Combination> expand(const Config& config);
 // every config.
 std::string combination_key(const ModelSpec& model, const RenderSettings& render, const std::string& accel,
                             const ParamSet& params);
+
+// The render settings a combination runs with: the config's, with its thread count.
+RenderSettings render_of(const Config& config, const Combination& c);
+
+// "ray_set=ao;samples=4;distance=0.1;seed=1": what of the config's `ray_sets` a set
+// depends on (the key's suffix; primary and shadow depend on no parameter).
+std::string ray_set_key(RaySetKind kind, const RaySetParams& params);
 
 uint64_t fnv1a64(const std::string& text);
 std::string hex16(uint64_t v);

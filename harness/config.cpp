@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
+#include <thread>
 #include <set>
 
 #include "accelbench/base/params.h"
@@ -94,8 +96,8 @@ public:
 
         // `grid:` belongs to the analysis's grid search (analysis/README.md): accepted, unread.
         Fields top(c_, root, "",
-                   {"name", "description", "repetitions", "warmup", "timeout_s", "errors", "render", "rays", "models",
-                    "accelerators", "skip", "grid"});
+                   {"name", "description", "repetitions", "warmup", "timeout_s", "errors", "render", "ray_sets", "rays",
+                    "models", "accelerators", "skip", "grid"});
         if (!top.ok()) throw ConfigError(c_.issues);
 
         cfg_.name = fs::path(cfg_.path).stem().string();
@@ -118,6 +120,7 @@ public:
         cfg_.render.shading = false;  // timing measures tracing; shading costs every structure the same
         if (auto* e = top.find("render")) read_render(e->value);
         if (auto* e = top.find("rays")) default_rays_ = read_rays(e->value, "rays");
+        if (auto* e = top.find("ray_sets")) read_ray_sets(e->value);
 
         if (auto* e = top.require("models")) read_list(c_, e->value, "models", [&](const YAML::Node& n, const std::string& p) {
             read_model(n, p);
@@ -149,12 +152,75 @@ private:
             if (auto v = read_int(c_, e->value, f.child("height"), 1, 16384)) r.height = int(*v);
         if (auto* e = f.find("spp"))
             if (auto v = read_int(c_, e->value, f.child("spp"), 1, 4096)) r.spp = int(*v);
-        if (auto* e = f.find("threads"))
-            if (auto v = read_int(c_, e->value, f.child("threads"), 1, 1024)) r.threads = int(*v);
+        if (auto* e = f.find("threads")) read_threads(e->value, f.child("threads"));
         if (auto* e = f.find("light"))
             if (auto v = read_bool(c_, e->value, f.child("light"))) r.light = *v;
         if (auto* e = f.find("shading"))
             if (auto v = read_bool(c_, e->value, f.child("shading"))) r.shading = *v;
+    }
+
+    // One count, a list of counts, or "1..nproc" (every count from 1 to the machine's
+    // hardware threads): render.threads is the first.
+    void read_threads(const YAML::Node& n, const std::string& path) {
+        std::vector<int> counts;
+        if (n.IsScalar() && n.Scalar() == "1..nproc") {
+            const int nproc = int(std::max(1u, std::thread::hardware_concurrency()));
+            for (int t = 1; t <= nproc; ++t) counts.push_back(t);
+        } else if (n.IsSequence()) {
+            read_list(c_, n, path, [&](const YAML::Node& item, const std::string& p) {
+                if (auto v = read_int(c_, item, p, 1, 1024)) {
+                    if (std::find(counts.begin(), counts.end(), int(*v)) != counts.end())
+                        c_.error(item, p, "thread count " + std::to_string(*v) + " is listed twice");
+                    else counts.push_back(int(*v));
+                }
+            });
+        } else if (auto v = read_int(c_, n, path, 1, 1024)) {
+            counts.push_back(int(*v));
+        }
+        if (counts.empty()) return;
+        cfg_.thread_counts = counts;
+        cfg_.render.threads = counts.front();
+    }
+
+    void read_ray_sets(const YAML::Node& n) {
+        Fields f(c_, n, "ray_sets", {"sets", "ao", "diffuse", "random", "seed"});
+        if (!f.ok()) return;
+        RaySetsSpec spec;
+        if (auto* e = f.find("sets")) {
+            read_list(c_, e->value, f.child("sets"), [&](const YAML::Node& item, const std::string& p) {
+                const auto name = read_string(c_, item, p);
+                if (!name) return;
+                const auto kind = parse_ray_set(*name);
+                std::vector<std::string> names(ray_set_names().begin(), ray_set_names().end());
+                if (!kind) c_.error(item, p, unknown_name("ray set", *name, names, did_you_mean(*name, names)));
+                else if (std::find(spec.sets.begin(), spec.sets.end(), *kind) != spec.sets.end())
+                    c_.error(item, p, "ray set '" + *name + "' is listed twice");
+                else spec.sets.push_back(*kind);
+            });
+        } else {
+            for (auto name : ray_set_names()) spec.sets.push_back(*parse_ray_set(name));
+        }
+        RaySetParams& r = spec.params;
+        if (auto* e = f.find("ao")) {
+            Fields ao(c_, e->value, f.child("ao"), {"samples", "distance"});
+            if (auto* s = ao.find("samples"))
+                if (auto v = read_int(c_, s->value, ao.child("samples"), 1, 1024)) r.ao_samples = int(*v);
+            if (auto* s = ao.find("distance"))
+                if (auto v = read_number(c_, s->value, ao.child("distance"), 0, 1e3, true)) r.ao_distance = float(*v);
+        }
+        if (auto* e = f.find("diffuse")) {
+            Fields d(c_, e->value, f.child("diffuse"), {"bounces"});
+            if (auto* s = d.find("bounces"))
+                if (auto v = read_int(c_, s->value, d.child("bounces"), 1, 64)) r.diffuse_bounces = int(*v);
+        }
+        if (auto* e = f.find("random")) {
+            Fields d(c_, e->value, f.child("random"), {"rays"});
+            if (auto* s = d.find("rays"))
+                if (auto v = read_int(c_, s->value, d.child("rays"), 1, int64_t(1) << 30)) r.random_rays = uint64_t(*v);
+        }
+        if (auto* e = f.find("seed"))
+            if (auto v = read_int(c_, e->value, f.child("seed"), 0, std::numeric_limits<int64_t>::max())) r.seed = uint64_t(*v);
+        cfg_.ray_sets = std::move(spec);
     }
 
     std::shared_ptr<const RaySet> read_rays(const YAML::Node& n, const std::string& path) {
@@ -439,6 +505,12 @@ private:
     // the same label could not be told apart in the CSV. One pass with maps: a list of
     // 100,000 models is checked in well under a second.
     void check_models() {
+        // Ray sets start from the camera's rays and their reference hits.
+        for (const ModelSpec& m : cfg_.models)
+            if (cfg_.ray_sets && (m.rays || m.kind == ModelSpec::Kind::Case))
+                c_.issues.push_back({m.mark, m.key_path,
+                                     std::string("`ray_sets` are made from a model's camera view; ") +
+                                         (m.rays ? "this model traces a ray file" : "a robustness case is judged, not timed")});
         std::map<std::string, size_t> by_key, by_label;
         for (size_t i = 0; i < cfg_.models.size(); ++i) {
             const ModelSpec& b = cfg_.models[i];

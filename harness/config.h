@@ -14,6 +14,7 @@
 
 #include "accelbench/scene/camera.h"
 #include "accelbench/base/geometry.h"
+#include "accelbench/render/ray_sets.h"
 #include "accelbench/render/renderer.h"
 #include "checked_yaml.h"
 
@@ -84,6 +85,13 @@ struct SkipRule {
     std::string key_path;  // "skip[0]"
 };
 
+// `ray_sets` (issue 14): the ray sets to time, each in a row of its own, and their
+// parameters (core/accelbench/render/ray_sets.h).
+struct RaySetsSpec {
+    std::vector<RaySetKind> sets;  // in the order written; default every set
+    RaySetParams params;
+};
+
 struct Config {
     std::string path;  // the config file
     std::string dir;   // its directory: relative paths in the config start here
@@ -95,6 +103,12 @@ struct Config {
     // error columns; `errors: false` turns it off.
     bool errors = true;
     RenderSettings render;  // shading defaults to off in configs (see docs/configs.md)
+    // Absent: one row per combination, primary and shadow rays timed together as the report
+    // did (`ray_set` = camera).
+    std::optional<RaySetsSpec> ray_sets;
+    // `render.threads` as a list (or "1..nproc"): each count is a combination of its own
+    // (thread scaling); a single count gives one entry, equal to render.threads.
+    std::vector<int> thread_counts = {1};
     std::vector<ModelSpec> models;
     std::vector<AcceleratorSpec> accelerators;
     std::vector<SkipRule> skip;

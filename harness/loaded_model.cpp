@@ -1,6 +1,7 @@
 #include "loaded_model.h"
 
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 
@@ -74,6 +75,29 @@ void add_reference_answers(LoadedModel& model, const RenderSettings& render) {
     answers->image = std::move(out.image);
     answers->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     model.reference = std::move(answers);
+}
+
+void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySetsSpec& spec) {
+    const auto t0 = std::chrono::steady_clock::now();
+    auto reference = make_accelerator("reference", {});
+    reference->build(model.scene);
+    const std::vector<Ray> primary = camera_rays(model.camera, render);
+    auto sets = std::make_shared<std::vector<GeneratedRaySet>>(
+        make_ray_sets(*reference, model.scene, primary, model.light.position, spec.sets, spec.params));
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    for (const GeneratedRaySet& set : *sets)
+        std::fprintf(stderr, "accelbench run: ray set %s of %s: %zu rays, hash %016llx\n",
+                     std::string(ray_set_name(set.kind)).c_str(), model.scene.name.c_str(), set.rays.size(),
+                     (unsigned long long)set.hash);
+    std::fprintf(stderr, "accelbench run: ray sets made in %.2f s\n", s);
+    model.ray_sets = std::move(sets);
+}
+
+const GeneratedRaySet& LoadedModel::ray_set(RaySetKind kind) const {
+    if (ray_sets)
+        for (const GeneratedRaySet& s : *ray_sets)
+            if (s.kind == kind) return s;
+    throw std::logic_error("ray set '" + std::string(ray_set_name(kind)) + "' was not made for this model");
 }
 
 namespace {

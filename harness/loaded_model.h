@@ -37,6 +37,11 @@ struct LoadedModel {
     // no view and is judged (judge_case), never timed.
     std::shared_ptr<const RobustnessCase> robustness_case;
     std::shared_ptr<const ReferenceAnswers> reference;  // set by add_reference_answers
+    // The config's ray sets (issue 14), with the reference's answers; set by add_ray_sets.
+    std::shared_ptr<const std::vector<GeneratedRaySet>> ray_sets;
+
+    // The set of that kind; throws std::logic_error if it was not made.
+    const GeneratedRaySet& ray_set(RaySetKind kind) const;
 };
 
 // Traces the model's rays (its ray file, else its camera's) through `accel`.
@@ -49,6 +54,10 @@ TraceOutput trace_model(const Accelerator& accel, const LoadedModel& model, cons
 // counting render with these (measure.h).
 void add_reference_answers(LoadedModel& model, const RenderSettings& render);
 
+// Makes the config's ray sets for the model (make_ray_sets: from its camera's rays, the
+// reference's hits and its light), once per model in the parent process, outside anything
+// timed, so every accelerator traces the same rays. Prints each set's size and hash.
+void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySetsSpec& spec);
 // The answers as bytes and back, to bring them from the child process that traces them
 // under the time limit (runner.cpp) to the parent.
 std::string reference_bytes(const ReferenceAnswers& answers);

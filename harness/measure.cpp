@@ -1,4 +1,5 @@
 #include "measure.h"
+#include "combinations.h"
 #include "instructions.h"
 #include "accelbench/base/memory.h"
 #include "text.h"
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <iostream>
 #include <set>
 #include <sstream>
@@ -37,6 +39,13 @@ const std::vector<BuildStatField>& build_stat_fields() {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// CPU time of every thread of this process so far (CLOCK_PROCESS_CPUTIME_ID).
+double process_cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
 
 double seconds_between(Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double>(b - a).count();
@@ -196,9 +205,10 @@ private:
 class MeasuringStages {
 public:
     MeasuringStages(const AcceleratorInfo& info, const ParamSet& params, const LoadedModel& model,
-                    const RenderSettings& render, const MeasureSettings& settings, const StageFn& stage)
+                    const RenderSettings& render, const MeasureSettings& settings, const StageFn& stage,
+                    const GeneratedRaySet* ray_set)
         : info_(info), params_(params), model_(model), render_(render), settings_(settings), stage_(stage),
-          start_(Clock::now()) {
+          start_(Clock::now()), ray_set_(ray_set) {
         timed_.settings = render;
         timed_.light = model.light;
         timed_.counts = CountMode::Off;
@@ -210,7 +220,7 @@ public:
         // keeps every primary hit and, in an image run, shades (its counts must still equal
         // the first one's), so error measurement costs no render of its own.
         error_trace_ = counting_;
-        if (model.reference) {
+        if (model.reference || ray_set) {
             error_trace_.keep_hits = true;
             error_trace_.settings.shading = render.shading;
         }
@@ -269,6 +279,8 @@ public:
         m.columns["peak_rss_bytes"] = std::to_string(peak_rss_bytes());
         m.build_s = reporter.build_s;
         m.render_s = reporter.render_s;
+        m.render_cpu_s = render_cpu_s_;
+        if (ray_set_) m.columns["ray_set_hash"] = hex16(ray_set_->hash);
         m.build = *first_build_;
         m.rays = first_count_->rays;
         m.hits = first_count_->hits;
@@ -343,9 +355,11 @@ private:
         if (rep == 1 && !settings_.callgrind_out.empty()) callgrind.emplace(settings_.callgrind_out, settings_.callgrind_tag);
         for (auto _ : st) {
             if (callgrind) callgrind->start();
+            const double cpu0 = process_cpu_seconds();
             const auto t0 = Clock::now();
             out = trace(timed_);
             const auto t1 = Clock::now();
+            render_cpu_s_.push_back(process_cpu_seconds() - cpu0);
             if (callgrind) instructions_ = callgrind->stop();
             st.SetIterationTime(seconds_between(t0, t1));
         }
@@ -368,6 +382,11 @@ private:
     // against the reference's answers; nullopt without reference answers.
     std::optional<std::map<std::string, std::string>> errors_against_reference() const {
         if (!model_.reference || !second_count_) return std::nullopt;
+        if (ray_set_)
+            return error_columns(ray_set_->query == RayQuery::Closest
+                                     ? compare_hits(second_count_->primary_hits, ray_set_->reference_hits)
+                                     : compare_occlusion(second_count_->occluded, ray_set_->reference_occluded),
+                                 std::nullopt);
         std::optional<ImageErrors> image;
         if (second_count_->image && model_.reference->image)
             image = compare_images(*second_count_->image, *model_.reference->image, second_count_->primary_hits,
@@ -434,7 +453,10 @@ private:
             throw Nondeterministic("nondeterministic render: " + d + " (first render vs " + what + ")");
     }
 
-    TraceOutput trace(const TraceRequest& req) const { return trace_model(*accel_, model_, req); }
+    TraceOutput trace(const TraceRequest& req) const {
+        if (ray_set_) return trace_ray_set(*accel_, ray_set_->rays, ray_set_->query, req);
+        return trace_model(*accel_, model_, req);
+    }
 
     const AcceleratorInfo& info_;
     const ParamSet& params_;
@@ -453,15 +475,18 @@ private:
     std::optional<BuildStats> first_build_;
     std::optional<TraceOutput> first_trace_, first_count_, second_count_;
     std::optional<uint64_t> instructions_;
+    const GeneratedRaySet* ray_set_;  // nullptr: the camera's (or ray file's) rays
+    std::vector<double> render_cpu_s_;
 };
 
 }  // namespace
 
 Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
                     const LoadedModel& model, const RenderSettings& render_settings, const MeasureSettings& settings,
-                    const StageFn& stage) {
+                    const StageFn& stage, std::optional<RaySetKind> ray_set) {
     reset_peak_rss();
-    MeasuringStages stages(info, params, model, render_settings, settings, stage);
+    MeasuringStages stages(info, params, model, render_settings, settings, stage,
+                           ray_set ? &model.ray_set(*ray_set) : nullptr);
     CaptureReporter reporter(settings);
     benchmark::ClearRegisteredBenchmarks();
     for (auto [suffix, fn] : {std::pair<const char*, std::function<void(benchmark::State&)>>{
@@ -550,6 +575,7 @@ std::string serialize(const Measurement& m) {
     put("stage", m.stage);
     put("build_s", list_text(m.build_s));
     put("render_s", list_text(m.render_s));
+    put("render_cpu_s", list_text(m.render_cpu_s));
     for (const auto& f : build_stat_fields())
         if (auto v = f.get(m.build)) put(std::string("build.") + f.name, f.count ? std::to_string(*(m.build.*f.count)) : real_text(*v));
     for (const auto& [k, v] : m.build.extra) put("extra." + k, real_text(v));
@@ -586,6 +612,7 @@ Measurement deserialize(const std::string& text) {
         else if (k == "stage") m.stage = v;
         else if (k == "build_s") m.build_s = parse_list(v);
         else if (k == "render_s") m.render_s = parse_list(v);
+        else if (k == "render_cpu_s") m.render_cpu_s = parse_list(v);
         else if (k.rfind("build.", 0) == 0) {
             const BuildStatField* f = nullptr;
             for (const auto& field : build_stat_fields())

@@ -45,7 +45,10 @@ struct MeasureSettings {
 struct Measurement {
     std::string status = "ok";  // ok, error or timeout
     std::string message;
-    std::vector<double> build_s, render_s;  // one per counted repetition, seconds
+    std::vector<double> build_s, render_s;  // one per counted repetition, seconds (wall)
+    // The process's CPU time of each counted render (all render threads together): with
+    // render.threads > 1, wall / CPU time says how well the threads were used.
+    std::vector<double> render_cpu_s;
     BuildStats build;
     uint64_t rays = 0, hits = 0, shadow_rays = 0, shadow_hits = 0;
     // Totals over primary and shadow rays; nullopt when the structure does not count its
@@ -89,9 +92,14 @@ std::map<std::string, std::string> error_columns(const HitErrors& hits, const st
 // Errors (exceptions from build or render, nondeterministic
 // counters, an exceeded time limit at a stage boundary) end up in the returned status and
 // message; measure() itself does not throw for them.
+//
+// With `ray_set`, the renders trace that ray set of the model (model.ray_sets, made by
+// add_ray_sets) instead of the camera's primary and shadow rays, with its query (closest
+// or any hit), and the error columns compare with the set's reference answers; the
+// columns get its ray_set_hash.
 Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
                     const LoadedModel& model, const RenderSettings& render, const MeasureSettings& settings,
-                    const StageFn& stage = {});
+                    const StageFn& stage = {}, std::optional<RaySetKind> ray_set = std::nullopt);
 
 // Runs `work` in a forked child process and returns its Measurement. The child reports
 // each stage it begins; if it runs longer than timeout_s it is killed and the result is

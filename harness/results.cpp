@@ -33,8 +33,8 @@ std::vector<std::string> column_headers(const std::vector<std::string>& keys) {
 }
 
 std::vector<std::string> result_columns() {
-    std::vector<std::string> c = {"config", "combo_id", "model", "triangles", "vertices", "ray_source", "accel",
-                                  "params"};
+    std::vector<std::string> c = {"config", "combo_id", "model", "triangles", "vertices", "ray_source", "ray_set",
+                                  "ray_set_hash", "accel", "params"};
     // Every accelerator's parameters, in registry then declaration order, each once.
     std::set<std::string> seen;
     for (const auto& info : accelerator_registry())
@@ -44,7 +44,7 @@ std::vector<std::string> result_columns() {
          {"status", "message", "repetitions",  //
           "build_s_median", "build_s_mean", "build_s_stddev", "build_s_ci_lo", "build_s_ci_hi",  //
           "render_s_median", "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi",
-          "ci_coverage",  //
+          "ci_coverage", "render_cpu_s_median",  //
           "rays", "hits", "shadow_rays", "shadow_hits", "mrays_per_s",  //
           "nodes", "leaves", "max_depth", "memory_bytes", "sah_cost", "avg_leaf_size", "build_extra",  //
           "prim_tests", "node_visits", "box_tests", "prim_tests_per_ray", "node_visits_per_ray",  //

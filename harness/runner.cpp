@@ -53,10 +53,15 @@ public:
     // config's timeout_s, like each measurement (unless --in-process). False (and
     // reference_error, or reference_timeout) when the reference cannot trace the model.
     bool add_reference() {
-        if (!reference_wanted_ || loaded_->robustness_case || loaded_->reference || !reference_error.empty() ||
+        // Ray sets need the reference's answers to be made at all, `errors` or not.
+        const bool wanted = reference_wanted_ || plan_.config.ray_sets;
+        if (!wanted || loaded_->robustness_case || loaded_->reference || !reference_error.empty() ||
             !reference_timeout.empty())
             return reference_error.empty() && reference_timeout.empty();
         try {
+            // Made here, in the parent process (single-threaded), outside anything timed.
+            if (plan_.config.ray_sets && !loaded_->ray_sets)
+                add_ray_sets(*loaded_, plan_.config.render, *plan_.config.ray_sets);
             if (in_process_) add_reference_answers(*loaded_, plan_.config.render);
             else trace_reference_in_child();
         } catch (const std::exception& e) {
@@ -155,7 +160,7 @@ private:
         first_measurement_ = false;
         auto work = [&](const StageFn& stage) {
             if (model.robustness_case) return judge_measurement(c.accel, c.given, *model.robustness_case, stage);
-            return measure(c.name, *info, c.params, model, plan_.config.render, ms, stage);
+            return measure(c.name, *info, c.params, model, render_of(plan_.config, c), ms, stage, c.ray_set);
         };
         return options_.in_process ? work(StageFn{}) : run_isolated(work, plan_.config.timeout_s);
     }

@@ -213,6 +213,15 @@ def run(args: argparse.Namespace) -> list[Path]:
     out: Path = args.out
     written: list[Path] = []
     claims = figures = comparison = None
+    # Ray-set and thread-scaling rows (issue 14) have outputs of their own; the report's
+    # tables, claims and figures see only the other rows.
+    from dataclasses import replace
+    from .workloads import workload_mask, write_workloads
+    beyond = workload_mask(results.rows)
+    if args.command == "all" and beyond.any():
+        written += write_workloads(results, out)
+    if beyond.any() and not beyond.all():
+        results = replace(results, rows=results.rows[~beyond])
     if args.command in ("tables", "all"):
         written += write_tables(results, report_nums, out / "tables")
         if not results.case_rows().empty:

@@ -108,6 +108,15 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
                        f"(configs/robustness.yaml) and accelerator, the failures with their "
                        f"counts, and the stiff-parameter runs with memory and errors.")
             break
+    if (out_dir / "tables" / "ray_sets.md").is_file():
+        out.append("- [Mrays/s per ray set](tables/ray_sets.md) (primary, shadow, ambient "
+                   "occlusion, diffuse bounces, random rays; each structure also as a ratio to "
+                   "Embree), the [ranking of structures by ray set](tables/ray_set_ranking.md) "
+                   "marking where their order changes, and [the figure](figures/ray_sets.png).")
+    if (out_dir / "tables" / "thread_scaling.md").is_file():
+        out.append("- [Thread scaling](tables/thread_scaling.md): wall and CPU time, speedup and "
+                   "parallel efficiency at 1..nproc render threads "
+                   "([figure](figures/thread_scaling.png)).")
     for png in sorted((out_dir / "figures").glob("cost-*.png")):
         model = png.stem[len("cost-"):]
         out.append(f"- [Cost images, {model}](figures/{png.name}): node visits and triangle "

@@ -23,7 +23,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-KEY_COLUMNS = ["config", "model", "accel", "params"]
+# A row's identity. `ray_set` (issue 14: camera, or one of RAY_SETS) and the render
+# `threads` tell apart the rows of one combination in a ray-set or thread-scaling run;
+# CSVs from before them get ray_set = camera, and their threads never vary within a file.
+KEY_COLUMNS = ["config", "model", "accel", "params", "ray_set", "threads"]
+CAMERA_SET = "camera"
+RAY_SETS = ("primary", "shadow", "ao", "diffuse", "random")
 
 
 def stat_columns(measure: str) -> list[str]:
@@ -82,7 +87,10 @@ ISA_COLUMN = "isa"
 # Build types whose timings are representative (the Makefile builds RelWithDebInfo).
 OPTIMISED_BUILD_TYPES = {"release", "relwithdebinfo"}
 
-REPS_REQUIRED_COLUMNS = KEY_COLUMNS + ["repetition", "build_s", "render_s"]
+# The repetitions file names rows by combo_id (unique per row, ray set and thread count
+# included) besides the four columns it always had.
+REPS_KEY_COLUMNS = ["config", "model", "accel", "params"]
+REPS_REQUIRED_COLUMNS = REPS_KEY_COLUMNS + ["repetition", "build_s", "render_s"]
 
 # Prefix of the per-parameter columns once read: parameter names (max_depth, threads)
 # may equal statistic or provenance column names, so the harness's per-parameter columns
@@ -304,6 +312,11 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     if df.empty:
         raise ContractError(f"{path}: no data rows")
     problems = _to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
+    if "ray_set" not in df.columns:
+        df["ray_set"] = CAMERA_SET
+    df["ray_set"] = df["ray_set"].str.strip().replace("", CAMERA_SET)
+    if "render_cpu_s_median" in df.columns:
+        problems += _to_numbers(df, ["render_cpu_s_median"], starts)
 
     status = df["status"].str.strip().str.lower()
     bad_status = ~status.isin(STATUSES)
@@ -344,7 +357,7 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     dup = df.duplicated(KEY_COLUMNS, keep=False)
     if dup.any():
         keys = df.loc[dup, KEY_COLUMNS].drop_duplicates().head(3).to_dict("records")
-        raise ContractError(f"{path}: the key (config, model, accel, params) must be unique; "
+        raise ContractError(f"{path}: the key (config, model, accel, params, ray_set, threads) must be unique; "
                             f"repeated: {keys}")
     df["source"] = str(path)
     if ISA_COLUMN not in df.columns:
@@ -379,8 +392,9 @@ def reps_path(path: str | Path) -> Path:
 def _check_reps(rows: pd.DataFrame, reps: pd.DataFrame) -> list[str]:
     """The summary's medians must be the medians of its repetitions."""
     warnings = []
-    med = reps.groupby(KEY_COLUMNS)[["build_s", "render_s"]].median().reset_index()
-    merged = rows.merge(med, on=KEY_COLUMNS, how="inner")
+    key = ["combo_id"] if "combo_id" in rows.columns and "combo_id" in reps.columns else REPS_KEY_COLUMNS
+    med = reps.groupby(key)[["build_s", "render_s"]].median().reset_index()
+    merged = rows.merge(med, on=key, how="inner")
     for measure in ("build_s", "render_s"):
         a, b = merged[f"{measure}_median"], merged[measure]
         bad = ~np.isclose(a, b, rtol=REPS_MEDIAN_RTOL, equal_nan=True)
@@ -454,7 +468,7 @@ def load_results(paths: list[str | Path]) -> Results:
         dup = rows.duplicated(KEY_COLUMNS, keep=False)
         if dup.any():
             n = int(rows[dup].drop_duplicates(KEY_COLUMNS).shape[0])
-            warnings.append(f"{n} (config, model, accel, params) keys occur in more than one "
+            warnings.append(f"{n} (config, model, accel, params, ray_set, threads) keys occur in more than one "
                             f"file; where such a row fills a table cell the newest timestamp "
                             f"is used and the cell's note says so.")
     for col in ERROR_COLUMNS + [PEAK_RSS_COLUMN, INSTRUCTIONS_COLUMN]:

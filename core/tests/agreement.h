@@ -14,6 +14,7 @@
 
 #include "accelbench/verify/error_metrics.h"
 #include "accelbench/accel/registry.h"
+#include "accelbench/render/ray_sets.h"
 #include "accelbench/scene/scene.h"
 
 namespace accelbench::test {
@@ -113,6 +114,27 @@ inline void expect_agrees_with_embree(const Scene& scene, const Accelerator& acc
     EXPECT_LE(a.mismatched_hit, max_hit_disagreements) << what;
     EXPECT_EQ(a.mismatched_prim, 0u) << what;
     EXPECT_LE(a.mismatched_occlusion, max_shadow_disagreements) << what;
+}
+
+// The same judgement against a ray set's own reference answers (ray_sets.h), made by the
+// double-precision reference when the set was made: closest-hit sets through
+// compare_hits (ties allowed), any-hit sets through compare_occlusion. At most
+// `max_disagreements` wrong answers (false misses + false hits + wrong primitives).
+inline HitErrors expect_agrees_on_ray_set(const GeneratedRaySet& set, const Accelerator& accel, const std::string& what,
+                                          uint64_t max_disagreements = 0) {
+    TraceRequest request;
+    request.keep_hits = true;
+    const TraceOutput out = trace_ray_set(accel, set.rays, set.query, request);
+    const HitErrors e = set.query == RayQuery::Closest ? compare_hits(out.primary_hits, set.reference_hits)
+                                                       : compare_occlusion(out.occluded, set.reference_occluded);
+    std::printf("[ray-set agreement] %s %s: %llu rays, %llu false misses, %llu false hits, %llu prim mismatches, "
+                "%llu ties\n",
+                what.c_str(), std::string(ray_set_name(set.kind)).c_str(), (unsigned long long)e.rays,
+                (unsigned long long)e.false_misses, (unsigned long long)e.false_hits,
+                (unsigned long long)e.prim_mismatches, (unsigned long long)e.ties);
+    EXPECT_EQ(e.nan_results, 0u) << what << " " << ray_set_name(set.kind);
+    EXPECT_LE(e.false_misses + e.false_hits + e.prim_mismatches, max_disagreements) << what << " " << ray_set_name(set.kind);
+    return e;
 }
 
 }  // namespace accelbench::test

@@ -20,6 +20,9 @@ Row identification_row(const Config& config, const CombinationResult& result) {
     if (result.vertices) r["vertices"] = std::to_string(*result.vertices);
     const bool judged = model.kind == ModelSpec::Kind::Case;  // its own rays; no image, no shadow rays
     r["ray_source"] = judged ? "robustness-case" : model.rays ? model.rays->display : "camera";
+    // The workload: one of the config's ray sets, else the report's primary + shadow rays
+    // timed together (`camera`, whether from the camera or a ray file: see ray_source).
+    if (!judged) r["ray_set"] = c.ray_set ? std::string(ray_set_name(*c.ray_set)) : "camera";
     r["accel"] = c.accel;
     r["params"] = c.params.canonical();
     for (const auto& [k, v] : c.params.items()) r[param_column(k)] = v;
@@ -33,7 +36,7 @@ Row identification_row(const Config& config, const CombinationResult& result) {
         r["shading"] = config.render.shading ? "true" : "false";
     }
     for (const auto& [name, value] : provenance_values()) r[name] = value;
-    r["threads"] = std::to_string(config.render.threads);
+    r["threads"] = std::to_string(c.threads);
     r["timestamp"] = result.timestamp;
     return r;
 }
@@ -60,6 +63,7 @@ void add_measurement(Row& r, const Measurement& m) {
         if (s.ci_hi) r[prefix + "_ci_hi"] = number_text(*s.ci_hi);
         if (s.coverage) r["ci_coverage"] = number_text(*s.coverage, 6);
     }
+    if (!m.render_cpu_s.empty()) r["render_cpu_s_median"] = number_text(summarize(m.render_cpu_s).median);
     r["rays"] = std::to_string(m.rays);
     r["hits"] = std::to_string(m.hits);
     r["shadow_rays"] = std::to_string(m.shadow_rays);

@@ -49,19 +49,8 @@ ShadowSetup shadow_setup(const Scene& scene, const TraceRequest& request, const 
     ShadowSetup s;
     s.on = request.settings.light;
     s.light = request.light ? request.light->position : fallback.position;
-    const float size = scene.bounds.empty() ? 0.0f : length(scene.bounds.diagonal());
-    s.epsilon = kShadowEpsilon * (size > 0.0f ? size : 1.0f);
+    s.epsilon = shadow_epsilon(scene);
     return s;
-}
-
-// The shadow ray of a hit: from the hit point toward the light, direction light - p so the
-// light sits at t = 1; the interval stops `epsilon` (a distance) short of both ends.
-Ray shadow_ray(const Ray& primary, const Hit& hit, const ShadowSetup& s) {
-    const Vec3 p = primary.org + primary.dir * hit.t;
-    const Vec3 d = s.light - p;
-    const float dist = length(d);
-    const float eps_t = dist > 0.0f ? s.epsilon / dist : 0.0f;
-    return {p, eps_t, d, 1.0f - eps_t};
 }
 
 // Counts of one batch; tiles keep their own and the run sums them in tile order.
@@ -114,7 +103,7 @@ BatchTotals trace_batch(const Accelerator& accel, std::span<const Ray> rays, con
         if (!s.hits[i].found()) continue;
         ++t.hits;
         if (!shadow.on) continue;
-        s.shadow_rays.push_back(shadow_ray(rays[i], s.hits[i], shadow));
+        s.shadow_rays.push_back(shadow_ray(rays[i], s.hits[i], shadow.light, shadow.epsilon));
         s.shadow_of.push_back(uint32_t(i));
     }
     const size_t m = s.shadow_rays.size();
@@ -240,6 +229,13 @@ void sample_offset(int s, int spp, uint64_t pixel, float& dx, float& dy) {
     dy = (float(s / gx) + rng.uniform()) / float(gy);
 }
 
+// Sample k of pixel (x, y).
+Ray pixel_ray(const CameraRays& cam, const RenderSettings& rs, int x, int y, int k) {
+    float dx, dy;
+    sample_offset(k, rs.spp, uint64_t(y) * uint64_t(rs.width) + uint64_t(x), dx, dy);
+    return cam.primary(float(x) + dx, float(y) + dy);
+}
+
 // The primary rays of one tile, in the order render() traces them: rows of the tile top to
 // bottom, pixels left to right, a pixel's samples in turn.
 void tile_primary_rays(const CameraRays& cam, const RenderSettings& rs, size_t tile, std::vector<Ray>& rays) {
@@ -249,11 +245,7 @@ void tile_primary_rays(const CameraRays& cam, const RenderSettings& rs, size_t t
     rays.clear();
     for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x)
-            for (int k = 0; k < rs.spp; ++k) {
-                float dx, dy;
-                sample_offset(k, rs.spp, uint64_t(y) * uint64_t(rs.width) + uint64_t(x), dx, dy);
-                rays.push_back(cam.primary(float(x) + dx, float(y) + dy));
-            }
+            for (int k = 0; k < rs.spp; ++k) rays.push_back(pixel_ray(cam, rs, x, y, k));
 }
 
 size_t tile_count(const RenderSettings& rs) {
@@ -279,10 +271,34 @@ RenderRays render_rays(const Accelerator& accel, const Scene& scene, const Camer
         out.primary_batch_end.push_back(out.primary.size());
         if (!shadow.on) continue;
         for (size_t i = 0; i < rays.size(); ++i)
-            if (hits[i].found()) out.shadow.push_back(shadow_ray(rays[i], hits[i], shadow));
+            if (hits[i].found()) out.shadow.push_back(shadow_ray(rays[i], hits[i], shadow.light, shadow.epsilon));
         out.shadow_batch_end.push_back(out.shadow.size());
     }
     return out;
+}
+
+float shadow_epsilon(const Scene& scene) {
+    const float size = scene.bounds.empty() ? 0.0f : length(scene.bounds.diagonal());
+    return kShadowEpsilon * (size > 0.0f ? size : 1.0f);
+}
+
+Ray shadow_ray(const Ray& primary, const Hit& hit, Vec3 light, float epsilon) {
+    const Vec3 p = primary.org + primary.dir * hit.t;
+    const Vec3 d = light - p;
+    const float dist = length(d);
+    const float eps_t = dist > 0.0f ? epsilon / dist : 0.0f;
+    return {p, eps_t, d, 1.0f - eps_t};
+}
+
+std::vector<Ray> camera_rays(const Camera& camera, const RenderSettings& settings) {
+    check_settings(settings, true);
+    const CameraRays cam(camera, settings.width, settings.height);
+    std::vector<Ray> rays;
+    rays.reserve(size_t(settings.width) * size_t(settings.height) * size_t(settings.spp));
+    for (int y = 0; y < settings.height; ++y)
+        for (int x = 0; x < settings.width; ++x)
+            for (int k = 0; k < settings.spp; ++k) rays.push_back(pixel_ray(cam, settings, x, y, k));
+    return rays;
 }
 
 TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera,
@@ -357,6 +373,47 @@ TraceOutput trace_rays(const Accelerator& accel, const Scene& scene, std::span<c
             if (request.keep_hits) out.primary_hits[first + i] = s.hits[i];
             if (request.counts == CountMode::PerPixel) out.per_pixel[first + i] = s.cost[i];
         }
+    });
+    add_totals(totals, out);
+    return out;
+}
+
+TraceOutput trace_ray_set(const Accelerator& accel, std::span<const Ray> rays, RayQuery query,
+                          const TraceRequest& request) {
+    check_settings(request.settings, false);
+    const size_t batches = (rays.size() + kBatchRays - 1) / kBatchRays;
+    const bool counting = request.counts != CountMode::Off;
+    TraceOutput out;
+    if (request.counts == CountMode::PerPixel) out.per_pixel.resize(rays.size());
+    if (request.keep_hits && query == RayQuery::Closest) out.primary_hits.resize(rays.size());
+    if (request.keep_hits && query == RayQuery::Any) out.occluded.resize(rays.size());
+    std::vector<BatchTotals> totals(batches);
+
+    // Batches write disjoint ranges of the outputs and keep their own totals, summed in
+    // batch order below: nothing depends on which thread traced which batch.
+    for_each_batch(batches, request.settings.threads, [&](size_t b, Scratch& s) {
+        const size_t first = b * kBatchRays;
+        const std::span<const Ray> batch = rays.subspan(first, std::min(kBatchRays, rays.size() - first));
+        const size_t n = batch.size();
+        if (counting) s.primary_stats.assign(n, RayStats{});
+        const std::span<RayStats> stats = counting ? std::span<RayStats>(s.primary_stats) : std::span<RayStats>{};
+        BatchTotals& t = totals[b];
+        t.rays = n;
+        if (query == RayQuery::Closest) {
+            s.hits.resize(n);
+            accel.closest_hits(batch, s.hits, stats);
+            for (size_t i = 0; i < n; ++i) t.hits += s.hits[i].found() ? 1 : 0;
+            if (request.keep_hits) std::copy(s.hits.begin(), s.hits.end(), out.primary_hits.begin() + ptrdiff_t(first));
+        } else {
+            s.occluded.resize(n);
+            accel.any_hits(batch, s.occluded, stats);
+            for (size_t i = 0; i < n; ++i) t.hits += s.occluded[i];
+            if (request.keep_hits) std::copy(s.occluded.begin(), s.occluded.end(), out.occluded.begin() + ptrdiff_t(first));
+        }
+        if (!counting) return;
+        for (size_t i = 0; i < n; ++i) t.primary += s.primary_stats[i];
+        if (request.counts == CountMode::PerPixel)
+            std::copy(s.primary_stats.begin(), s.primary_stats.end(), out.per_pixel.begin() + ptrdiff_t(first));
     });
     add_totals(totals, out);
     return out;

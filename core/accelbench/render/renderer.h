@@ -36,8 +36,8 @@ enum class CountMode {
 };
 
 struct TraceOutput {
-    uint64_t rays = 0;          // primary (or ray-file) rays
-    uint64_t hits = 0;          // of those, how many hit something
+    uint64_t rays = 0;          // primary (or ray-file, or ray-set) rays
+    uint64_t hits = 0;          // of those, how many hit something (any-hit sets: were occluded)
     uint64_t shadow_rays = 0;
     uint64_t shadow_hits = 0;   // shadow rays that found an occluder
     RayStats primary_stats;     // CountMode != Off
@@ -47,6 +47,8 @@ struct TraceOutput {
     // row-major over pixels (top row first) and, within a pixel, sample after sample:
     // index (y * width + x) * spp + s. For trace_rays() it is the order of the input.
     std::vector<Hit> primary_hits;
+    // Only when keep_hits and trace_ray_set() traced an any-hit set: one 0/1 per ray.
+    std::vector<uint8_t> occluded;
     std::optional<Image> image;       // only when shading
 };
 
@@ -85,5 +87,27 @@ RenderRays render_rays(const Accelerator& accel, const Scene& scene, const Camer
 // default_light(bounds, Camera::fit(bounds, 4/3)). Shadow rays start at each hit point.
 TraceOutput trace_rays(const Accelerator& accel, const Scene& scene, std::span<const Ray> rays,
                        const TraceRequest& request);
+
+// What a ray set asks of each ray: the closest hit, or only whether anything is hit
+// (shadow and ambient-occlusion rays).
+enum class RayQuery : uint8_t { Closest, Any };
+
+// Traces the rays of one ray set (ray_sets.h) as they are, one query per ray and nothing
+// derived from the answers (no shadow rays, no image): rays/hits and primary_stats of the
+// output describe these rays; keep_hits keeps primary_hits (Closest) or occluded (Any);
+// CountMode::PerPixel gives one RayStats per ray. Only settings.threads is read from the
+// settings. Results do not depend on the thread count.
+TraceOutput trace_ray_set(const Accelerator& accel, std::span<const Ray> rays, RayQuery query,
+                          const TraceRequest& request);
+
+// The camera's rays in the order render() traces and keeps them: pixels row-major (top
+// row first), within a pixel sample after sample (the same stratified jitter).
+std::vector<Ray> camera_rays(const Camera& camera, const RenderSettings& settings);
+
+// The shadow ray of a hit, as render() makes it: from the hit point org + t dir toward
+// the light (which sits at t = 1), the interval stopping shadow_epsilon(scene) (a
+// distance) short of both ends.
+float shadow_epsilon(const Scene& scene);
+Ray shadow_ray(const Ray& primary, const Hit& hit, Vec3 light, float epsilon);
 
 }  // namespace accelbench

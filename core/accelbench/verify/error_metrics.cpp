@@ -60,6 +60,19 @@ HitErrors compare_hits(std::span<const Hit> hits, std::span<const Hit> reference
     return e;
 }
 
+HitErrors compare_occlusion(std::span<const uint8_t> occluded, std::span<const uint8_t> reference) {
+    if (occluded.size() != reference.size())
+        throw std::invalid_argument("compare_occlusion: " + std::to_string(occluded.size()) + " answers against " +
+                                    std::to_string(reference.size()) + " reference answers");
+    HitErrors e;
+    e.rays = occluded.size();
+    for (size_t i = 0; i < occluded.size(); ++i) {
+        if ((occluded[i] != 0) == (reference[i] != 0)) continue;
+        ++(reference[i] ? e.false_misses : e.false_hits);
+    }
+    return e;
+}
+
 ImageErrors compare_images(const Image& image, const Image& reference, std::span<const Hit> hits,
                            std::span<const Hit> reference_hits, int samples_per_pixel) {
     if (image.width != reference.width || image.height != reference.height ||

@@ -44,6 +44,12 @@ struct HitErrors {
 // sizes differ.
 HitErrors compare_hits(std::span<const Hit> hits, std::span<const Hit> reference, int64_t tie_ulps = kTieUlps);
 
+// Any-hit answers (shadow and ambient-occlusion rays, 1 = occluded) against the
+// reference's: rays, false_misses (the reference finds an occluder, the accelerator does
+// not) and false_hits; the other counts stay 0 and the t columns empty (an any-hit query
+// returns no distance). Throws std::invalid_argument if the sizes differ.
+HitErrors compare_occlusion(std::span<const uint8_t> occluded, std::span<const uint8_t> reference);
+
 struct ImageErrors {
     uint64_t pixels = 0;
     // Root mean square difference over every pixel and channel, in [0, 1] (8-bit

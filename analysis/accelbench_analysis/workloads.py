@@ -1,0 +1,250 @@
+"""Beyond the report's one workload (issue 14): Mrays/s per ray set (primary, shadow, ao,
+diffuse, random) and thread scaling.
+
+Rows of ray-set runs carry `ray_set` != camera (configs/ray-sets.yaml); rows of
+thread-scaling runs are camera rows of a config whose render `threads` vary
+(configs/thread-scaling.yaml). Neither kind fills the report's tables: `workload_mask`
+tells them apart, and the `all` command gives the tables only the other rows.
+
+Outputs (when the input has such rows):
+- tables/ray_sets.md, .csv: each structure's Mrays/s per set and its ratio to Embree's
+  on the same model and set;
+- tables/ray_set_ranking.md: per model, the structures ranked by Mrays/s in each set, a
+  rank marked * where it differs from the rank in the first set (primary);
+- figures/ray_sets.png: Mrays/s per set, structure and model;
+- tables/thread_scaling.md, .csv and figures/thread_scaling.png: wall and CPU time per
+  thread count, speedup = wall(1 thread) / wall(t) and parallel efficiency = speedup / t.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import pandas as pd  # noqa: E402
+import seaborn as sns  # noqa: E402
+
+from .formatting import md_escape  # noqa: E402
+from .schema import CAMERA_SET, RAY_SETS, Results  # noqa: E402
+
+BASELINE = "embree"
+
+
+def _thread_scaling_configs(rows: pd.DataFrame) -> pd.Series:
+    """Per row: its config measures more than one render thread count."""
+    return rows.groupby("config")["threads"].transform("nunique") > 1
+
+
+def workload_mask(rows: pd.DataFrame) -> pd.Series:
+    """Rows of ray-set or thread-scaling runs (not for the report's tables)."""
+    return (rows["ray_set"] != CAMERA_SET) | _thread_scaling_configs(rows)
+
+
+def structure_labels(rows: pd.DataFrame) -> pd.Series:
+    """`accel`, plus the parameters that vary among that accelerator's rows
+    (e.g. "bvh split=sah"), so that two variants never share a label."""
+    labels = pd.Series(rows["accel"].values, index=rows.index, dtype=object)
+    for accel, group in rows.groupby("accel"):
+        dicts = group["param_dict"]
+        keys = sorted({k for d in dicts for k in d})
+        varying = [k for k in keys if k != "threads" and len({d.get(k) for d in dicts}) > 1]
+        for i, d in dicts.items():
+            extra = ",".join(f"{k}={d.get(k, '')}" for k in varying)
+            labels[i] = f"{accel} {extra}" if extra else accel
+    return labels
+
+
+def ray_set_rows(results: Results) -> pd.DataFrame:
+    rows = results.ok()
+    rows = rows[rows["ray_set"].isin(RAY_SETS)].copy()
+    if rows.empty:
+        return rows
+    rows["structure"] = structure_labels(rows)
+    rows["ray_set"] = pd.Categorical(rows["ray_set"], categories=[s for s in RAY_SETS
+                                                                   if s in set(rows["ray_set"])],
+                                     ordered=True)
+    return rows
+
+
+def ray_set_table(rows: pd.DataFrame) -> pd.DataFrame:
+    """One row per model, structure and set: Mrays/s and its ratio to Embree's."""
+    base = (rows[rows["accel"] == BASELINE].groupby(["model", "ray_set"], observed=True)
+            ["mrays_per_s"].median().rename("embree_mrays_per_s"))
+    t = rows[["model", "structure", "ray_set", "mrays_per_s", "rays", "false_misses",
+              "false_hits"]].merge(base.reset_index(), on=["model", "ray_set"], how="left")
+    t["ratio_to_embree"] = t["mrays_per_s"] / t["embree_mrays_per_s"]
+    return t.sort_values(["model", "structure", "ray_set"]).reset_index(drop=True)
+
+
+def ranking(rows: pd.DataFrame) -> pd.DataFrame:
+    """Per model and set, each structure's rank by Mrays/s (1 = fastest), and whether it
+    differs from its rank in the first set listed."""
+    r = rows[["model", "structure", "ray_set", "mrays_per_s"]].copy()
+    r["rank"] = r.groupby(["model", "ray_set"], observed=True)["mrays_per_s"].rank(
+        ascending=False, method="min").astype(int)
+    first = r["ray_set"].cat.categories[0]
+    ref = r[r["ray_set"] == first].set_index(["model", "structure"])["rank"].rename("first_rank")
+    r = r.join(ref, on=["model", "structure"])
+    r["changed"] = r["rank"] != r["first_rank"]
+    return r
+
+
+def _md_table(header: list[str], body: list[list[str]]) -> list[str]:
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(row) + " |" for row in body]
+    return out
+
+
+def ray_set_markdown(table: pd.DataFrame) -> str:
+    sets = list(table["ray_set"].cat.categories) if hasattr(table["ray_set"], "cat") else \
+        sorted(set(table["ray_set"]))
+    out = ["# Mrays/s per ray set", "",
+           "Each structure's Mrays/s on each ray set (configs/ray-sets.yaml; every set made "
+           "once per model from the reference's hits, so every structure traces the same rays), "
+           f"and in parentheses its ratio to Embree's on the same model and set (> 1: faster than "
+           f"Embree). Wrong answers against the reference (false misses + false hits) are shown "
+           f"where there are any.", ""]
+    for model, g in table.groupby("model"):
+        out += [f"## {md_escape(model)}", ""]
+        body = []
+        for structure, s in g.groupby("structure"):
+            cells = [md_escape(structure)]
+            for rs in sets:
+                hit = s[s["ray_set"] == rs]
+                if hit.empty:
+                    cells.append("-")
+                    continue
+                r = hit.iloc[0]
+                cell = f"{r['mrays_per_s']:.3g}"
+                if pd.notna(r["ratio_to_embree"]):
+                    cell += f" ({r['ratio_to_embree']:.2f}x)"
+                wrong = (r["false_misses"] if pd.notna(r["false_misses"]) else 0) + \
+                        (r["false_hits"] if pd.notna(r["false_hits"]) else 0)
+                if wrong:
+                    cell += f" [{int(wrong)} wrong]"
+                cells.append(cell)
+            body.append(cells)
+        out += _md_table(["structure"] + sets, body) + [""]
+    return "\n".join(out)
+
+
+def ranking_markdown(rank: pd.DataFrame) -> str:
+    sets = list(rank["ray_set"].cat.categories)
+    out = ["# Ranking by ray set", "",
+           f"Per model, each structure's rank by Mrays/s in each ray set (1 = fastest). A rank "
+           f"marked * differs from its rank on `{sets[0]}` rays: there the order of structures "
+           f"changes. The last column lists the sets in which the order changes.", ""]
+    for model, g in rank.groupby("model"):
+        out += [f"## {md_escape(model)}", ""]
+        body = []
+        order = g[g["ray_set"] == sets[0]].sort_values("rank")["structure"].tolist()
+        order += sorted(set(g["structure"]) - set(order))
+        for structure in order:
+            s = g[g["structure"] == structure]
+            cells = [md_escape(structure)]
+            for rs in sets:
+                hit = s[s["ray_set"] == rs]
+                cells.append("-" if hit.empty else f"{int(hit.iloc[0]['rank'])}" +
+                             ("*" if hit.iloc[0]["changed"] else ""))
+            body.append(cells)
+        changed = [rs for rs in sets if g[(g["ray_set"] == rs)]["changed"].any()]
+        out += _md_table(["structure"] + sets, body)
+        out += ["", "Order changes in: " + (", ".join(changed) if changed else "none") + ".", ""]
+    return "\n".join(out)
+
+
+def ray_set_figure(rows: pd.DataFrame, path: Path) -> Path:
+    g = sns.catplot(data=rows, kind="bar", x="ray_set", y="mrays_per_s", hue="structure",
+                    col="model", sharey=False, height=3.6, aspect=1.3, errorbar=None)
+    g.set_axis_labels("ray set", "Mrays/s")
+    g.set_titles("{col_name}")
+    g.figure.suptitle("Mrays/s per ray set, structure and model", y=1.03)
+    g.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(g.figure)
+    return path
+
+
+def thread_scaling_rows(results: Results) -> pd.DataFrame:
+    rows = results.ok()
+    rows = rows[(rows["ray_set"] == CAMERA_SET) & _thread_scaling_configs(rows)].copy()
+    if rows.empty:
+        return rows
+    rows["structure"] = structure_labels(rows)
+    keys = ["config", "model", "structure"]
+    one = rows[rows["threads"] == 1].set_index(keys)["render_s_median"].rename("wall_1")
+    rows = rows.join(one, on=keys)
+    rows["speedup"] = rows["wall_1"] / rows["render_s_median"]
+    rows["efficiency"] = rows["speedup"] / rows["threads"]
+    if "render_cpu_s_median" in rows.columns:
+        rows["cpu_per_wall"] = rows["render_cpu_s_median"] / rows["render_s_median"]
+    return rows.sort_values(keys + ["threads"]).reset_index(drop=True)
+
+
+def thread_scaling_markdown(rows: pd.DataFrame) -> str:
+    out = ["# Thread scaling", "",
+           "Render wall time (median) and the process's CPU time per thread count "
+           "(configs/thread-scaling.yaml); speedup = wall time at 1 thread / wall time at t "
+           "threads, parallel efficiency = speedup / t. CPU / wall near t means the threads were "
+           "busy; a speedup below that means they competed (memory, the machine's other load).",
+           ""]
+    has_cpu = "render_cpu_s_median" in rows.columns
+    for model, g in rows.groupby("model"):
+        out += [f"## {md_escape(model)}", ""]
+        body = []
+        for _, r in g.iterrows():
+            body.append([md_escape(r["structure"]), f"{int(r['threads'])}",
+                         f"{r['render_s_median'] * 1e3:.2f}",
+                         f"{r['render_cpu_s_median'] * 1e3:.2f}" if has_cpu and
+                         pd.notna(r["render_cpu_s_median"]) else "-",
+                         f"{r['speedup']:.2f}" if pd.notna(r["speedup"]) else "-",
+                         f"{r['efficiency']:.2f}" if pd.notna(r["efficiency"]) else "-"])
+        out += _md_table(["structure", "threads", "wall ms", "CPU ms", "speedup", "efficiency"],
+                         body) + [""]
+    return "\n".join(out)
+
+
+def thread_scaling_figure(rows: pd.DataFrame, path: Path) -> Path:
+    g = sns.relplot(data=rows, kind="line", x="threads", y="speedup", hue="structure",
+                    col="model", marker="o", height=3.4, aspect=1.2)
+    top = rows["threads"].max()
+    for ax in g.axes.flat:
+        ax.plot([1, top], [1, top], ls="--", color="grey", lw=1, label="ideal")
+        ax.set_xticks(sorted(rows["threads"].unique()))
+    g.set_axis_labels("render threads", "speedup over 1 thread")
+    g.set_titles("{col_name}")
+    g.figure.suptitle("Thread scaling (dashed: ideal)", y=1.03)
+    g.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(g.figure)
+    return path
+
+
+def write_workloads(results: Results, out_dir: Path) -> list[Path]:
+    """Writes the ray-set and thread-scaling outputs that the rows allow; [] when the
+    input has neither kind of row."""
+    written: list[Path] = []
+    tables, figures = out_dir / "tables", out_dir / "figures"
+    rows = ray_set_rows(results)
+    if not rows.empty:
+        tables.mkdir(parents=True, exist_ok=True)
+        figures.mkdir(parents=True, exist_ok=True)
+        table = ray_set_table(rows)
+        table.to_csv(tables / "ray_sets.csv", index=False)
+        (tables / "ray_sets.md").write_text(ray_set_markdown(table))
+        (tables / "ray_set_ranking.md").write_text(ranking_markdown(ranking(rows)))
+        written += [tables / "ray_sets.md", tables / "ray_sets.csv", tables / "ray_set_ranking.md",
+                    ray_set_figure(rows, figures / "ray_sets.png")]
+    ts = thread_scaling_rows(results)
+    if not ts.empty:
+        tables.mkdir(parents=True, exist_ok=True)
+        figures.mkdir(parents=True, exist_ok=True)
+        cols = [c for c in ["config", "model", "structure", "threads", "render_s_median",
+                            "render_cpu_s_median", "speedup", "efficiency", "cpu_per_wall"]
+                if c in ts.columns]
+        ts[cols].to_csv(tables / "thread_scaling.csv", index=False)
+        (tables / "thread_scaling.md").write_text(thread_scaling_markdown(ts))
+        written += [tables / "thread_scaling.md", tables / "thread_scaling.csv",
+                    thread_scaling_figure(ts, figures / "thread_scaling.png")]
+    return written
