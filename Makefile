@@ -17,7 +17,7 @@ FRESH       ?=
 # Debian packages the build, tests and analysis need (checked with dpkg first).
 DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
   libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
-  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev valgrind \
+  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev valgrind clang-format \
   python3 python3-venv python3-pip
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
@@ -78,6 +78,14 @@ test-python: venv
 	cd analysis && ../$(PYTHON) -m pytest -q tests
 
 test: test-cpp test-python
+
+# Formatting: clang-format (.clang-format: the code's style as it was when it was applied
+# once) over our C++ and ruff (analysis/ruff.toml) over the analysis; both only check.
+# To fix: clang-format -i FILES, .venv/bin/ruff format analysis.
+.PHONY: lint
+lint: venv
+	clang-format --dry-run --Werror $$(git ls-files '*.cpp' '*.h')
+	cd analysis && ../$(VENV)/bin/ruff check . && ../$(VENV)/bin/ruff format --check .
 
 # ASan + UBSan (incl. float-divide-by-zero and float-cast-overflow; flags in CMakeLists.txt,
 # ACCELBENCH_SANITIZE) over the whole C++ test suite. Any finding aborts its test. UBSan
