@@ -65,8 +65,9 @@ YAML::Node load_yaml_document(const std::string& path) {
     // so that nothing the user wrote is silently dropped.
     if (documents.size() > 1) {
         const YAML::Mark m = documents[1].Mark();
-        throw single_issue(path, m.line >= 0 ? m.line + 1 : 0, m.column >= 0 ? m.column + 1 : 0,
-                           "a second YAML document (after '---'): a config is one document; join them or use two files");
+        throw single_issue(
+            path, m.line >= 0 ? m.line + 1 : 0, m.column >= 0 ? m.column + 1 : 0,
+            "a second YAML document (after '---'): a config is one document; join them or use two files");
     }
     if (documents.empty() || documents[0].IsNull()) throw single_issue(path, 1, 1, "the config is empty");
     return documents[0];
@@ -106,15 +107,16 @@ Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::v
             continue;
         }
         if (auto s = seen.find(key); s != seen.end()) {
-            c.error(k, child(key), "duplicate key '" + key + "' (first given at line " +
-                                       std::to_string(s->second.line + 1) + ", column " +
-                                       std::to_string(s->second.column + 1) + ")");
+            c.error(k, child(key),
+                    "duplicate key '" + key + "' (first given at line " + std::to_string(s->second.line + 1) +
+                        ", column " + std::to_string(s->second.column + 1) + ")");
             continue;
         }
         seen.emplace(key, k.Mark());
         if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-            c.error(k, child(key), "unknown key '" + key + "'" + did_you_mean(key, allowed) + "; allowed here: " +
-                                       join_names(allowed));
+            c.error(
+                k, child(key),
+                "unknown key '" + key + "'" + did_you_mean(key, allowed) + "; allowed here: " + join_names(allowed));
             continue;
         }
         entries_.push_back({key, k, entry.second});
@@ -157,8 +159,9 @@ std::optional<std::string> read_string(Checker& c, const YAML::Node& n, const st
 std::optional<int64_t> read_int(Checker& c, const YAML::Node& n, const std::string& path, int64_t lo, int64_t hi) {
     const std::string range = concat("[", std::to_string(lo), ", ", std::to_string(hi), "]");
     if (!n.IsScalar() || quoted(n)) {
-        c.error(n, path, "expected an integer in " + range + ", got " +
-                             (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
+        c.error(n, path,
+                "expected an integer in " + range + ", got " +
+                    (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
         return std::nullopt;
     }
     const std::string& t = n.Scalar();
@@ -181,8 +184,9 @@ std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::st
     char range[96];
     std::snprintf(range, sizeof range, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
     if (!n.IsScalar() || quoted(n)) {
-        c.error(n, path, std::string("expected a number in ") + range + ", got " +
-                             (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
+        c.error(n, path,
+                std::string("expected a number in ") + range + ", got " +
+                    (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
         return std::nullopt;
     }
     const std::string& t = n.Scalar();
@@ -205,15 +209,17 @@ std::optional<bool> read_bool(Checker& c, const YAML::Node& n, const std::string
         if (t == "true" || t == "yes" || t == "on") return true;
         if (t == "false" || t == "no" || t == "off") return false;
     }
-    c.error(n, path, std::string("expected true or false, got ") +
-                         (n.IsScalar() ? "'" + n.Scalar() + "'" : std::string(kind_of(n))));
+    c.error(n, path,
+            std::string("expected true or false, got ") +
+                (n.IsScalar() ? "'" + n.Scalar() + "'" : std::string(kind_of(n))));
     return std::nullopt;
 }
 
 std::optional<Vec3> read_vec3(Checker& c, const YAML::Node& n, const std::string& path) {
     if (!n.IsSequence() || n.size() != 3) {
-        c.error(n, path, std::string("expected a list of three numbers [x, y, z], got ") +
-                             (n.IsSequence() ? "a list of " + std::to_string(n.size()) : std::string(kind_of(n))));
+        c.error(n, path,
+                std::string("expected a list of three numbers [x, y, z], got ") +
+                    (n.IsSequence() ? "a list of " + std::to_string(n.size()) : std::string(kind_of(n))));
         return std::nullopt;
     }
     Vec3 v;

@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/scene/camera.h"
 #include "accelbench/render/renderer.h"
+#include "accelbench/scene/camera.h"
 #include "accelbench/scene/scene.h"
 #include "loaded_model.h"
 

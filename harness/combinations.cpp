@@ -27,10 +27,11 @@ std::string hex16(uint64_t v) {
 std::string combination_key(const ModelSpec& model, const RenderSettings& r, const std::string& accel,
                             const ParamSet& params) {
     // Ray files replace the camera's rays: the image size and samples do not apply.
-    std::string render = model.rays ? "rays" : std::to_string(r.width) + "x" + std::to_string(r.height) +
-                                                   ";spp=" + std::to_string(r.spp);
+    std::string render = model.rays
+        ? "rays"
+        : std::to_string(r.width) + "x" + std::to_string(r.height) + ";spp=" + std::to_string(r.spp);
     render += std::string(";light=") + (r.light ? "1" : "0") + ";shading=" + (r.shading ? "1" : "0") +
-              ";threads=" + std::to_string(r.threads);
+        ";threads=" + std::to_string(r.threads);
     return model.key + "|" + render + "|" + accel + "|" + params.canonical();
 }
 
@@ -47,7 +48,9 @@ std::string ray_set_key(RaySetKind kind, const RaySetParams& p) {
     switch (kind) {
         case RaySetKind::Primary:
         case RaySetKind::Shadow: return k;
-        case RaySetKind::Ao: k += ";samples=" + std::to_string(p.ao_samples) + ";distance=" + number_text(p.ao_distance); break;
+        case RaySetKind::Ao:
+            k += ";samples=" + std::to_string(p.ao_samples) + ";distance=" + number_text(p.ao_distance);
+            break;
         case RaySetKind::Diffuse: k += ";bounces=" + std::to_string(p.diffuse_bounces); break;
         case RaySetKind::Random: k += ";rays=" + std::to_string(p.random_rays); break;
     }
@@ -184,9 +187,8 @@ std::optional<Shard> shard_from_slurm() {
     const uint64_t task = parse_count(id, "SLURM_ARRAY_TASK_ID");
     Shard s{0, parse_count(count, "SLURM_ARRAY_TASK_COUNT")};
     if (s.count == 0 || task < first || task - first >= s.count)
-        throw std::invalid_argument("SLURM_ARRAY_TASK_ID=" + std::string(id) + " is not within an array of " +
-                                    count + " tasks starting at " + std::to_string(first) +
-                                    " (array ids must be consecutive)");
+        throw std::invalid_argument("SLURM_ARRAY_TASK_ID=" + std::string(id) + " is not within an array of " + count +
+                                    " tasks starting at " + std::to_string(first) + " (array ids must be consecutive)");
     s.index = task - first;
     return s;
 }

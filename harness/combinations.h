@@ -15,19 +15,19 @@
 namespace accelbench {
 
 struct Combination {
-    size_t model = 0;        // index into Config::models
-    size_t accelerator = 0;  // index into Config::accelerators
-    std::string accel;       // accelerator name
+    size_t model = 0;                          // index into Config::models
+    size_t accelerator = 0;                    // index into Config::accelerators
+    std::string accel;                         // accelerator name
     std::map<std::string, std::string> given;  // values the config gives (canonical text)
-    ParamSet params;         // every parameter: given or default
-    int threads = 1;         // render threads (one of Config::thread_counts)
+    ParamSet params;                           // every parameter: given or default
+    int threads = 1;                           // render threads (one of Config::thread_counts)
     // The ray set this row times (Config::ray_sets); nullopt: the camera row, primary and
     // shadow rays together as the report timed them (`ray_set` = camera).
     std::optional<RaySetKind> ray_set;
-    std::string key;         // canonical identity: model key, render settings, accel, params, ray set
-    uint64_t hash = 0;       // FNV-1a 64 of key
-    std::string id;          // hash as 16 hex digits: the CSV's combo_id
-    std::string name;        // for people: "stanford-bunny/kdtree:max_prims=1,max_depth=28"
+    std::string key;    // canonical identity: model key, render settings, accel, params, ray set
+    uint64_t hash = 0;  // FNV-1a 64 of key
+    std::string id;     // hash as 16 hex digits: the CSV's combo_id
+    std::string name;   // for people: "stanford-bunny/kdtree:max_prims=1,max_depth=28"
 };
 
 // Expansion: for each model (outer loop) and each accelerator entry, the cartesian

@@ -9,14 +9,14 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
-#include <thread>
 #include <set>
+#include <thread>
 
-#include "accelbench/base/params.h"
-#include "accelbench/scene/procedural.h"
 #include "accelbench/accel/registry.h"
-#include "accelbench/verify/robustness_cases.h"
+#include "accelbench/base/params.h"
 #include "accelbench/base/unknown_name.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/verify/robustness_cases.h"
 #include "checked_yaml.h"
 #include "model_registry.h"
 #include "ray_file.h"
@@ -51,8 +51,9 @@ std::optional<std::string> read_param_value(Checker& c, const YAML::Node& n, con
         return std::nullopt;
     }
     if (quoted(n) && spec.type != ParamType::Enum) {
-        c.error(n, path, std::string("expected a ") + to_string(spec.type) + " value, got the quoted string '" +
-                             n.Scalar() + "'");
+        c.error(
+            n, path,
+            std::string("expected a ") + to_string(spec.type) + " value, got the quoted string '" + n.Scalar() + "'");
         return std::nullopt;
     }
     // A default that depends on the scene (the kd-tree's max_depth "auto") can be named, so
@@ -105,7 +106,8 @@ public:
             if (auto s = read_string(c_, e->value, "name")) {
                 if (s->find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-") !=
                     std::string::npos)
-                    c_.error(e->value, "name", "'" + *s + "' is used in file names: use letters, digits, '.', '_', '-'");
+                    c_.error(e->value, "name",
+                             "'" + *s + "' is used in file names: use letters, digits, '.', '_', '-'");
                 else cfg_.name = *s;
             }
         if (auto* e = top.find("description")) read_string(c_, e->value, "description");
@@ -122,16 +124,17 @@ public:
         if (auto* e = top.find("rays")) default_rays_ = read_rays(e->value, "rays");
         if (auto* e = top.find("ray_sets")) read_ray_sets(e->value);
 
-        if (auto* e = top.require("models")) read_list(c_, e->value, "models", [&](const YAML::Node& n, const std::string& p) {
-            read_model(n, p);
-        });
+        if (auto* e = top.require("models"))
+            read_list(c_, e->value, "models", [&](const YAML::Node& n, const std::string& p) { read_model(n, p); });
         check_models();
         if (auto* e = top.require("accelerators"))
-            read_list(c_, e->value, "accelerators", [&](const YAML::Node& n, const std::string& p) { read_accelerator(n, p); });
+            read_list(c_, e->value, "accelerators",
+                      [&](const YAML::Node& n, const std::string& p) { read_accelerator(n, p); });
         check_combination_count(top);
         check_reference_size();
         if (auto* e = top.find("skip"))
-            read_list(c_, e->value, "skip", [&](const YAML::Node& n, const std::string& p) { read_skip(n, p); }, true);
+            read_list(
+                c_, e->value, "skip", [&](const YAML::Node& n, const std::string& p) { read_skip(n, p); }, true);
 
         if (!c_.issues.empty()) throw ConfigError(c_.issues);
         return std::move(cfg_);
@@ -219,7 +222,8 @@ private:
                 if (auto v = read_int(c_, s->value, d.child("rays"), 1, int64_t(1) << 30)) r.random_rays = uint64_t(*v);
         }
         if (auto* e = f.find("seed"))
-            if (auto v = read_int(c_, e->value, f.child("seed"), 0, std::numeric_limits<int64_t>::max())) r.seed = uint64_t(*v);
+            if (auto v = read_int(c_, e->value, f.child("seed"), 0, std::numeric_limits<int64_t>::max()))
+                r.seed = uint64_t(*v);
         cfg_.ray_sets = std::move(spec);
     }
 
@@ -243,8 +247,8 @@ private:
             }
             return nullptr;
         }
-        auto set = std::make_shared<RaySet>(RaySet{resolved, fs::path(*file).lexically_normal().string(),
-                                                   std::move(contents.rays)});
+        auto set = std::make_shared<RaySet>(
+            RaySet{resolved, fs::path(*file).lexically_normal().string(), std::move(contents.rays)});
         ray_sets_.emplace(resolved, set);
         return set;
     }
@@ -288,8 +292,9 @@ private:
         if (registry_.find(name)) return true;
         std::vector<std::string> names;
         for (const auto& e : registry_.entries()) names.push_back(e.name);
-        c_.error(n, path, "unknown model '" + name + "': not in the model registry (configs/models.yaml: " +
-                              join_names(names) + "); a mesh file is written {path: FILE}");
+        c_.error(n, path,
+                 "unknown model '" + name + "': not in the model registry (configs/models.yaml: " + join_names(names) +
+                     "); a mesh file is written {path: FILE}");
         return false;
     }
 
@@ -308,16 +313,19 @@ private:
             return;
         }
         if (!n.IsMap()) {
-            c_.error(n, path, std::string("expected a registry name or a mapping (name:, path:, procedural: or "
-                                          "case:), got ") + kind_of(n));
+            c_.error(n, path,
+                     std::string("expected a registry name or a mapping (name:, path:, procedural: or "
+                                 "case:), got ") +
+                         kind_of(n));
             return;
         }
         Fields f(c_, n, path, {});  // keys depend on the form: checked below
         const bool has_name = f.has("name"), has_path = f.has("path"), has_proc = f.has("procedural"),
                    has_case = f.has("case");
         if (int(has_name) + int(has_path) + int(has_proc) + int(has_case) != 1) {
-            c_.error(n, path, "a model needs exactly one of 'name' (registry model), 'path' (mesh file), "
-                              "'procedural' (generated scene) or 'case' (robustness case)");
+            c_.error(n, path,
+                     "a model needs exactly one of 'name' (registry model), 'path' (mesh file), "
+                     "'procedural' (generated scene) or 'case' (robustness case)");
             return;
         }
         if (has_case) return read_cases(f, std::move(m));
@@ -354,8 +362,9 @@ private:
             m.kind = ModelSpec::Kind::Procedural;
             proc = find_procedural(m.name);
             if (!proc) {
-                c_.error(given->value, f.child(form),
-                         unknown_name("procedural scene", m.name, names_of(procedural_registry(), &ProceduralInfo::name)));
+                c_.error(
+                    given->value, f.child(form),
+                    unknown_name("procedural scene", m.name, names_of(procedural_registry(), &ProceduralInfo::name)));
                 return;
             }
             for (const auto& s : proc->params) allowed.push_back(s.name);
@@ -364,7 +373,8 @@ private:
             if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
             std::string what = proc ? "procedural scene '" + proc->name + "' has no parameter '" + e.key + "'"
                                     : "unknown key '" + e.key + "'";
-            c_.error(e.key_node, f.child(e.key), what + did_you_mean(e.key, allowed) + "; allowed here: " + join_names(allowed));
+            c_.error(e.key_node, f.child(e.key),
+                     what + did_you_mean(e.key, allowed) + "; allowed here: " + join_names(allowed));
             ok = false;
         }
         if (proc) {
@@ -394,7 +404,7 @@ private:
                 const Camera& cam = *m.camera;
                 auto v3 = [](Vec3 v) { return format_float(v.x) + "," + format_float(v.y) + "," + format_float(v.z); };
                 m.key += ";camera=" + v3(cam.eye) + ";" + v3(cam.look_at) + ";" + v3(cam.up) + ";" +
-                         format_float(cam.fov_deg);
+                    format_float(cam.fov_deg);
             }
         }
         if (auto* e = f.find("rays")) {
@@ -416,8 +426,10 @@ private:
         bool ok = true;
         for (const auto& e : f.entries())
             if (e.key != "case" && e.key != "label") {
-                c_.error(e.key_node, f.child(e.key), "unknown key '" + e.key + "' for a robustness case (a case brings "
-                                                     "its own scene and rays); allowed here: case, label");
+                c_.error(e.key_node, f.child(e.key),
+                         "unknown key '" + e.key +
+                             "' for a robustness case (a case brings "
+                             "its own scene and rays); allowed here: case, label");
                 ok = false;
             }
         const auto* given = f.find("case");
@@ -508,9 +520,10 @@ private:
         // Ray sets start from the camera's rays and their reference hits.
         for (const ModelSpec& m : cfg_.models)
             if (cfg_.ray_sets && (m.rays || m.kind == ModelSpec::Kind::Case))
-                c_.issues.push_back({m.mark, m.key_path,
-                                     std::string("`ray_sets` are made from a model's camera view; ") +
-                                         (m.rays ? "this model traces a ray file" : "a robustness case is judged, not timed")});
+                c_.issues.push_back(
+                    {m.mark, m.key_path,
+                     std::string("`ray_sets` are made from a model's camera view; ") +
+                         (m.rays ? "this model traces a ray file" : "a robustness case is judged, not timed")});
         std::map<std::string, size_t> by_key, by_label;
         for (size_t i = 0; i < cfg_.models.size(); ++i) {
             const ModelSpec& b = cfg_.models[i];
@@ -521,8 +534,9 @@ private:
                 c_.issues.push_back({b.mark, b.key_path, "the same model as " + a.key_path + " ('" + a.label + "')"});
             } else if (!new_label) {
                 const ModelSpec& a = cfg_.models[label->second];
-                c_.issues.push_back({b.mark, b.key_path, "the same label '" + b.label + "' as " + a.key_path +
-                                                             ": give one of them a distinct `label:`"});
+                c_.issues.push_back(
+                    {b.mark, b.key_path,
+                     "the same label '" + b.label + "' as " + a.key_path + ": give one of them a distinct `label:`"});
             }
         }
     }
@@ -535,7 +549,8 @@ private:
         bool over = false;
         for (const auto& a : cfg_.accelerators) {
             uint64_t product = 1;
-            for (const auto& axis : a.axes) over |= __builtin_mul_overflow(product, uint64_t(axis.values.size()), &product);
+            for (const auto& axis : a.axes)
+                over |= __builtin_mul_overflow(product, uint64_t(axis.values.size()), &product);
             over |= __builtin_add_overflow(per_model, product, &per_model);
         }
         uint64_t total = 0;
@@ -544,7 +559,8 @@ private:
             const auto* e = top.find("accelerators");
             c_.error(e ? e->value : top.node(), "accelerators",
                      "the config expands to " + (over ? std::string("more than 2^64") : std::to_string(total)) +
-                         " combinations (" + std::to_string(cfg_.models.size()) + (cfg_.models.size() == 1 ? " model x " : " models x ") +
+                         " combinations (" + std::to_string(cfg_.models.size()) +
+                         (cfg_.models.size() == 1 ? " model x " : " models x ") +
                          (over ? std::string("too many") : std::to_string(per_model)) +
                          " accelerator settings); at most " + std::to_string(kMaxCombinations) +
                          " in one config: split it, or use grid.mode: successive_halving");
@@ -566,11 +582,14 @@ private:
             if (rays > most) most = rays, worst = &m;
         }
         if (most <= kMaxReferenceRays) return;
-        const std::string what = worst->rays ? "the ray file " + worst->rays->display + " has " + std::to_string(most) + " rays"
-                                             : "render: width x height x spp = " + std::to_string(most) + " primary rays";
+        const std::string what = worst->rays
+            ? "the ray file " + worst->rays->display + " has " + std::to_string(most) + " rays"
+            : "render: width x height x spp = " + std::to_string(most) + " primary rays";
         c_.issues.push_back({worst->mark, worst->key_path,
-                             what + "; with error columns the reference keeps a 16-byte hit per primary ray (twice, "
-                                    "with the measurement's), at most " + std::to_string(kMaxReferenceRays) +
+                             what +
+                                 "; with error columns the reference keeps a 16-byte hit per primary ray (twice, "
+                                 "with the measurement's), at most " +
+                                 std::to_string(kMaxReferenceRays) +
                                  " rays: a smaller image or spp, or errors: false"});
     }
 
@@ -587,7 +606,8 @@ private:
         const AcceleratorInfo* info = find_accelerator(a.name);
         if (!info) {
             const auto names = names_of(accelerator_registry(), &AcceleratorInfo::name);
-            c_.error(ne->value, f.child("name"), unknown_name("accelerator", a.name, names, did_you_mean(a.name, names)));
+            c_.error(ne->value, f.child("name"),
+                     unknown_name("accelerator", a.name, names, did_you_mean(a.name, names)));
             return;
         }
         bool ok = read_effort(f, a.repetitions, a.warmup);
@@ -603,8 +623,9 @@ private:
                 if (group) {
                     names = split_group(e.key);
                     if (names.size() < 2) {
-                        c_.error(e.key_node, pf.child(e.key), "a zipped group names two or more parameters, e.g. "
-                                                              "\"[max_prims, max_depth]\"");
+                        c_.error(e.key_node, pf.child(e.key),
+                                 "a zipped group names two or more parameters, e.g. "
+                                 "\"[max_prims, max_depth]\"");
                         ok = false;
                         continue;
                     }
@@ -618,7 +639,8 @@ private:
                     if (!spec) {
                         const auto known = spec_names(info->params);
                         c_.error(e.key_node, base + "." + pn,
-                                 "accelerator '" + a.name + "' has no parameter '" + pn + "'" + did_you_mean(pn, known) +
+                                 "accelerator '" + a.name + "' has no parameter '" + pn + "'" +
+                                     did_you_mean(pn, known) +
                                      (known.empty() ? " (it takes none)" : " (it has: " + join_names(known) + ")"));
                         names_ok = false;
                         continue;
@@ -670,8 +692,9 @@ private:
         }
         if (n.IsMap()) return read_range(n, path, accel, spec, axis);
         if (!n.IsSequence() || n.size() == 0) {
-            c_.error(n, path, std::string("expected a value, a non-empty list of values or a range, got ") +
-                                  (n.IsSequence() ? "an empty list" : kind_of(n)));
+            c_.error(n, path,
+                     std::string("expected a value, a non-empty list of values or a range, got ") +
+                         (n.IsSequence() ? "an empty list" : kind_of(n)));
             return false;
         }
         bool ok = true;
@@ -774,8 +797,9 @@ private:
                            const std::string& accel, const std::vector<const ParamSpec*>& specs, ParamAxis& axis) {
         const std::string path = base + "." + key;
         if (!n.IsSequence() || n.size() == 0) {
-            c_.error(n, path, "expected a non-empty list of tuples, e.g. [[1, 28], [10, 20]], got " +
-                                  std::string(n.IsSequence() ? "an empty list" : kind_of(n)));
+            c_.error(n, path,
+                     "expected a non-empty list of tuples, e.g. [[1, 28], [10, 20]], got " +
+                         std::string(n.IsSequence() ? "an empty list" : kind_of(n)));
             return false;
         }
         bool ok = true;
@@ -783,8 +807,9 @@ private:
             const YAML::Node& t = n[j];
             const std::string tp = path + "[" + std::to_string(j) + "]";
             if (!t.IsSequence() || t.size() != specs.size()) {
-                c_.error(t, tp, "expected a tuple of " + std::to_string(specs.size()) + " values (" + key + "), got " +
-                                    (t.IsSequence() ? "a list of " + std::to_string(t.size()) : std::string(kind_of(t))));
+                c_.error(t, tp,
+                         "expected a tuple of " + std::to_string(specs.size()) + " values (" + key + "), got " +
+                             (t.IsSequence() ? "a list of " + std::to_string(t.size()) : std::string(kind_of(t))));
                 ok = false;
                 continue;
             }
@@ -837,7 +862,8 @@ private:
             if (s && !known) {
                 std::vector<std::string> labels;
                 for (const auto& m : cfg_.models) labels.push_back(m.label);
-                c_.error(e->value, f.child("model"), "'" + *s + "' matches no model of this config (" + join_names(labels) + ")");
+                c_.error(e->value, f.child("model"),
+                         "'" + *s + "' matches no model of this config (" + join_names(labels) + ")");
                 s.reset();
             }
             if (s) r.model = *s;
@@ -851,13 +877,15 @@ private:
             }
         if (const auto* e = f.find("params")) {
             if (!f.has("accel")) {
-                c_.error(e->key_node, f.child("params"), "matching on params needs `accel:` (parameters belong to one accelerator)");
+                c_.error(e->key_node, f.child("params"),
+                         "matching on params needs `accel:` (parameters belong to one accelerator)");
                 ok = false;
             } else if (info) {
                 Fields pf(c_, e->value, f.child("params"), spec_names(info->params));
                 ok &= pf.ok();
                 for (const auto& pe : pf.entries()) {
-                    auto v = read_param_value(c_, pe.value, pf.child(pe.key), info->name, *find_spec(info->params, pe.key));
+                    auto v =
+                        read_param_value(c_, pe.value, pf.child(pe.key), info->name, *find_spec(info->params, pe.key));
                     if (v) r.params[pe.key] = *v;
                     else ok = false;
                 }
@@ -865,8 +893,9 @@ private:
         }
         if (!f.has("accel") && !f.has("model") && !f.has("triangles_above") && !f.has("triangles_below") &&
             !f.has("params")) {
-            c_.error(n, path, "a skip rule needs at least one condition (accel, model, triangles_above, "
-                              "triangles_below, params)");
+            c_.error(n, path,
+                     "a skip rule needs at least one condition (accel, model, triangles_above, "
+                     "triangles_below, params)");
             ok = false;
         }
         if (ok) cfg_.skip.push_back(std::move(r));
@@ -884,4 +913,3 @@ private:
 Config load_config(const std::string& path, const ModelRegistry& models) { return Loader(path, models).load(); }
 
 }  // namespace accelbench
-

@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/scene/camera.h"
 #include "accelbench/base/geometry.h"
 #include "accelbench/render/ray_sets.h"
 #include "accelbench/render/renderer.h"
+#include "accelbench/scene/camera.h"
 #include "checked_yaml.h"
 
 namespace accelbench {
@@ -47,13 +47,13 @@ struct ModelSpec {
     std::string name;           // registry name, path as written, procedural kind, or case id
     std::string resolved_path;  // Kind::Path: relative to the config file's directory
     std::map<std::string, std::string> procedural_params;  // Kind::Procedural: as given
-    std::string procedural_canonical;  // Kind::Procedural: all parameters, defaults filled in
-    std::optional<Camera> camera;      // overrides the registry's / the auto-fit view
-    std::shared_ptr<const RaySet> rays;  // trace these instead of camera rays
-    std::optional<ModelTransformSpec> transform;  // Kind::Registry only
-    std::optional<int> repetitions, warmup;  // override the config's for this model
-    std::string label;  // the CSV's `model` column
-    std::string key;    // config-independent identity (the combination id hashes it)
+    std::string procedural_canonical;                      // Kind::Procedural: all parameters, defaults filled in
+    std::optional<Camera> camera;                          // overrides the registry's / the auto-fit view
+    std::shared_ptr<const RaySet> rays;                    // trace these instead of camera rays
+    std::optional<ModelTransformSpec> transform;           // Kind::Registry only
+    std::optional<int> repetitions, warmup;                // override the config's for this model
+    std::string label;                                     // the CSV's `model` column
+    std::string key;                                       // config-independent identity (the combination id hashes it)
     SourceMark mark;
     std::string key_path;  // "models[3]"
 };
@@ -67,7 +67,7 @@ struct ParamAxis {
 
 struct AcceleratorSpec {
     std::string name;
-    std::vector<ParamAxis> axes;  // in the order written
+    std::vector<ParamAxis> axes;             // in the order written
     std::optional<int> repetitions, warmup;  // override the model's and the config's
     SourceMark mark;
     std::string key_path;  // "accelerators[1]"
@@ -77,9 +77,9 @@ struct AcceleratorSpec {
 // condition given must hold.
 struct SkipRule {
     std::optional<std::string> accel;
-    std::optional<std::string> model;  // matches the model's label (the `model` column)
-    std::optional<uint64_t> triangles_above;  // skip when triangles > this
-    std::optional<uint64_t> triangles_below;  // skip when triangles < this
+    std::optional<std::string> model;           // matches the model's label (the `model` column)
+    std::optional<uint64_t> triangles_above;    // skip when triangles > this
+    std::optional<uint64_t> triangles_below;    // skip when triangles < this
     std::map<std::string, std::string> params;  // canonical text of resolved values
     std::string reason;
     std::string key_path;  // "skip[0]"

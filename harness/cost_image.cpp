@@ -11,10 +11,9 @@ namespace accelbench {
 std::array<uint8_t, 3> inferno(double t) {
     // matplotlib's inferno sampled at 9 evenly spaced points, interpolated linearly:
     // close enough to the full table for reading a heatmap, and a few lines long.
-    static constexpr double stops[9][3] = {
-        {0.001, 0.000, 0.014}, {0.086, 0.045, 0.225}, {0.258, 0.039, 0.406}, {0.416, 0.090, 0.433},
-        {0.578, 0.148, 0.404}, {0.735, 0.216, 0.330}, {0.865, 0.317, 0.226}, {0.954, 0.469, 0.099},
-        {0.988, 0.645, 0.040}};
+    static constexpr double stops[9][3] = {{0.001, 0.000, 0.014}, {0.086, 0.045, 0.225}, {0.258, 0.039, 0.406},
+                                           {0.416, 0.090, 0.433}, {0.578, 0.148, 0.404}, {0.735, 0.216, 0.330},
+                                           {0.865, 0.317, 0.226}, {0.954, 0.469, 0.099}, {0.988, 0.645, 0.040}};
     static constexpr double top[3] = {0.988, 0.998, 0.645};  // t = 1
     t = std::clamp(std::isfinite(t) ? t : 0.0, 0.0, 1.0);
     const double x = t * 9.0;

@@ -1,9 +1,9 @@
 #include "derived_model.h"
 
+#include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <unistd.h>
 
 #include "accelbench/scene/mesh_io.h"
 #include "accelbench/scene/mesh_transform.h"

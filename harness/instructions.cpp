@@ -1,7 +1,7 @@
 #include "instructions.h"
 
-#include <valgrind/callgrind.h>
 #include <unistd.h>
+#include <valgrind/callgrind.h>
 
 #include <cctype>
 #include <filesystem>

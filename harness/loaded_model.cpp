@@ -5,9 +5,9 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "accelbench/accel/registry.h"
 #include "accelbench/scene/mesh_io.h"
 #include "accelbench/scene/procedural.h"
-#include "accelbench/accel/registry.h"
 #include "accelbench/verify/robustness_cases.h"
 #include "derived_model.h"
 #include "model_registry.h"
@@ -22,14 +22,13 @@ LoadedModel load_model(const ModelSpec& spec, const ModelRegistry& registry, con
         case ModelSpec::Kind::Registry: {
             const ModelEntry* entry = registry.find(spec.name);
             if (!entry) throw std::runtime_error("model '" + spec.name + "' is not in the model registry");
-            m.scene = spec.transform ? load_derived_scene(registry, *entry, *spec.transform) : registry.load_scene(*entry);
+            m.scene =
+                spec.transform ? load_derived_scene(registry, *entry, *spec.transform) : registry.load_scene(*entry);
             if (!camera) camera = entry->camera;
             light = entry->light;
             break;
         }
-        case ModelSpec::Kind::Path:
-            m.scene = load_mesh(spec.resolved_path);
-            break;
+        case ModelSpec::Kind::Path: m.scene = load_mesh(spec.resolved_path); break;
         case ModelSpec::Kind::Case: {
             auto c = std::make_shared<const RobustnessCase>(make_robustness_case(spec.name));
             m.scene = c->scene;

@@ -6,8 +6,8 @@
 #include <memory>
 #include <vector>
 
-#include "accelbench/scene/camera.h"
 #include "accelbench/render/renderer.h"
+#include "accelbench/scene/camera.h"
 #include "accelbench/scene/scene.h"
 #include "config.h"
 

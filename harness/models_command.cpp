@@ -16,7 +16,8 @@ int models_command(int argc, char** argv) {
     for (int i = 0; i < argc; ++i) {
         if (std::strcmp(argv[i], "--fetch") == 0) fetch = true;
         else {
-            std::fprintf(stderr, "accelbench models: unknown option '%s'\nusage: accelbench models [--fetch]\n", argv[i]);
+            std::fprintf(stderr, "accelbench models: unknown option '%s'\nusage: accelbench models [--fetch]\n",
+                         argv[i]);
             return 2;
         }
     }

@@ -20,11 +20,11 @@ void require_regular_file_or_absent(const std::string& path, const std::string& 
     if (ec || !fs::exists(st)) return;
     const fs::file_status target = fs::status(path, ec);
     if (!ec && fs::is_regular_file(target)) return;
-    const char* kind = fs::is_directory(target) ? "a directory"
-                       : fs::is_character_file(target) || fs::is_block_file(target) ? "a device"
-                       : fs::is_fifo(target) ? "a FIFO"
-                       : fs::is_socket(target) ? "a socket"
-                                               : "not a regular file";
+    const char* kind = fs::is_directory(target)                      ? "a directory"
+        : fs::is_character_file(target) || fs::is_block_file(target) ? "a device"
+        : fs::is_fifo(target)                                        ? "a FIFO"
+        : fs::is_socket(target)                                      ? "a socket"
+                                                                     : "not a regular file";
     throw std::runtime_error("'" + path + "' is " + kind + ": " + what + " must be a regular file (or not exist yet)");
 }
 
@@ -62,7 +62,8 @@ void OutputLock::add(const std::string& path) {
         const int err = errno;
         ::close(fd);
         if (err == EWOULDBLOCK)
-            throw std::runtime_error("'" + path + "' is being written by another process (an accelbench run or merge "
+            throw std::runtime_error("'" + path +
+                                     "' is being written by another process (an accelbench run or merge "
                                      "holds its lock): wait for it to finish, or choose another --out");
         throw std::runtime_error("cannot lock '" + path + "': " + std::strerror(err));
     }

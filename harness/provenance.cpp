@@ -76,16 +76,20 @@ std::string compiled_isa() {
 
 std::vector<std::pair<std::string, std::string>> provenance_values() {
     const Provenance& p = provenance();
-    return {{"git_sha", p.git_sha},   {"git_dirty", p.git_dirty ? "true" : "false"},
-            {"compiler", p.compiler}, {"build_type", p.build_type},
-            {"cpu", p.cpu},           {"embree_version", p.embree_version},
+    return {{"git_sha", p.git_sha},
+            {"git_dirty", p.git_dirty ? "true" : "false"},
+            {"compiler", p.compiler},
+            {"build_type", p.build_type},
+            {"cpu", p.cpu},
+            {"embree_version", p.embree_version},
             {"isa", p.isa}};
 }
 
 int provenance_command(int argc, char** argv) {
     if (argc > 0 && (std::string(argv[0]) == "-h" || std::string(argv[0]) == "--help")) {
-        std::printf("usage: accelbench provenance\n"
-                    "  prints the provenance columns this build writes into every results row, NAME=VALUE\n");
+        std::printf(
+            "usage: accelbench provenance\n"
+            "  prints the provenance columns this build writes into every results row, NAME=VALUE\n");
         return 0;
     }
     if (argc > 0) {

@@ -53,15 +53,17 @@ RayFileContents read_ray_file(const std::string& path, const std::string& displa
             if (text == "ox,oy,oz,dx,dy,dz") fields = 6;
             else if (text == "ox,oy,oz,dx,dy,dz,tmax") fields = 7;
             else {
-                issue(line_no, 1, "expected the header 'ox,oy,oz,dx,dy,dz' or 'ox,oy,oz,dx,dy,dz,tmax', got '" + text + "'");
+                issue(line_no, 1,
+                      "expected the header 'ox,oy,oz,dx,dy,dz' or 'ox,oy,oz,dx,dy,dz,tmax', got '" + text + "'");
                 return result;
             }
             continue;
         }
         auto parts = split_fields(line);
         if (parts.size() != fields) {
-            issue(line_no, 1, "expected " + std::to_string(fields) + " comma-separated numbers, got " +
-                                  std::to_string(parts.size()));
+            issue(
+                line_no, 1,
+                "expected " + std::to_string(fields) + " comma-separated numbers, got " + std::to_string(parts.size()));
             continue;
         }
         float v[7] = {0, 0, 0, 0, 0, 0, kInfinity};

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/scene/mesh_io.h"
 #include "accelbench/accel/registry.h"
 #include "accelbench/render/renderer.h"
+#include "accelbench/scene/mesh_io.h"
 #include "cost_image.h"
 #include "model_registry.h"
 
@@ -22,9 +22,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 int usage_error(const std::string& msg) {
     std::fprintf(stderr, "accelbench render: %s\n", msg.c_str());
@@ -48,9 +46,9 @@ int parse_int(const std::string& flag, const std::string& v, int lo, int hi) {
         size_t used = 0;
         int x = std::stoi(v, &used);
         if (used == v.size() && x >= lo && x <= hi) return x;
-    } catch (const std::exception&) {
-    }
-    throw ParamError(flag + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" + v + "'");
+    } catch (const std::exception&) {}
+    throw ParamError(flag + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" +
+                     v + "'");
 }
 
 }  // namespace
@@ -160,8 +158,7 @@ int render_command(int argc, char** argv) {
                     req.settings.threads == 1 ? "" : "s");
         std::printf("rays       %llu primary, %llu hits; %llu shadow, %llu occluded\n", (unsigned long long)r.rays,
                     (unsigned long long)r.hits, (unsigned long long)r.shadow_rays, (unsigned long long)r.shadow_hits);
-        std::printf("speed      %.2f Mrays/s (primary + shadow)\n",
-                    double(r.rays + r.shadow_rays) / render_s * 1e-6);
+        std::printf("speed      %.2f Mrays/s (primary + shadow)\n", double(r.rays + r.shadow_rays) / render_s * 1e-6);
         std::printf("tree       nodes %s, leaves %s, max depth %s, memory %s bytes\n", opt(bs.nodes).c_str(),
                     opt(bs.leaves).c_str(), opt(bs.max_depth).c_str(), opt(bs.memory_bytes).c_str());
         if (bs.sah_cost) std::printf("sah cost   %.4f\n", *bs.sah_cost);

@@ -33,26 +33,71 @@ std::vector<std::string> column_headers(const std::vector<std::string>& keys) {
 }
 
 std::vector<std::string> result_columns() {
-    std::vector<std::string> c = {"config", "combo_id", "model", "triangles", "vertices", "ray_source", "ray_set",
-                                  "ray_set_hash", "accel", "params"};
+    std::vector<std::string> c = {"config",     "combo_id", "model",        "triangles", "vertices",
+                                  "ray_source", "ray_set",  "ray_set_hash", "accel",     "params"};
     // Every accelerator's parameters, in registry then declaration order, each once.
     std::set<std::string> seen;
     for (const auto& info : accelerator_registry())
         for (const auto& p : info.params)
             if (seen.insert(p.name).second) c.push_back(param_column(p.name));
-    for (const char* col :
-         {"status", "message", "repetitions",  //
-          "build_s_median", "build_s_mean", "build_s_stddev", "build_s_ci_lo", "build_s_ci_hi",  //
-          "render_s_median", "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi",
-          "ci_coverage", "render_cpu_s_median",  //
-          "rays", "hits", "shadow_rays", "shadow_hits", "mrays_per_s",  //
-          "nodes", "leaves", "max_depth", "memory_bytes", "sah_cost", "avg_leaf_size", "build_extra",  //
-          "prim_tests", "node_visits", "box_tests", "prim_tests_per_ray", "node_visits_per_ray",  //
-          "instructions",  //
-          "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max", "nan_results",
-          "image_rmse", "hole_pixels", "peak_rss_bytes", "verdict", "verdict_counts",  //
-          "width", "height", "spp", "light", "shading",  //
-          "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version", "timestamp", "isa"})
+    for (const char* col : {"status",
+                            "message",
+                            "repetitions",  //
+                            "build_s_median",
+                            "build_s_mean",
+                            "build_s_stddev",
+                            "build_s_ci_lo",
+                            "build_s_ci_hi",  //
+                            "render_s_median",
+                            "render_s_mean",
+                            "render_s_stddev",
+                            "render_s_ci_lo",
+                            "render_s_ci_hi",
+                            "ci_coverage",
+                            "render_cpu_s_median",  //
+                            "rays",
+                            "hits",
+                            "shadow_rays",
+                            "shadow_hits",
+                            "mrays_per_s",  //
+                            "nodes",
+                            "leaves",
+                            "max_depth",
+                            "memory_bytes",
+                            "sah_cost",
+                            "avg_leaf_size",
+                            "build_extra",  //
+                            "prim_tests",
+                            "node_visits",
+                            "box_tests",
+                            "prim_tests_per_ray",
+                            "node_visits_per_ray",  //
+                            "instructions",         //
+                            "false_misses",
+                            "false_hits",
+                            "prim_mismatches",
+                            "t_err_ulp_p50",
+                            "t_err_ulp_max",
+                            "nan_results",
+                            "image_rmse",
+                            "hole_pixels",
+                            "peak_rss_bytes",
+                            "verdict",
+                            "verdict_counts",  //
+                            "width",
+                            "height",
+                            "spp",
+                            "light",
+                            "shading",  //
+                            "git_sha",
+                            "git_dirty",
+                            "compiler",
+                            "build_type",
+                            "cpu",
+                            "threads",
+                            "embree_version",
+                            "timestamp",
+                            "isa"})
         c.push_back(col);
     return c;
 }
@@ -62,8 +107,8 @@ std::vector<std::string> repetition_columns() {
 }
 
 const std::vector<std::string>& provenance_columns() {
-    static const std::vector<std::string> cols = {"git_sha", "git_dirty", "compiler", "build_type", "cpu",
-                                                  "embree_version", "isa"};
+    static const std::vector<std::string> cols = {"git_sha", "git_dirty",      "compiler", "build_type",
+                                                  "cpu",     "embree_version", "isa"};
     return cols;
 }
 
@@ -82,7 +127,7 @@ std::string header_mismatch(const std::string& path, const std::vector<std::stri
         const std::string b = i < want.size() ? want[i] : "(none)";
         if (a != b)
             return path + ": its columns differ from this build's (column " + std::to_string(i + 1) + " is '" + a +
-                   "', expected '" + b + "'); write to a new file or merge with an older build's binary";
+                "', expected '" + b + "'); write to a new file or merge with an older build's binary";
     }
     return "";
 }
@@ -209,13 +254,49 @@ namespace {
 // the header) name each refusal.
 void check_result_rows(const CsvData& d, const std::string& path) {
     static const std::set<std::string> statuses = {"ok", "skipped", "error", "timeout"};
-    static const std::set<std::string> numeric = {
-        "triangles", "vertices", "repetitions", "build_s_median", "build_s_mean", "build_s_stddev", "build_s_ci_lo",
-        "build_s_ci_hi", "render_s_median", "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi",
-        "ci_coverage", "rays", "hits", "shadow_rays", "shadow_hits", "mrays_per_s", "nodes", "leaves", "max_depth",
-        "memory_bytes", "sah_cost", "avg_leaf_size", "prim_tests", "node_visits", "box_tests", "prim_tests_per_ray",
-        "node_visits_per_ray", "instructions", "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50",
-        "t_err_ulp_max", "nan_results", "image_rmse", "hole_pixels", "peak_rss_bytes", "width", "height", "spp"};
+    static const std::set<std::string> numeric = {"triangles",
+                                                  "vertices",
+                                                  "repetitions",
+                                                  "build_s_median",
+                                                  "build_s_mean",
+                                                  "build_s_stddev",
+                                                  "build_s_ci_lo",
+                                                  "build_s_ci_hi",
+                                                  "render_s_median",
+                                                  "render_s_mean",
+                                                  "render_s_stddev",
+                                                  "render_s_ci_lo",
+                                                  "render_s_ci_hi",
+                                                  "ci_coverage",
+                                                  "rays",
+                                                  "hits",
+                                                  "shadow_rays",
+                                                  "shadow_hits",
+                                                  "mrays_per_s",
+                                                  "nodes",
+                                                  "leaves",
+                                                  "max_depth",
+                                                  "memory_bytes",
+                                                  "sah_cost",
+                                                  "avg_leaf_size",
+                                                  "prim_tests",
+                                                  "node_visits",
+                                                  "box_tests",
+                                                  "prim_tests_per_ray",
+                                                  "node_visits_per_ray",
+                                                  "instructions",
+                                                  "false_misses",
+                                                  "false_hits",
+                                                  "prim_mismatches",
+                                                  "t_err_ulp_p50",
+                                                  "t_err_ulp_max",
+                                                  "nan_results",
+                                                  "image_rmse",
+                                                  "hole_pixels",
+                                                  "peak_rss_bytes",
+                                                  "width",
+                                                  "height",
+                                                  "spp"};
     const size_t id = column_index(d, "combo_id", path);
     auto optional_column = [&](const char* name) {
         const auto it = std::find(d.header.begin(), d.header.end(), name);

@@ -76,7 +76,8 @@ int run(const RunOptions& opt) {
         Progress progress;
         std::vector<RunSink*> sinks;
         if (json) sinks.push_back(&*json);
-        for (RunSink* s : std::initializer_list<RunSink*>{&verdicts, &progress, &repetitions, &results}) sinks.push_back(s);
+        for (RunSink* s : std::initializer_list<RunSink*>{&verdicts, &progress, &repetitions, &results})
+            sinks.push_back(s);
         return run_plan(plan, opt, sinks);
     } catch (const ConfigError& e) {
         for (const auto& issue : e.issues()) std::fprintf(stderr, "%s\n", format_issue(issue).c_str());
@@ -115,7 +116,8 @@ int run_command(int argc, char** argv) {
             else if (a.rfind("--benchmark_out=", 0) == 0) opt.json_out = a.substr(16);
             else if (a.rfind("--benchmark_out_format=", 0) == 0) {
                 if (a.substr(23) != "json")
-                    return usage_error("only --benchmark_out_format=json is supported (our own CSV is the results file)");
+                    return usage_error(
+                        "only --benchmark_out_format=json is supported (our own CSV is the results file)");
             } else if (a.rfind("--benchmark_filter", 0) == 0 || a.rfind("--benchmark_list_tests", 0) == 0)
                 return usage_error(a + ": choose combinations in the config (or with --shard) instead");
             else if (a.rfind("--benchmark_", 0) == 0) opt.benchmark_args.push_back(a);
@@ -128,8 +130,10 @@ int run_command(int argc, char** argv) {
     }
     if (opt.config_path.empty()) return usage_error("no config given");
     if (!opt.callgrind_out.empty() && !opt.dry_run && !running_on_valgrind())
-        return usage_error("--instructions counts with callgrind: run under valgrind --tool=callgrind "
-                           "--instr-atstart=no --callgrind-out-file=" + opt.callgrind_out);
+        return usage_error(
+            "--instructions counts with callgrind: run under valgrind --tool=callgrind "
+            "--instr-atstart=no --callgrind-out-file=" +
+            opt.callgrind_out);
     if (opt.resume && opt.out.empty() && opt.dry_run) return usage_error("--resume and --dry-run do not go together");
     return run(opt);
 }
@@ -151,18 +155,18 @@ int merge_command(int argc, char** argv) {
                 std::fprintf(stderr, "accelbench merge: --shards expects a count > 0, got '%s'\n", argv[i]);
                 return 2;
             }
-        }
-        else if (a == "-h" || a == "--help") {
-            std::printf("usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
-                        "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
-                        "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
-                        "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa) differs\n"
-                        "  unless --allow-mixed, and a combination present in two inputs.\n"
-                        "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
-                        "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"
-                        "  and refuses rows that are not of CONFIG\n"
-                        "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
-                        "  instructions of a callgrind run added to a timed run of the same config)\n");
+        } else if (a == "-h" || a == "--help") {
+            std::printf(
+                "usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
+                "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
+                "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
+                "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa) differs\n"
+                "  unless --allow-mixed, and a combination present in two inputs.\n"
+                "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
+                "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"
+                "  and refuses rows that are not of CONFIG\n"
+                "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
+                "  instructions of a callgrind run added to a timed run of the same config)\n");
             return 0;
         } else if (a.rfind("-", 0) == 0) {
             std::fprintf(stderr, "accelbench merge: unknown option '%s'\n", a.c_str());

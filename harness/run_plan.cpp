@@ -100,16 +100,17 @@ void print_dry_run(const RunPlan& plan) {
         if (status.find("skip") == std::string::npos &&
             (repetitions_of(config, c) != config.repetitions || warmup_of(config, c) != config.warmup))
             status += "  [" + std::to_string(repetitions_of(config, c)) + " repetitions, warm-up " +
-                      std::to_string(warmup_of(config, c)) + "]";
+                std::to_string(warmup_of(config, c)) + "]";
         std::printf("%-4zu %-16s %s%s\n", i + 1, c.id.c_str(), c.name.c_str(), status.c_str());
     }
     std::printf("%zu combinations", plan.selected.size());
     if (plan.shard && plan.shard->count > 1)
         std::printf(" in shard %llu/%llu (of %zu in the config)", (unsigned long long)plan.shard->index,
                     (unsigned long long)plan.shard->count, plan.all.size());
-    std::printf(": %zu to measure, %zu skipped by rules; %d repetitions and warm-up %d unless shown, timeout %s s each\n",
-                plan.selected.size() - skipped, skipped, config.repetitions, config.warmup,
-                number_text(config.timeout_s, 6).c_str());
+    std::printf(
+        ": %zu to measure, %zu skipped by rules; %d repetitions and warm-up %d unless shown, timeout %s s each\n",
+        plan.selected.size() - skipped, skipped, config.repetitions, config.warmup,
+        number_text(config.timeout_s, 6).c_str());
 }
 
 void choose_output(RunPlan& plan, const RunOptions& options) {
@@ -117,11 +118,13 @@ void choose_output(RunPlan& plan, const RunOptions& options) {
     plan.out = options.out;
     if (plan.out.empty() && options.resume) {
         auto newest = newest_run(runs_dir, plan.config.name, shard_suffix(plan.shard));
-        if (!newest) throw UsageError("--resume without --out: no earlier run of '" + plan.config.name + "' in " + runs_dir);
+        if (!newest)
+            throw UsageError("--resume without --out: no earlier run of '" + plan.config.name + "' in " + runs_dir);
         plan.out = *newest;
     }
     if (plan.out.empty())
-        plan.out = runs_dir + "/" + plan.config.name + "-" + utc_now("%Y%m%d-%H%M%S") + shard_suffix(plan.shard) + ".csv";
+        plan.out =
+            runs_dir + "/" + plan.config.name + "-" + utc_now("%Y%m%d-%H%M%S") + shard_suffix(plan.shard) + ".csv";
     const std::string reps = repetitions_path(plan.out);
     require_regular_file_or_absent(plan.out, "--out (the results CSV)");
     require_regular_file_or_absent(reps, "the repetitions file beside --out");
@@ -131,8 +134,10 @@ void choose_output(RunPlan& plan, const RunOptions& options) {
     // Repetitions without their results file (deleted, or another run's): a new run would
     // append its samples to them. Refused; --resume drops them (they have no results rows).
     if (!options.resume && has_rows(reps))
-        throw UsageError("'" + reps + "' exists without results in '" + plan.out + "': its samples are another run's; "
-                         "remove it, pass --resume (which drops repetitions without a results row), or choose another --out");
+        throw UsageError(
+            "'" + reps + "' exists without results in '" + plan.out +
+            "': its samples are another run's; "
+            "remove it, pass --resume (which drops repetitions without a results row), or choose another --out");
     plan.lock = OutputLock({plan.out, reps});
     if (options.resume) plan.done = prepare_resume(plan.out, result_columns(), repetition_columns());
     for (const Combination* c : plan.selected)

@@ -32,13 +32,13 @@ struct UsageError : std::invalid_argument {
 struct RunPlan {
     ModelRegistry registry;
     Config config;
-    std::vector<Combination> all;           // the config's, in expansion order
-    std::optional<Shard> shard;             // --shard, else SLURM's array task
+    std::vector<Combination> all;              // the config's, in expansion order
+    std::optional<Shard> shard;                // --shard, else SLURM's array task
     std::vector<const Combination*> selected;  // this shard's
-    std::string out;                        // the results CSV (its repetitions beside it)
-    std::set<std::string> done;             // combo_ids already in `out` (--resume)
-    std::vector<const Combination*> to_do;  // selected minus done
-    OutputLock lock;                        // `out` and its repetitions, for the whole run
+    std::string out;                           // the results CSV (its repetitions beside it)
+    std::set<std::string> done;                // combo_ids already in `out` (--resume)
+    std::vector<const Combination*> to_do;     // selected minus done
+    OutputLock lock;                           // `out` and its repetitions, for the whole run
 };
 
 // The config (ConfigError lists its issues), its combinations and this shard's. Throws

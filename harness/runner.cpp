@@ -98,7 +98,9 @@ private:
                 }
             },
             limit);
-        if (o.timed_out) reference_timeout = time_limit_message(limit, "the reference pass (once per model, before its measurements)");
+        if (o.timed_out)
+            reference_timeout =
+                time_limit_message(limit, "the reference pass (once per model, before its measurements)");
         else if (!o.result) reference_error = "the reference process " + o.failure;
         else if (o.result->rfind("E", 0) == 0) reference_error = o.result->substr(1);
         else loaded_->reference = reference_from_bytes(o.result->substr(1));
@@ -127,8 +129,8 @@ public:
         } else if (!model.add_reference()) {
             r.measurement.status = model.reference_timeout.empty() ? "error" : "timeout";
             r.measurement.message = model.reference_timeout.empty()
-                                        ? "no error measurement: the reference cannot trace the model: " + model.reference_error
-                                        : model.reference_timeout;
+                ? "no error measurement: the reference cannot trace the model: " + model.reference_error
+                : model.reference_timeout;
         } else {
             const auto t0 = Clock::now();
             r.measurement = measure_combination(c, *loaded);
@@ -173,8 +175,9 @@ private:
 }  // namespace
 
 int run_plan(const RunPlan& plan, const RunOptions& options, const std::vector<RunSink*>& sinks) {
-    const RunContext context{plan.config, plan.out, plan.shard, plan.selected.size(),
-                             plan.selected.size() - plan.to_do.size(), plan.to_do.size()};
+    const RunContext context{
+        plan.config,      plan.out, plan.shard, plan.selected.size(), plan.selected.size() - plan.to_do.size(),
+        plan.to_do.size()};
     for (RunSink* s : sinks) s->context(context);
     // Not under callgrind, whose instruction counts are the point of such a run.
     const bool reference_wanted = plan.config.errors && options.callgrind_out.empty();

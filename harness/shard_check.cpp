@@ -13,8 +13,8 @@
 namespace accelbench {
 
 std::map<uint64_t, std::vector<const Combination*>> missing_by_shard(const std::vector<Combination>& all,
-                                                                    const std::set<std::string>& present,
-                                                                    uint64_t count) {
+                                                                     const std::set<std::string>& present,
+                                                                     uint64_t count) {
     std::map<uint64_t, std::vector<const Combination*>> missing;
     for (const auto& c : all)
         if (!present.count(c.id)) missing[c.hash % count].push_back(&c);
@@ -55,16 +55,19 @@ int check_shards_complete(const std::string& config_path, uint64_t shards, const
         n += combos.size();
         append_item(ids, ",", std::to_string(shard));
     }
-    std::fprintf(stderr, "accelbench merge: incomplete: %zu of the %zu combinations of %s are in no input; nothing "
-                         "written. Missing, by shard of %llu:\n", n, all.size(), config_path.c_str(),
-                 (unsigned long long)shards);
+    std::fprintf(stderr,
+                 "accelbench merge: incomplete: %zu of the %zu combinations of %s are in no input; nothing "
+                 "written. Missing, by shard of %llu:\n",
+                 n, all.size(), config_path.c_str(), (unsigned long long)shards);
     for (const auto& [shard, combos] : missing) {
         std::fprintf(stderr, "  shard %llu: %zu missing:", (unsigned long long)shard, combos.size());
         for (size_t i = 0; i < combos.size() && i < 3; ++i) std::fprintf(stderr, " %s", combos[i]->name.c_str());
         std::fprintf(stderr, "%s\n", combos.size() > 3 ? " ..." : "");
     }
-    std::fprintf(stderr, "accelbench merge: run shards %s again (--shard I/%llu --resume; under Slurm "
-                         "--array=%s) and merge again\n", ids.c_str(), (unsigned long long)shards, ids.c_str());
+    std::fprintf(stderr,
+                 "accelbench merge: run shards %s again (--shard I/%llu --resume; under Slurm "
+                 "--array=%s) and merge again\n",
+                 ids.c_str(), (unsigned long long)shards, ids.c_str());
     return 3;
 }
 

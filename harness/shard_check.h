@@ -16,8 +16,8 @@ namespace accelbench {
 // The combinations of `all` whose combo_id is not in `present`, by the shard of `count`
 // each belongs to (Shard::contains: hash % count).
 std::map<uint64_t, std::vector<const Combination*>> missing_by_shard(const std::vector<Combination>& all,
-                                                                    const std::set<std::string>& present,
-                                                                    uint64_t count);
+                                                                     const std::set<std::string>& present,
+                                                                     uint64_t count);
 
 // Checks that the result files `inputs` hold every combination of the config, naming on
 // stderr the missing ones by shard and the shards to run again (sbatch --array=<shards>).

@@ -20,9 +20,9 @@ namespace accelbench {
 struct Summary {
     size_t n = 0;
     double median = 0, mean = 0;
-    std::optional<double> stddev;          // sample standard deviation; n >= 2
-    std::optional<double> ci_lo, ci_hi;    // n >= 2
-    std::optional<double> coverage;        // of [ci_lo, ci_hi]
+    std::optional<double> stddev;        // sample standard deviation; n >= 2
+    std::optional<double> ci_lo, ci_hi;  // n >= 2
+    std::optional<double> coverage;      // of [ci_lo, ci_hi]
 };
 
 constexpr double kCiLevel = 0.95;

@@ -12,14 +12,14 @@ Tolerances (what "~", "about the same" and "best" mean here) are the constants b
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import pandas as pd
 
-from .report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
 from .formatting import fmt_sig, md_escape
+from .report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
 from .schema import Results
 from .selection import Picker, setting_spec
 from .tables import METRIC, preferred_variant
@@ -53,6 +53,7 @@ class Missing(Exception):
 
 # ---- sources ----------------------------------------------------------------------------
 
+
 class ReportSource:
     name = "report"
 
@@ -73,7 +74,9 @@ class ReportSource:
 
     def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
         if metric == "total":
-            return self.get(model, structure, "build", setting) + self.get(model, structure, "render", setting)
+            return self.get(model, structure, "build", setting) + self.get(
+                model, structure, "render", setting
+            )
         v = report_value(self.report_nums, model, structure, setting, METRIC[metric].report)
         if v is None or math.isnan(v):
             raise Missing(f"report has no {metric} for {structure} {setting} on {model}")
@@ -86,8 +89,11 @@ class OurSource:
     def __init__(self, results: Results, report_nums: pd.DataFrame):
         self.results = results
         self.picker = Picker(results)
-        self.depths = [s.split("=")[1] for s in report_nums.loc[report_nums["table"] == 2, "setting"]
-                       if s.startswith("maxDepth=")]
+        self.depths = [
+            s.split("=")[1]
+            for s in report_nums.loc[report_nums["table"] == 2, "setting"]
+            if s.startswith("maxDepth=")
+        ]
         self._groups: set[str] = set()
         self.variants_used: set[str] = set()
 
@@ -108,7 +114,9 @@ class OurSource:
 
     def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
         if metric == "total":
-            return self.get(model, structure, "build", setting) + self.get(model, structure, "render", setting)
+            return self.get(model, structure, "build", setting) + self.get(
+                model, structure, "render", setting
+            )
         ours = self.model(model)
         spec = setting_spec(setting, structure, self.picker, ours, self.depths)
         variant = preferred_variant(self.picker.variants([ours], spec))
@@ -126,6 +134,7 @@ class OurSource:
 
 
 # ---- building blocks (each returns (holds, evidence)) -------------------------------------
+
 
 def short(model: str) -> str:
     return REPORT_MODEL[model].short
@@ -154,16 +163,19 @@ def count_text(flags: list[bool], quantifier: str) -> str:
     return f"{sum(flags)}/{len(flags)} (needs {need})"
 
 
-def ranking(src, models, metric, winner, extreme="min", quantifier="all",
-            structures=("bvh", "lbvh", "kdtree")):
+def ranking(
+    src, models, metric, winner, extreme="min", quantifier="all", structures=("bvh", "lbvh", "kdtree")
+):
     flags, parts = [], []
     for m in models:
         vals = {s: src.get(m, s, metric) for s in structures}
         order = sorted(vals, key=vals.get)
         best = order[0] if extreme == "min" else order[-1]
         flags.append(best == winner)
-        parts.append(f"{short(m)} {'✓' if flags[-1] else '✗'} " +
-                     " < ".join(f"{STRUCTURE_SHORT[s]} {fmt_sig(vals[s])}" for s in order))
+        parts.append(
+            f"{short(m)} {'✓' if flags[-1] else '✗'} "
+            + " < ".join(f"{STRUCTURE_SHORT[s]} {fmt_sig(vals[s])}" for s in order)
+        )
     return quantify(flags, quantifier), f"{count_text(flags, quantifier)}: " + "; ".join(parts)
 
 
@@ -172,10 +184,12 @@ def factor(src, pairs, target, label):
     ratios = [num() / den() for num, den in pairs]
     gm = math.exp(sum(math.log(r) for r in ratios) / len(ratios))
     lo, hi = approx_range(target)
-    each = "" if len(ratios) == 1 else " (geometric mean of " + ", ".join(
-        f"{fmt_sig(r)}" for r in ratios) + ")"
-    return approx(gm, target), (f"{label} {fmt_sig(gm)}x{each}; ~{target:g}x accepts "
-                                f"{fmt_sig(lo)}-{fmt_sig(hi)}x")
+    each = (
+        "" if len(ratios) == 1 else " (geometric mean of " + ", ".join(f"{fmt_sig(r)}" for r in ratios) + ")"
+    )
+    return approx(gm, target), (
+        f"{label} {fmt_sig(gm)}x{each}; ~{target:g}x accepts {fmt_sig(lo)}-{fmt_sig(hi)}x"
+    )
 
 
 def similar(src, models, a, b, metric, quantifier, within=SIMILAR_FACTOR):
@@ -186,7 +200,8 @@ def similar(src, models, a, b, metric, quantifier, within=SIMILAR_FACTOR):
         parts.append(f"{short(m)} {fmt_sig(r)}{'' if flags[-1] else ' ✗'}")
     return quantify(flags, quantifier), (
         f"{STRUCTURE_SHORT[a]}/{STRUCTURE_SHORT[b]} {metric}: {', '.join(parts)}; "
-        f"within {within}x on {count_text(flags, quantifier)}")
+        f"within {within}x on {count_text(flags, quantifier)}"
+    )
 
 
 def compare(src, models, a, b, metric, quantifier="all"):
@@ -198,15 +213,20 @@ def compare(src, models, a, b, metric, quantifier="all"):
         parts.append(f"{short(m)} {fmt_sig(va)} {'<' if flags[-1] else '≥'} {fmt_sig(vb)}")
     return quantify(flags, quantifier), (
         f"{STRUCTURE_SHORT[a]} vs {STRUCTURE_SHORT[b]} {metric}: {'; '.join(parts)}; "
-        f"{count_text(flags, quantifier)}")
+        f"{count_text(flags, quantifier)}"
+    )
 
 
 def more_than(src, model, num, den, metric, minimum):
     ratios = {d: src.get(model, num, metric) / src.get(model, d, metric) for d in den}
     ok = all(r > minimum for r in ratios.values())
-    return ok, (f"{short(model)}: " + ", ".join(
-        f"{STRUCTURE_SHORT[num]}/{STRUCTURE_SHORT[d]} {metric} {fmt_sig(r)}x"
-        for d, r in ratios.items()) + f" (needs > {minimum}x each)")
+    return ok, (
+        f"{short(model)}: "
+        + ", ".join(
+            f"{STRUCTURE_SHORT[num]}/{STRUCTURE_SHORT[d]} {metric} {fmt_sig(r)}x" for d, r in ratios.items()
+        )
+        + f" (needs > {minimum}x each)"
+    )
 
 
 def kd(src, metric, setting):
@@ -223,18 +243,23 @@ def best_setting(src, settings, winner, metric="total"):
     vals = {s: kd(src, metric, s) for s in settings}
     low = min(vals.values())
     ok = vals[winner] <= low * (1 + BEST_TOL)
-    return ok, (", ".join(f"{s}: {fmt_sig(v)}" for s, v in vals.items()) +
-                f" (build + render; best within {BEST_TOL:.0%} of the lowest)")
+    return ok, (
+        ", ".join(f"{s}: {fmt_sig(v)}" for s, v in vals.items())
+        + f" (build + render; best within {BEST_TOL:.0%} of the lowest)"
+    )
 
 
 def trend(src, settings, metric, rising):
     vals = [kd(src, metric, s) for s in settings]
-    ok = all((b >= a * (1 - TREND_NOISE)) if rising else (b <= a * (1 + TREND_NOISE))
-             for a, b in zip(vals, vals[1:]))
+    ok = all(
+        (b >= a * (1 - TREND_NOISE)) if rising else (b <= a * (1 + TREND_NOISE))
+        for a, b in zip(vals, vals[1:])
+    )
     return ok, f"{metric} " + " → ".join(fmt_sig(v) for v in vals)
 
 
 # ---- the claims -------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class Claim:
@@ -251,6 +276,7 @@ def claim(id_: str, section: str, text: str):
     def register(fn):
         CLAIMS.append(Claim(id_, section, text, fn))
         return fn
+
     return register
 
 
@@ -261,17 +287,29 @@ DEPTHS = ("maxDepth=5", "maxDepth=10", "maxDepth=28", "maxDepth=100")
 # Table 2 claims of the form "setting A -> B changes a metric ~N x": (id, text, metric,
 # numerator setting, denominator setting, N).
 KD_FACTOR_CLAIMS = [
-    ("5.1-a", "maxPrims 1 → 100 cuts kd-tree build time ~2x (the text says 'increased'; its "
-     "table shows a fall)", "build", "maxPrims=1", "maxPrims=100", 2),
+    (
+        "5.1-a",
+        "maxPrims 1 → 100 cuts kd-tree build time ~2x (the text says 'increased'; its table shows a fall)",
+        "build",
+        "maxPrims=1",
+        "maxPrims=100",
+        2,
+    ),
     ("5.1-b", "maxPrims 1 → 100 cuts #nodes ~418x", "nodes", "maxPrims=1", "maxPrims=100", 418),
     ("5.1-c", "maxPrims 1 → 100 raises #int. tests ~61x", "prim_tests", "maxPrims=100", "maxPrims=1", 61),
     ("5.1-d", "maxPrims 1 → 100 raises render time ~1.2x", "render", "maxPrims=100", "maxPrims=1", 1.2),
-    ("5.1-g", "max_depth 5 → 10 cuts total (build + render) time ~3x", "total", "maxDepth=5", "maxDepth=10", 3),
+    (
+        "5.1-g",
+        "max_depth 5 → 10 cuts total (build + render) time ~3x",
+        "total",
+        "maxDepth=5",
+        "maxDepth=10",
+        3,
+    ),
     ("5.1-h", "max_depth 10 → 28 improves total time ~1.2x", "total", "maxDepth=10", "maxDepth=28", 1.2),
 ]
 for _id, _text, _metric, _num, _den, _target in KD_FACTOR_CLAIMS:
-    claim(_id, "5.1", _text)(
-        lambda src, m=_metric, n=_num, d=_den, t=_target: kd_factor(src, m, n, d, t))
+    claim(_id, "5.1", _text)(lambda src, m=_metric, n=_num, d=_den, t=_target: kd_factor(src, m, n, d, t))
 
 
 @claim("5.1-e", "5.1", "maxPrims=10 is the best trade-off of 1/10/100 (lowest build + render)")
@@ -289,8 +327,9 @@ def _(src):
 @claim("5.1-i", "5.1", "Depth saturates above ~28: depth 28 and 100 give the same tree (#nodes)")
 def _(src):
     a, b = kd(src, "nodes", "maxDepth=28"), kd(src, "nodes", "maxDepth=100")
-    return abs(b - a) <= SAME_TREE_RTOL * a, (f"nodes {fmt_sig(a)} vs {fmt_sig(b)} "
-                                              f"(same within {SAME_TREE_RTOL:.0%})")
+    return abs(b - a) <= SAME_TREE_RTOL * a, (
+        f"nodes {fmt_sig(a)} vs {fmt_sig(b)} (same within {SAME_TREE_RTOL:.0%})"
+    )
 
 
 @claim("5.1-j", "5.1", "Depth 28 (Equation 5) gives the best total of the depths tried")
@@ -310,8 +349,15 @@ def _(src):
 
 @claim("5.2-c", "5.2", "LBVH builds ~2x slower than BVH")
 def _(src):
-    return factor(src, [((lambda m=m: src.get(m, "lbvh", "build")), (lambda m=m: src.get(m, "bvh", "build")))
-                        for m in TABLE4_MODELS], 2, "LBVH/BVH build")
+    return factor(
+        src,
+        [
+            ((lambda m=m: src.get(m, "lbvh", "build")), (lambda m=m: src.get(m, "bvh", "build")))
+            for m in TABLE4_MODELS
+        ],
+        2,
+        "LBVH/BVH build",
+    )
 
 
 @claim("5.2-d", "5.2", "BVH and LBVH render about the same")
@@ -334,8 +380,12 @@ def _(src):
     return similar(src, TABLE4_MODELS, "lbvh", "bvh", "nodes", "all", within=1.1)
 
 
-@claim("5.2-h", "5.2", "kd-tree has more nodes than BVH on the small models (bunny, Igea) and "
-       "fewer on the large ones (Dragon, Buddha)")
+@claim(
+    "5.2-h",
+    "5.2",
+    "kd-tree has more nodes than BVH on the small models (bunny, Igea) and "
+    "fewer on the large ones (Dragon, Buddha)",
+)
 def _(src):
     ok_s, ev_s = compare(src, SMALL_MODELS, "bvh", "kdtree", "nodes")
     ok_l, ev_l = compare(src, LARGE_MODELS, "kdtree", "bvh", "nodes")
@@ -354,10 +404,14 @@ def _(src):
 
 @claim("5.3-b", "5.3", "kd-tree renders more than 2x faster than BVH and LBVH on Trees")
 def _(src):
-    ratios = {s: src.get("trees", s, "render") / src.get("trees", "kdtree", "render") for s in ("bvh", "lbvh")}
+    ratios = {
+        s: src.get("trees", s, "render") / src.get("trees", "kdtree", "render") for s in ("bvh", "lbvh")
+    }
     return all(r > 2 for r in ratios.values()), (
-        "Trees: " + ", ".join(f"{STRUCTURE_SHORT[s]}/kd-tree render {fmt_sig(r)}x" for s, r in ratios.items())
-        + " (needs > 2x each)")
+        "Trees: "
+        + ", ".join(f"{STRUCTURE_SHORT[s]}/kd-tree render {fmt_sig(r)}x" for s, r in ratios.items())
+        + " (needs > 2x each)"
+    )
 
 
 @claim("5.3-c", "5.3", "kd-tree takes more than twice as long to build as BVH and LBVH on Trees")
@@ -415,6 +469,7 @@ CLAIMS.sort(key=lambda c: (c.section, c.id))  # ids follow the report's sections
 
 # ---- evaluation and output ----------------------------------------------------------------
 
+
 @dataclass
 class Finding:
     verdict: str
@@ -431,8 +486,10 @@ def evaluate(c: Claim, src) -> Finding:
         return Finding(NOT_COMPARABLE, "a value the claim divides by is zero")
     groups = src.groups()
     if len(groups) > 1:
-        return Finding(NOT_COMPARABLE, f"{evidence} — but the rows come from different "
-                                       f"provenance groups ({', '.join(sorted(groups))})")
+        return Finding(
+            NOT_COMPARABLE,
+            f"{evidence} — but the rows come from different provenance groups ({', '.join(sorted(groups))})",
+        )
     return Finding(HOLDS if holds else FAILS, evidence)
 
 
@@ -447,33 +504,38 @@ class ClaimRow:
     def machine_dependent(self) -> bool:
         """Judged on both runs with opposite verdicts: the same code holds the claim on one
         machine and not on the other."""
-        return (self.reference is not None and {self.ours.verdict, self.reference.verdict}
-                == {HOLDS, FAILS})
+        return self.reference is not None and {self.ours.verdict, self.reference.verdict} == {HOLDS, FAILS}
 
 
-def evaluate_all(results: Results, report_nums: pd.DataFrame,
-                 reference: Results | None = None) -> tuple[list[ClaimRow], OurSource]:
+def evaluate_all(
+    results: Results, report_nums: pd.DataFrame, reference: Results | None = None
+) -> tuple[list[ClaimRow], OurSource]:
     rsrc, osrc = ReportSource(report_nums), OurSource(results, report_nums)
     refsrc = OurSource(reference, report_nums) if reference is not None else None
-    return [ClaimRow(c, evaluate(c, rsrc), evaluate(c, osrc),
-                     evaluate(c, refsrc) if refsrc is not None else None) for c in CLAIMS], osrc
+    return [
+        ClaimRow(c, evaluate(c, rsrc), evaluate(c, osrc), evaluate(c, refsrc) if refsrc is not None else None)
+        for c in CLAIMS
+    ], osrc
 
 
 def tolerance_text() -> str:
     lo12, hi12 = approx_range(1.2)
     lo2, hi2 = approx_range(2)
-    return (f"Tolerances (accelbench_analysis/claims.py): '~N x' holds when the measured factor "
-            f"lies within a factor {APPROX_FACTOR} of N and keeps at least "
-            f"{APPROX_MIN_EFFECT:.0%} of the claimed effect in log terms (~1.2x accepts "
-            f"{fmt_sig(lo12)}-{fmt_sig(hi12)}x, ~2x accepts {fmt_sig(lo2)}-{fmt_sig(hi2)}x); "
-            f"'about the same' = within a factor {SIMILAR_FACTOR} (node counts: 1.1); 'the same "
-            f"tree' = node counts within {SAME_TREE_RTOL:.0%}; 'best' = within {BEST_TOL:.0%} "
-            f"of the lowest; trends may reverse by at most {TREND_NOISE:.0%} per step. 'most' "
-            f"= more than half of the models. Our side uses medians.")
+    return (
+        f"Tolerances (accelbench_analysis/claims.py): '~N x' holds when the measured factor "
+        f"lies within a factor {APPROX_FACTOR} of N and keeps at least "
+        f"{APPROX_MIN_EFFECT:.0%} of the claimed effect in log terms (~1.2x accepts "
+        f"{fmt_sig(lo12)}-{fmt_sig(hi12)}x, ~2x accepts {fmt_sig(lo2)}-{fmt_sig(hi2)}x); "
+        f"'about the same' = within a factor {SIMILAR_FACTOR} (node counts: 1.1); 'the same "
+        f"tree' = node counts within {SAME_TREE_RTOL:.0%}; 'best' = within {BEST_TOL:.0%} "
+        f"of the lowest; trends may reverse by at most {TREND_NOISE:.0%} per step. 'most' "
+        f"= more than half of the models. Our side uses medians."
+    )
 
 
-def claims_markdown(rows: list[ClaimRow], results: Results, osrc: OurSource,
-                    reference: Results | None = None) -> str:
+def claims_markdown(
+    rows: list[ClaimRow], results: Results, osrc: OurSource, reference: Results | None = None
+) -> str:
     out = ["# The report's claims, checked", ""]
     out += [f"> **Warning:** {md_escape(w)}" + "\n" for w in results.warnings]
     counts = {v: sum(r.ours.verdict == v for r in rows) for v in (HOLDS, FAILS, NOT_COMPARABLE)}
@@ -493,34 +555,49 @@ def claims_markdown(rows: list[ClaimRow], results: Results, osrc: OurSource,
         "",
     ]
     if osrc.variants_used:
-        out += [f"Our BVH/LBVH rows use traversal={', '.join(sorted(osrc.variants_used))} "
-                f"(the report's order is preferred where both modes were measured).", ""]
+        out += [
+            f"Our BVH/LBVH rows use traversal={', '.join(sorted(osrc.variants_used))} "
+            f"(the report's order is preferred where both modes were measured).",
+            "",
+        ]
     if reference is None:
-        out += ["| # | claim | report's evidence | report's data | our evidence | verdict (ours) |",
-                "|:---|:---|:---|:---|:---|:---|"]
+        out += [
+            "| # | claim | report's evidence | report's data | our evidence | verdict (ours) |",
+            "|:---|:---|:---|:---|:---|:---|",
+        ]
         for r in rows:
-            out.append(f"| {r.claim.id} | {md_escape(r.claim.text)} | {md_escape(r.report.evidence)} | "
-                       f"{r.report.verdict} | {md_escape(r.ours.evidence)} | **{r.ours.verdict}** |")
+            out.append(
+                f"| {r.claim.id} | {md_escape(r.claim.text)} | {md_escape(r.report.evidence)} | "
+                f"{r.report.verdict} | {md_escape(r.ours.evidence)} | **{r.ours.verdict}** |"
+            )
         return "\n".join(out) + "\n"
     dependent = [r.claim.id for r in rows if r.machine_dependent]
-    out += [f"The last columns: the same claim on the committed reference run "
-            f"({'; '.join(g.describe() for g in reference.groups)}). Machine-dependent "
-            f"(holds on one run, not on the other): "
-            f"{', '.join(dependent) if dependent else 'none'}.", ""]
-    out += ["| # | claim | report's evidence | report's data | our evidence | verdict (ours) "
-            "| reference run's evidence | verdict (reference run) | |",
-            "|:---|:---|:---|:---|:---|:---|:---|:---|:---|"]
+    out += [
+        f"The last columns: the same claim on the committed reference run "
+        f"({'; '.join(g.describe() for g in reference.groups)}). Machine-dependent "
+        f"(holds on one run, not on the other): "
+        f"{', '.join(dependent) if dependent else 'none'}.",
+        "",
+    ]
+    out += [
+        "| # | claim | report's evidence | report's data | our evidence | verdict (ours) "
+        "| reference run's evidence | verdict (reference run) | |",
+        "|:---|:---|:---|:---|:---|:---|:---|:---|:---|",
+    ]
     for r in rows:
         ref = r.reference
         flag = "**machine-dependent**" if r.machine_dependent else ""
-        out.append(f"| {r.claim.id} | {md_escape(r.claim.text)} | {md_escape(r.report.evidence)} | "
-                   f"{r.report.verdict} | {md_escape(r.ours.evidence)} | **{r.ours.verdict}** | "
-                   f"{md_escape(ref.evidence)} | {ref.verdict} | {flag} |")
+        out.append(
+            f"| {r.claim.id} | {md_escape(r.claim.text)} | {md_escape(r.report.evidence)} | "
+            f"{r.report.verdict} | {md_escape(r.ours.evidence)} | **{r.ours.verdict}** | "
+            f"{md_escape(ref.evidence)} | {ref.verdict} | {flag} |"
+        )
     return "\n".join(out) + "\n"
 
 
-def write_claims(results: Results, report_nums: pd.DataFrame, out_dir: Path,
-                 reference: Results | None = None) -> tuple[Path, list[ClaimRow]]:
+def write_claims(
+    results: Results, report_nums: pd.DataFrame, out_dir: Path, reference: Results | None = None
+) -> tuple[Path, list[ClaimRow]]:
     out_dir.mkdir(parents=True, exist_ok=True)
     rows, osrc = evaluate_all(results, report_nums, reference)
     path = out_dir / "claims.md"

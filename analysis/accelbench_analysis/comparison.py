@@ -30,14 +30,13 @@ from .tables import METRIC, ratio
 
 TIME_METRICS = ["build", "render"]
 COUNT_METRICS = ["prim_tests", "nodes"]
-HEADER = ["model", "structure", "report", "this run", "reference run", "this/report",
-          "this/reference"]
+HEADER = ["model", "structure", "report", "this run", "reference run", "this/report", "this/reference"]
 
 
 @dataclass
 class ThreeWay:
     metric: str
-    model: str          # the report's model label (our stand-in named where it is one)
+    model: str  # the report's model label (our stand-in named where it is one)
     structure: str
     report: float | None
     this: float | None
@@ -54,8 +53,10 @@ class ThreeWay:
 
 def _cells(report_nums: pd.DataFrame) -> list[tuple[str, str, str, str]]:
     """(report model, structure key, setting, label) of every cell compared, table order."""
-    out = [(TABLE2_MODEL, "kdtree", s, f"kd-tree {s}")
-           for s in report_nums.loc[report_nums["table"] == 2, "setting"]]
+    out = [
+        (TABLE2_MODEL, "kdtree", s, f"kd-tree {s}")
+        for s in report_nums.loc[report_nums["table"] == 2, "setting"]
+    ]
     for rm in TABLE4_MODELS + TABLE5_MODELS:
         out += [(rm, s.key, "default", s.label) for s in STRUCTURES]
     return out
@@ -70,8 +71,7 @@ def _ours(src: OurSource | None, rm: str, structure: str, metric: str, setting: 
         return None
 
 
-def three_way(this: Results, reference: Results | None,
-              report_nums: pd.DataFrame) -> list[ThreeWay]:
+def three_way(this: Results, reference: Results | None, report_nums: pd.DataFrame) -> list[ThreeWay]:
     """Every cell where this run or the reference run has a number."""
     here = OurSource(this, report_nums)
     there = OurSource(reference, report_nums) if reference is not None else None
@@ -81,11 +81,19 @@ def three_way(this: Results, reference: Results | None,
             ours_model = here.model(rm)
             model = REPORT_MODEL[rm].label + (f" → {ours_model}" if REPORT_MODEL[rm].stand_in else "")
             s = next(s for s in STRUCTURES if s.key == skey)
-            rep = (report_value(report_nums, rm, s.report_accel, setting, METRIC[metric].report)
-                   if s.report_accel else None)
-            row = ThreeWay(metric, model, label, rep,
-                           _ours(here, rm, skey, metric, setting),
-                           _ours(there, rm, skey, metric, setting))
+            rep = (
+                report_value(report_nums, rm, s.report_accel, setting, METRIC[metric].report)
+                if s.report_accel
+                else None
+            )
+            row = ThreeWay(
+                metric,
+                model,
+                label,
+                rep,
+                _ours(here, rm, skey, metric, setting),
+                _ours(there, rm, skey, metric, setting),
+            )
             if row.this is not None or row.reference is not None:
                 out.append(row)
     return out
@@ -98,9 +106,19 @@ def _fmt(metric: str, v) -> str:
 
 
 def metric_table(rows: list[ThreeWay], metric: str) -> list[str]:
-    body = [[r.model, r.structure, _fmt(metric, r.report), _fmt(metric, r.this),
-             _fmt(metric, r.reference), fmt_sig(r.this_over_report),
-             fmt_sig(r.this_over_reference)] for r in rows if r.metric == metric]
+    body = [
+        [
+            r.model,
+            r.structure,
+            _fmt(metric, r.report),
+            _fmt(metric, r.this),
+            _fmt(metric, r.reference),
+            fmt_sig(r.this_over_report),
+            fmt_sig(r.this_over_reference),
+        ]
+        for r in rows
+        if r.metric == metric
+    ]
     return md_table(HEADER, body, align="ll") if body else []
 
 
@@ -109,19 +127,32 @@ def reference_text(reference: Results | None, reference_dir: Path | None) -> str
         where = f" ({reference_dir}/csv has none of this run's CSVs)" if reference_dir else ""
         return f"No committed reference run to compare with{where}: its column is empty."
     g = reference.groups
-    desc = "; ".join(f"commit {x.fields['git_sha'][:12]}"
-                     + (" (dirty)" if x.fields["git_dirty"] == "true" else "")
-                     + f" on {x.fields['cpu']}" for x in g)
-    return (f"The reference run: `{reference_dir}` ({desc}; "
-            f"{', '.join(Path(f).name for f in reference.files)}).")
+    desc = "; ".join(
+        f"commit {x.fields['git_sha'][:12]}"
+        + (" (dirty)" if x.fields["git_dirty"] == "true" else "")
+        + f" on {x.fields['cpu']}"
+        for x in g
+    )
+    return (
+        f"The reference run: `{reference_dir}` ({desc}; {', '.join(Path(f).name for f in reference.files)})."
+    )
 
 
-def comparison_markdown(rows: list[ThreeWay], this: Results, reference: Results | None,
-                        reference_dir: Path | None, metrics: list[str] | None = None) -> list[str]:
+def comparison_markdown(
+    rows: list[ThreeWay],
+    this: Results,
+    reference: Results | None,
+    reference_dir: Path | None,
+    metrics: list[str] | None = None,
+) -> list[str]:
     """The three-way tables, one per metric (all four unless `metrics` says)."""
     out = [reference_text(reference, reference_dir), ""]
-    labels = {"build": "Build time (s, median)", "render": "Render time (s, median)",
-              "prim_tests": METRIC["prim_tests"].label, "nodes": METRIC["nodes"].label}
+    labels = {
+        "build": "Build time (s, median)",
+        "render": "Render time (s, median)",
+        "prim_tests": METRIC["prim_tests"].label,
+        "nodes": METRIC["nodes"].label,
+    }
     for m in metrics or TIME_METRICS + COUNT_METRICS:
         table = metric_table(rows, m)
         if table:
@@ -131,15 +162,20 @@ def comparison_markdown(rows: list[ThreeWay], this: Results, reference: Results 
     return out
 
 
-def write_comparison(rows: list[ThreeWay], this: Results, reference: Results | None,
-                     reference_dir: Path | None, out_dir: Path) -> Path:
+def write_comparison(
+    rows: list[ThreeWay], this: Results, reference: Results | None, reference_dir: Path | None, out_dir: Path
+) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "comparison.md"
-    text = ["# This run, the report and the committed reference run", "",
-            "Per cell of the report's Tables 2, 4 and 5: the report's number, this run's, the "
-            "committed reference run's, and the ratios this/report and this/reference. Counts "
-            "are deterministic (this/reference 1 = the same trees and work); times compare "
-            "machines (the report's was much slower, so read its ratio for orderings, not "
-            "size).", ""]
+    text = [
+        "# This run, the report and the committed reference run",
+        "",
+        "Per cell of the report's Tables 2, 4 and 5: the report's number, this run's, the "
+        "committed reference run's, and the ratios this/report and this/reference. Counts "
+        "are deterministic (this/reference 1 = the same trees and work); times compare "
+        "machines (the report's was much slower, so read its ratio for orderings, not "
+        "size).",
+        "",
+    ]
     path.write_text("\n".join(text + comparison_markdown(rows, this, reference, reference_dir)))
     return path

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import pandas as pd
 
-from .formatting import fmt_count, fmt_sig, is_missing
+from .formatting import fmt_count, fmt_sig
 
 NOT_MEASURED = "not measured"
 NOT_APPLICABLE = "n/a"
@@ -29,9 +29,9 @@ NOT_APPLICABLE = "n/a"
 @dataclass(frozen=True)
 class ErrorMetric:
     column: str
-    label: str          # a table row's or section's label
-    short: str          # a column header in wide tables
-    kind: str           # "count", "ulp" or "fraction": how the value is printed
+    label: str  # a table row's or section's label
+    short: str  # a column header in wide tables
+    kind: str  # "count", "ulp" or "fraction": how the value is printed
     image: bool = False  # only image runs (shading=true) have it
 
 
@@ -69,8 +69,9 @@ def any_error_values(rows: pd.DataFrame) -> bool:
 
 def shown_metrics(rows: pd.DataFrame) -> list[ErrorMetric]:
     """Every error metric, the image ones only when some row has an image value."""
-    has_image = any(m.column in rows.columns and rows[m.column].notna().any()
-                    for m in ERROR_METRICS if m.image)
+    has_image = any(
+        m.column in rows.columns and rows[m.column].notna().any() for m in ERROR_METRICS if m.image
+    )
     return [m for m in ERROR_METRICS if has_image or not m.image]
 
 
@@ -99,8 +100,10 @@ def compact_errors(row) -> str:
     """The four counts in one cell ("0 / 2 / 0 / 0"), or "not measured"."""
     if not error_measured(row):
         return NOT_MEASURED
-    return " / ".join(error_text(row, ERROR_METRIC[c]) for c in
-                      ("false_misses", "false_hits", "prim_mismatches", "nan_results"))
+    return " / ".join(
+        error_text(row, ERROR_METRIC[c])
+        for c in ("false_misses", "false_hits", "prim_mismatches", "nan_results")
+    )
 
 
 def wrong_answers(rows: pd.DataFrame) -> pd.Series:
@@ -111,13 +114,17 @@ def wrong_answers(rows: pd.DataFrame) -> pd.Series:
 def note_errors(rows: pd.DataFrame) -> str:
     """What the error numbers are, or that the CSV has none; for every table's notes."""
     if not any_error_values(rows):
-        return ("Error against the reference: not measured. No row of the CSV has error "
-                "values (the harness ran without the reference comparison, config "
-                "`errors: false`, or predates it); the error rows/columns are kept and say "
-                "so instead of being dropped.")
-    return ("Errors are ours only (the report measured none): counts over each row's primary "
-            "rays against the double-precision `reference` accelerator. Wrong primitive: both "
-            "hit, different primitive, t differs by more than 64 float ulps (ties are not "
-            "errors). t error: float-ulp distance of t where both hit the same primitive "
-            "(n/a: no ray qualified). 'not measured': the comparison did not run for that "
-            "row.")
+        return (
+            "Error against the reference: not measured. No row of the CSV has error "
+            "values (the harness ran without the reference comparison, config "
+            "`errors: false`, or predates it); the error rows/columns are kept and say "
+            "so instead of being dropped."
+        )
+    return (
+        "Errors are ours only (the report measured none): counts over each row's primary "
+        "rays against the double-precision `reference` accelerator. Wrong primitive: both "
+        "hit, different primitive, t differs by more than 64 float ulps (ties are not "
+        "errors). t error: float-ulp distance of t where both hit the same primitive "
+        "(n/a: no ray qualified). 'not measured': the comparison did not run for that "
+        "row."
+    )

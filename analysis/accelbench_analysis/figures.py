@@ -32,8 +32,13 @@ from .tables import preferred_variant, ratio, structure_rows  # noqa: E402
 SEED = 0
 NO_MODES = "own (no modes)"  # traversal label of structures without traversal modes
 DPI = 130
-STRUCTURE_COLOURS = {"BVH (median)": "#1f77b4", "LBVH": "#ff7f0e", "kd-tree": "#2ca02c",
-                     "BVH (binned SAH)": "#9467bd", "Embree": "#7f7f7f"}
+STRUCTURE_COLOURS = {
+    "BVH (median)": "#1f77b4",
+    "LBVH": "#ff7f0e",
+    "kd-tree": "#2ca02c",
+    "BVH (binned SAH)": "#9467bd",
+    "Embree": "#7f7f7f",
+}
 ACCEL_COLOURS = {"bvh": "#1f77b4", "lbvh": "#ff7f0e", "kdtree": "#2ca02c", "embree": "#7f7f7f"}
 SOURCE_COLOURS = {"ours": "#d62728", "report": "#7f7f7f"}
 
@@ -75,12 +80,29 @@ def structure_frame(results: Results) -> pd.DataFrame:
             if not pick.ok:
                 continue
             r = pick.row
-            records.append({
-                "model": name, "structure": sr.structure.label,
-                "traversal": sr.variant or NO_MODES, "structure_key": sr.structure.key,
-                **{c: r[c] for c in ("build_s_median", "build_s_ci_lo", "build_s_ci_hi",
-                                      "render_s_median", "render_s_ci_lo", "render_s_ci_hi",
-                                      "prim_tests", "node_visits", "rays", "shadow_rays")}})
+            records.append(
+                {
+                    "model": name,
+                    "structure": sr.structure.label,
+                    "traversal": sr.variant or NO_MODES,
+                    "structure_key": sr.structure.key,
+                    **{
+                        c: r[c]
+                        for c in (
+                            "build_s_median",
+                            "build_s_ci_lo",
+                            "build_s_ci_hi",
+                            "render_s_median",
+                            "render_s_ci_lo",
+                            "render_s_ci_hi",
+                            "prim_tests",
+                            "node_visits",
+                            "rays",
+                            "shadow_rays",
+                        )
+                    },
+                }
+            )
     return pd.DataFrame.from_records(records)
 
 
@@ -111,6 +133,7 @@ def _palette(labels) -> dict[str, str]:
 
 # ---- build vs render ----------------------------------------------------------------------
 
+
 def build_vs_render(results: Results, path: Path) -> Path | Skipped:
     df = structure_frame(results)
     df = df.dropna(subset=["build_s_median", "render_s_median"]) if len(df) else df
@@ -118,19 +141,39 @@ def build_vs_render(results: Results, path: Path) -> Path | Skipped:
         return Skipped("no ok rows with build and render times at the report's default parameters")
     setup()
     order = [s.label for s in STRUCTURES if s.label in set(df["structure"])]
-    g = sns.relplot(data=df, x="build_s_median", y="render_s_median", hue="structure",
-                    hue_order=order, palette=_palette(order), style="traversal", s=70,
-                    col="model", col_wrap=min(3, df["model"].nunique()), height=3.0,
-                    aspect=1.15, facet_kws={"sharex": True, "sharey": True})
+    g = sns.relplot(
+        data=df,
+        x="build_s_median",
+        y="render_s_median",
+        hue="structure",
+        hue_order=order,
+        palette=_palette(order),
+        style="traversal",
+        s=70,
+        col="model",
+        col_wrap=min(3, df["model"].nunique()),
+        height=3.0,
+        aspect=1.15,
+        facet_kws={"sharex": True, "sharey": True},
+    )
 
     def errorbars(data, **_):
         ax = plt.gca()
         for _, r in data.iterrows():
-            ax.errorbar(r["build_s_median"], r["render_s_median"],
-                        xerr=[[r["build_s_median"] - r["build_s_ci_lo"]], [r["build_s_ci_hi"] - r["build_s_median"]]],
-                        yerr=[[r["render_s_median"] - r["render_s_ci_lo"]], [r["render_s_ci_hi"] - r["render_s_median"]]],
-                        fmt="none", ecolor=STRUCTURE_COLOURS.get(r["structure"], "black"),
-                        elinewidth=1, capsize=2, alpha=0.8)
+            ax.errorbar(
+                r["build_s_median"],
+                r["render_s_median"],
+                xerr=[[r["build_s_median"] - r["build_s_ci_lo"]], [r["build_s_ci_hi"] - r["build_s_median"]]],
+                yerr=[
+                    [r["render_s_median"] - r["render_s_ci_lo"]],
+                    [r["render_s_ci_hi"] - r["render_s_median"]],
+                ],
+                fmt="none",
+                ecolor=STRUCTURE_COLOURS.get(r["structure"], "black"),
+                elinewidth=1,
+                capsize=2,
+                alpha=0.8,
+            )
 
     g.map_dataframe(errorbars)
     g.set(xscale="log", yscale="log")
@@ -139,16 +182,20 @@ def build_vs_render(results: Results, path: Path) -> Path | Skipped:
     for ax in g.axes.flat:
         plain_log_ticks(ax, "x")
         plain_log_ticks(ax, "y")
-    g.figure.suptitle("Build vs render time at the report's default parameters "
-                      "(lower left is better)", y=1.02)
+    g.figure.suptitle(
+        "Build vs render time at the report's default parameters (lower left is better)", y=1.02
+    )
     return _save(g, path)
 
 
 # ---- Table 2 sweeps -------------------------------------------------------------------------
 
-SWEEP_METRICS = [("nodes", "nodes", "#nodes"), ("prim_tests", "prim_tests", "#int. tests"),
-                 ("build_s_median", "build_s", "build time"),
-                 ("render_s_median", "render_s", "render time")]
+SWEEP_METRICS = [
+    ("nodes", "nodes", "#nodes"),
+    ("prim_tests", "prim_tests", "#int. tests"),
+    ("build_s_median", "build_s", "build time"),
+    ("render_s_median", "render_s", "render time"),
+]
 
 
 def sweep_frame(results: Results, report_nums: pd.DataFrame) -> tuple[pd.DataFrame, dict[str, str]]:
@@ -163,8 +210,11 @@ def sweep_frame(results: Results, report_nums: pd.DataFrame) -> tuple[pd.DataFra
         # parameter free (same other parameters as the report-setting rows).
         probe = setting_spec(rep["setting"].iloc[0], "kdtree", picker, model, depths)
         fixed = tuple((k, v) for k, v in probe.required if k != param)
-        label = f"{report_name} sweep (" + ", ".join(
-            f"{k}={'auto' if v.startswith('<') else v}" for k, v in fixed) + ")"
+        label = (
+            f"{report_name} sweep ("
+            + ", ".join(f"{k}={'auto' if v.startswith('<') else v}" for k, v in fixed)
+            + ")"
+        )
         sweeps[param] = label
         spec = type(probe)("kdtree", fixed, probe.preferred)
         cands = picker.candidates(model, spec)
@@ -175,12 +225,16 @@ def sweep_frame(results: Results, report_nums: pd.DataFrame) -> tuple[pd.DataFra
                 x = float(x)
             except ValueError:
                 continue
-            records += [{"sweep": label, "x": x, "metric": title, "source": "ours",
-                         "value": r[col]} for col, _, title in SWEEP_METRICS]
+            records += [
+                {"sweep": label, "x": x, "metric": title, "source": "ours", "value": r[col]}
+                for col, _, title in SWEEP_METRICS
+            ]
         for _, r in rep.iterrows():
             x = float(r["setting"].split("=")[1])
-            records += [{"sweep": label, "x": x, "metric": title, "source": "report",
-                         "value": r[rcol]} for _, rcol, title in SWEEP_METRICS]
+            records += [
+                {"sweep": label, "x": x, "metric": title, "source": "report", "value": r[rcol]}
+                for _, rcol, title in SWEEP_METRICS
+            ]
     df = pd.DataFrame.from_records(records)
     if df.empty:
         return df, sweeps
@@ -198,11 +252,24 @@ def table2_sweeps(results: Results, report_nums: pd.DataFrame, path: Path) -> Pa
         return Skipped("no kd-tree sweep rows on the bunny")
     setup()
     metric_order = [m for _, _, m in SWEEP_METRICS]
-    g = sns.relplot(data=df, kind="line", x="x", y="relative", hue="source", style="source",
-                    palette=SOURCE_COLOURS, markers=True, dashes=False, row="metric",
-                    row_order=metric_order, col="sweep",
-                    col_order=[sweeps["max_prims"], sweeps["max_depth"]], height=2.3, aspect=1.7,
-                    facet_kws={"sharex": "col", "sharey": False})
+    g = sns.relplot(
+        data=df,
+        kind="line",
+        x="x",
+        y="relative",
+        hue="source",
+        style="source",
+        palette=SOURCE_COLOURS,
+        markers=True,
+        dashes=False,
+        row="metric",
+        row_order=metric_order,
+        col="sweep",
+        col_order=[sweeps["max_prims"], sweeps["max_depth"]],
+        height=2.3,
+        aspect=1.7,
+        facet_kws={"sharex": "col", "sharey": False},
+    )
     g.set(xscale="log", yscale="log")
     for (metric, sweep), ax in g.axes_dict.items():
         ax.axhline(1, color="black", lw=0.6, alpha=0.5)
@@ -214,12 +281,14 @@ def table2_sweeps(results: Results, report_nums: pd.DataFrame, path: Path) -> Pa
         ax.set_xticklabels([f"{x:g}" for x in xs], rotation=0, fontsize=8)
         ax.minorticks_off()
     g.set_axis_labels("parameter value", "relative to the\nsweep's first setting")
-    g.figure.suptitle("Table 2 sweeps (kd-tree, Stanford bunny): how each metric moves, "
-                      "ours vs the report", y=1.02)
+    g.figure.suptitle(
+        "Table 2 sweeps (kd-tree, Stanford bunny): how each metric moves, ours vs the report", y=1.02
+    )
     return _save(g, path)
 
 
 # ---- per-ray counters ---------------------------------------------------------------------------
+
 
 def per_ray(results: Results, path: Path) -> Path | Skipped:
     df = structure_frame(results)
@@ -229,11 +298,15 @@ def per_ray(results: Results, path: Path) -> Path | Skipped:
     all_rays = df["rays"] + df["shadow_rays"].fillna(0)
     df["primitive tests per ray"] = df["prim_tests"] / all_rays
     df["node visits per ray"] = df["node_visits"] / all_rays
-    df["structure"] = np.where(df["traversal"] == NO_MODES, df["structure"],
-                               df["structure"] + " · " + df["traversal"])
-    tidy = df.melt(id_vars=["model", "structure"],
-                   value_vars=["primitive tests per ray", "node visits per ray"],
-                   var_name="counter", value_name="per ray").dropna(subset=["per ray"])
+    df["structure"] = np.where(
+        df["traversal"] == NO_MODES, df["structure"], df["structure"] + " · " + df["traversal"]
+    )
+    tidy = df.melt(
+        id_vars=["model", "structure"],
+        value_vars=["primitive tests per ray", "node visits per ray"],
+        var_name="counter",
+        value_name="per ray",
+    ).dropna(subset=["per ray"])
     if tidy.empty:
         return Skipped("no row has prim_tests/node_visits counters")
     counted = set(tidy["structure"])
@@ -241,9 +314,20 @@ def per_ray(results: Results, path: Path) -> Path | Skipped:
     setup()
     order = [lbl for s in STRUCTURES for lbl in sorted(counted) if lbl.split(" · ")[0] == s.label]
     palette = {lbl: STRUCTURE_COLOURS.get(lbl.split(" · ")[0], "black") for lbl in order}
-    g = sns.catplot(data=tidy, kind="bar", x="model", y="per ray", hue="structure",
-                    hue_order=order, palette=palette, row="counter", sharey=False,
-                    height=2.8, aspect=4.2, errorbar=None)
+    g = sns.catplot(
+        data=tidy,
+        kind="bar",
+        x="model",
+        y="per ray",
+        hue="structure",
+        hue_order=order,
+        palette=palette,
+        row="counter",
+        sharey=False,
+        height=2.8,
+        aspect=4.2,
+        errorbar=None,
+    )
     # Hatch the report-order traversal so the two modes of one structure stay apart.
     hatched = [lbl.endswith("· report") for lbl in order]
     for ax in g.axes.flat:
@@ -266,6 +350,7 @@ def per_ray(results: Results, path: Path) -> Path | Skipped:
 
 # ---- render time vs error ---------------------------------------------------------------------
 
+
 def pareto_front(points: pd.DataFrame, x: str, y: str) -> pd.DataFrame:
     """Points no other point beats in both x and y (lower is better in both)."""
     pts = points.sort_values([x, y])
@@ -285,8 +370,7 @@ def error_frame(results: Results) -> pd.DataFrame:
     """The timed ok rows with error counts (catalogue verdicts have no time), their display
     model name and WRONG = false misses + false hits + wrong primitives."""
     rows = results.measured_rows()
-    df = rows[rows["status"] == "ok"].dropna(
-        subset=["render_s_median", "false_misses", "false_hits"]).copy()
+    df = rows[rows["status"] == "ok"].dropna(subset=["render_s_median", "false_misses", "false_hits"]).copy()
     df["model"] = df["model"].map(dict(model_order(results)))
     df[WRONG] = wrong_answers(df)
     return df
@@ -298,57 +382,97 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
     structures), so the y axis is symlog (linear through 0 to 1) and a panel whose rows are
     all zero says so instead of showing a flat line of dots as if it were a trade-off."""
     if not results.has_error_columns():
-        return Skipped("the CSV has no false_misses/false_hits values (the harness's "
-                       "reference comparison had not run)")
+        return Skipped(
+            "the CSV has no false_misses/false_hits values (the harness's reference comparison had not run)"
+        )
     df = error_frame(results)
     if df.empty:
         return Skipped("no ok row has both a render time and error counts")
     names = dict(model_order(results))
     y = WRONG
     setup()
-    accels = [a for a in ACCEL_COLOURS if a in set(df["accel"])] + sorted(set(df["accel"]) - set(ACCEL_COLOURS))
+    accels = [a for a in ACCEL_COLOURS if a in set(df["accel"])] + sorted(
+        set(df["accel"]) - set(ACCEL_COLOURS)
+    )
     colours = {a: ACCEL_COLOURS.get(a, "black") for a in accels}
-    g = sns.relplot(data=df, x="render_s_median", y=y, hue="accel",
-                    hue_order=accels, palette=colours,
-                    col="model", col_order=[n for n in names.values() if n in set(df["model"])],
-                    col_wrap=min(3, df["model"].nunique()), height=3.0, aspect=1.2, s=40,
-                    alpha=0.8, facet_kws={"sharex": False, "sharey": True})
+    g = sns.relplot(
+        data=df,
+        x="render_s_median",
+        y=y,
+        hue="accel",
+        hue_order=accels,
+        palette=colours,
+        col="model",
+        col_order=[n for n in names.values() if n in set(df["model"])],
+        col_wrap=min(3, df["model"].nunique()),
+        height=3.0,
+        aspect=1.2,
+        s=40,
+        alpha=0.8,
+        facet_kws={"sharex": False, "sharey": True},
+    )
     for name, ax in g.axes_dict.items():
         sub = df[df["model"] == name]
         # Each structure's own trade-off over its parameter sets ...
         for accel, pts in sub.groupby("accel"):
             front = pareto_front(pts, "render_s_median", y)
             if len(front) > 1:
-                ax.step(front["render_s_median"], front[y], where="post",
-                        color=colours[accel], lw=1, ls="--", alpha=0.9)
+                ax.step(
+                    front["render_s_median"],
+                    front[y],
+                    where="post",
+                    color=colours[accel],
+                    lw=1,
+                    ls="--",
+                    alpha=0.9,
+                )
         # ... and the points nothing beats overall, ringed.
         best = pareto_front(sub, "render_s_median", y)
-        ax.scatter(best["render_s_median"], best[y], s=120, facecolors="none",
-                   edgecolors="black", linewidths=1.2, zorder=5)
+        ax.scatter(
+            best["render_s_median"],
+            best[y],
+            s=120,
+            facecolors="none",
+            edgecolors="black",
+            linewidths=1.2,
+            zorder=5,
+        )
         if (sub[y] == 0).all():
-            ax.text(0.5, 0.92, f"all {len(sub)} rows: 0 wrong answers", transform=ax.transAxes,
-                    ha="center", va="top", fontsize=8,
-                    bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.8})
+            ax.text(
+                0.5,
+                0.92,
+                f"all {len(sub)} rows: 0 wrong answers",
+                transform=ax.transAxes,
+                ha="center",
+                va="top",
+                fontsize=8,
+                bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.8},
+            )
     g.set(xscale="log", yscale="symlog")
     ymax = max(1.0, float(df[y].max()))
     # symlog's default locator leaves counts between 1 and 10 unlabelled: 0, 1, 2, 5, 10, 20, ...
-    yticks = [0.0] + [m * 10.0 ** e for e in range(0, 10) for m in (1, 2, 5) if m * 10.0 ** e <= ymax * 1.6 + 1]
+    yticks = [0.0] + [m * 10.0**e for e in range(0, 10) for m in (1, 2, 5) if m * 10.0**e <= ymax * 1.6 + 1]
     for ax in g.axes.flat:
         ax.set_yscale("symlog", linthresh=1.0)
         ax.set_ylim(-0.3, ymax * 1.6 + 1)
         ax.set_yticks(yticks)
         ax.yaxis.set_major_formatter(mticker.FuncFormatter(lambda v, _: f"{v:g}"))
         plain_log_ticks(ax, "x")
-    g.set_axis_labels("render time (s, median)", "false misses + false hits\n+ wrong primitives "
-                      "vs the reference")
+    g.set_axis_labels(
+        "render time (s, median)", "false misses + false hits\n+ wrong primitives vs the reference"
+    )
     g.set_titles("{col_name}")
     zero = ": every row has 0 wrong answers" if (df[y] == 0).all() else ""
-    g.figure.suptitle(f"Render time vs wrong answers over every parameter set{zero}\n(dashed: each "
-                      "structure's Pareto front; ringed: optimal overall)", y=1.04)
+    g.figure.suptitle(
+        f"Render time vs wrong answers over every parameter set{zero}\n(dashed: each "
+        "structure's Pareto front; ringed: optimal overall)",
+        y=1.04,
+    )
     return _save(g, path)
 
 
 # ---- relative to BVH --------------------------------------------------------------------------
+
 
 def relative_frame(results: Results, report_nums: pd.DataFrame) -> pd.DataFrame:
     picker = Picker(results)
@@ -362,18 +486,30 @@ def relative_frame(results: Results, report_nums: pd.DataFrame) -> pd.DataFrame:
             if s.key == "bvh":
                 continue
             num = picker.pick(ours, s.spec, preferred_variant(picker.variants([ours], s.spec)))
-            for phase, col, rcol in (("build", "build_s_median", "build_s"),
-                                     ("render", "render_s_median", "render_s")):
+            for phase, col, rcol in (
+                ("build", "build_s_median", "build_s"),
+                ("render", "render_s_median", "render_s"),
+            ):
                 r = ratio(num.value(col), den.value(col))
                 if r is not None:
-                    records.append({"model": label, "structure": s.label, "phase": phase,
-                                    "source": "ours", "ratio": r})
+                    records.append(
+                        {"model": label, "structure": s.label, "phase": phase, "source": "ours", "ratio": r}
+                    )
                 if s.report_accel:
-                    r = ratio(report_value(report_nums, rm.key, s.report_accel, "default", rcol),
-                              report_value(report_nums, rm.key, "bvh", "default", rcol))
+                    r = ratio(
+                        report_value(report_nums, rm.key, s.report_accel, "default", rcol),
+                        report_value(report_nums, rm.key, "bvh", "default", rcol),
+                    )
                     if r is not None:
-                        records.append({"model": label, "structure": s.label, "phase": phase,
-                                        "source": "report", "ratio": r})
+                        records.append(
+                            {
+                                "model": label,
+                                "structure": s.label,
+                                "phase": phase,
+                                "source": "report",
+                                "ratio": r,
+                            }
+                        )
     return pd.DataFrame.from_records(records)
 
 
@@ -384,10 +520,26 @@ def relative_to_bvh(results: Results, report_nums: pd.DataFrame, path: Path) -> 
     setup()
     order = [s.label for s in STRUCTURES if s.label in set(df["structure"])]
     models = list(dict.fromkeys(df["model"]))
-    g = sns.catplot(data=df, kind="point", x="model", y="ratio", hue="source", order=models,
-                    hue_order=["ours", "report"], palette=SOURCE_COLOURS, markers=["o", "X"],
-                    linestyles="none", dodge=0.3, row="structure", row_order=order, col="phase",
-                    height=2.2, aspect=2.6, sharey=False, errorbar=None)
+    g = sns.catplot(
+        data=df,
+        kind="point",
+        x="model",
+        y="ratio",
+        hue="source",
+        order=models,
+        hue_order=["ours", "report"],
+        palette=SOURCE_COLOURS,
+        markers=["o", "X"],
+        linestyles="none",
+        dodge=0.3,
+        row="structure",
+        row_order=order,
+        col="phase",
+        height=2.2,
+        aspect=2.6,
+        sharey=False,
+        errorbar=None,
+    )
     g.set(yscale="log")
     for ax in g.axes.flat:
         ax.axhline(1, color="black", lw=0.8)
@@ -397,23 +549,36 @@ def relative_to_bvh(results: Results, report_nums: pd.DataFrame, path: Path) -> 
         ax.tick_params(axis="x", labelsize=8)
     g.set_titles("{row_name}: {col_name} time")
     g.set_axis_labels("", "time / BVH (median)")
-    g.figure.suptitle("Time relative to BVH (median) on the same model (below 1 = faster "
-                      "than BVH): the comparison that survives a change of machine", y=1.01)
+    g.figure.suptitle(
+        "Time relative to BVH (median) on the same model (below 1 = faster "
+        "than BVH): the comparison that survives a change of machine",
+        y=1.01,
+    )
     return _save(g, path)
 
 
 FIGURES = {
-    "build_vs_render": ("Build vs render time per structure and model (report defaults), "
-                        "medians with 95% CIs", lambda res, report_nums, p: build_vs_render(res, p)),
-    "relative_to_bvh": ("Build and render time relative to the median-split BVH, ours beside "
-                        "the report's", relative_to_bvh),
-    "table2_sweeps": ("Table 2's kd-tree parameter sweeps on the bunny, each series relative "
-                      "to its first setting", table2_sweeps),
-    "per_ray": ("Primitive tests and node visits per ray (primary + shadow)",
-                lambda res, report_nums, p: per_ray(res, p)),
-    "error_pareto": ("Render time vs wrong answers (false misses + false hits + wrong "
-                     "primitives) against the reference, with the Pareto front",
-                     lambda res, report_nums, p: error_pareto(res, p)),
+    "build_vs_render": (
+        "Build vs render time per structure and model (report defaults), medians with 95% CIs",
+        lambda res, report_nums, p: build_vs_render(res, p),
+    ),
+    "relative_to_bvh": (
+        "Build and render time relative to the median-split BVH, ours beside the report's",
+        relative_to_bvh,
+    ),
+    "table2_sweeps": (
+        "Table 2's kd-tree parameter sweeps on the bunny, each series relative to its first setting",
+        table2_sweeps,
+    ),
+    "per_ray": (
+        "Primitive tests and node visits per ray (primary + shadow)",
+        lambda res, report_nums, p: per_ray(res, p),
+    ),
+    "error_pareto": (
+        "Render time vs wrong answers (false misses + false hits + wrong "
+        "primitives) against the reference, with the Pareto front",
+        lambda res, report_nums, p: error_pareto(res, p),
+    ),
 }
 
 

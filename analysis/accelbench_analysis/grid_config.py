@@ -38,6 +38,7 @@ class GridConfigError(ValueError):
 
 # ---- ranges and axes ---------------------------------------------------------------------------
 
+
 def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
@@ -50,8 +51,10 @@ def expand_range(spec: dict, where: str) -> list:
     """The values of a `{from, to, step}` or `{from, to, scale}` range (see module doc)."""
     unknown = set(spec) - {"from", "to", "step", "scale"}
     if unknown:
-        raise GridConfigError(f"{where}: unknown range keys {sorted(unknown)} (a range has "
-                              f"from, to and either step or scale: log2/log10)")
+        raise GridConfigError(
+            f"{where}: unknown range keys {sorted(unknown)} (a range has "
+            f"from, to and either step or scale: log2/log10)"
+        )
     lo, hi = spec.get("from"), spec.get("to")
     if not (_is_number(lo) and _is_number(hi)):
         raise GridConfigError(f"{where}: a range needs numeric `from` and `to`")
@@ -65,7 +68,9 @@ def expand_range(spec: dict, where: str) -> list:
             raise GridConfigError(f"{where}: `step` must be a positive number")
         n = math.floor((hi - lo) / step + 1e-9) + 1
         integral = all(isinstance(v, int) for v in (lo, hi, step))
-        values = [lo + i * step if integral else _round(lo + i * step) for i in range(min(n, MAX_RANGE_VALUES + 1))]
+        values = [
+            lo + i * step if integral else _round(lo + i * step) for i in range(min(n, MAX_RANGE_VALUES + 1))
+        ]
     else:
         base = RANGE_SCALES.get(spec["scale"])
         if base is None:
@@ -74,7 +79,9 @@ def expand_range(spec: dict, where: str) -> list:
             raise GridConfigError(f"{where}: a {spec['scale']} range starts above 0")
         n = math.floor(math.log(hi / lo, base) + 1e-9) + 1
         integral = isinstance(lo, int)
-        values = [lo * base ** i if integral else _round(lo * base ** i) for i in range(min(n, MAX_RANGE_VALUES + 1))]
+        values = [
+            lo * base**i if integral else _round(lo * base**i) for i in range(min(n, MAX_RANGE_VALUES + 1))
+        ]
     if len(values) > MAX_RANGE_VALUES:
         raise GridConfigError(f"{where}: more than {MAX_RANGE_VALUES} values")
     return values
@@ -84,6 +91,7 @@ def expand_range(spec: dict, where: str) -> list:
 class Axis:
     """One parameter (or a zipped group of parameters) and its values, as the harness
     expands them: the cartesian product of the axes, the first axis varying slowest."""
+
     names: list[str]
     values: list[tuple]
 
@@ -123,9 +131,11 @@ def parse_axis(key: str, node, where: str) -> Axis:
 
 # ---- objective -------------------------------------------------------------------------------------
 
+
 @dataclass
 class Objective:
     """build_weight * build_s_median + render_weight * render_s_median, in seconds."""
+
     build_weight: float
     render_weight: float
 
@@ -156,8 +166,10 @@ def parse_objective(text, frames, where: str) -> Objective:
         raise GridConfigError(f"{where}.objective: {text!r} is not one of: {OBJECTIVE_FORMS}")
     if m[1] == "k":
         if not _is_number(frames) or frames <= 0:
-            raise GridConfigError(f"{where}.frames: objective {text!r} needs `frames:` (a "
-                                  f"positive number of frames one build serves)")
+            raise GridConfigError(
+                f"{where}.frames: objective {text!r} needs `frames:` (a "
+                f"positive number of frames one build serves)"
+            )
         return Objective(1.0, float(frames))
     if frames is not None:
         raise GridConfigError(f"{where}.frames: the objective already gives k ({m[1]})")
@@ -165,6 +177,7 @@ def parse_objective(text, frames, where: str) -> Objective:
 
 
 # ---- the config ---------------------------------------------------------------------------------------
+
 
 @dataclass
 class GridConfig:
@@ -202,8 +215,9 @@ class GridConfig:
 def _int_setting(node: dict, key: str, where: str, default=None):
     v = node.get(key, default)
     if v is not None and (not isinstance(v, int) or isinstance(v, bool) or v < (0 if key == "warmup" else 1)):
-        raise GridConfigError(f"{where}.{key}: expected a whole number "
-                              f"{'>= 0' if key == 'warmup' else '>= 1'}, got {v!r}")
+        raise GridConfigError(
+            f"{where}.{key}: expected a whole number {'>= 0' if key == 'warmup' else '>= 1'}, got {v!r}"
+        )
     return v
 
 
@@ -225,10 +239,16 @@ def load_grid_config(path: str | Path) -> GridConfig:
     if not isinstance(models, list) or not models:
         raise GridConfigError(f"{where}: models: expected a non-empty list")
     accels = raw.get("accelerators")
-    if not isinstance(accels, list) or len(accels) != 1 or not isinstance(accels[0], dict) \
-            or "name" not in accels[0]:
-        raise GridConfigError(f"{where}: accelerators: a grid config has exactly one accelerator "
-                              f"(a mapping with `name` and `params`)")
+    if (
+        not isinstance(accels, list)
+        or len(accels) != 1
+        or not isinstance(accels[0], dict)
+        or "name" not in accels[0]
+    ):
+        raise GridConfigError(
+            f"{where}: accelerators: a grid config has exactly one accelerator "
+            f"(a mapping with `name` and `params`)"
+        )
     accel = str(accels[0]["name"])
     params = accels[0].get("params") or {}
     if not isinstance(params, dict):
@@ -250,8 +270,9 @@ def load_grid_config(path: str | Path) -> GridConfig:
     objective = parse_objective(grid["objective"], grid.get("frames"), gw)
     constraint = grid.get("constraint") or {}
     if not isinstance(constraint, dict) or not all(_is_number(v) for v in constraint.values()):
-        raise GridConfigError(f"{gw}.constraint: expected a mapping column: largest allowed "
-                              f"value, e.g. {{false_misses: 0}}")
+        raise GridConfigError(
+            f"{gw}.constraint: expected a mapping column: largest allowed value, e.g. {{false_misses: 0}}"
+        )
     mode = grid.get("mode", "full")
     if mode not in MODES:
         raise GridConfigError(f"{gw}.mode: {mode!r} is not one of {', '.join(MODES)}")
@@ -261,8 +282,17 @@ def load_grid_config(path: str | Path) -> GridConfig:
     if halving and mode != "successive_halving":
         raise GridConfigError(f"{gw}.successive_halving: settings given but mode is {mode!r}")
     hw = f"{gw}.successive_halving"
-    return GridConfig(path=path, raw=raw, name=name, accel=accel, axes=axes, objective=objective,
-                      constraints={str(k): float(v) for k, v in constraint.items()}, mode=mode,
-                      keep=_int_setting(halving, "keep", hw),
-                      final_repetitions=_int_setting(halving, "repetitions", hw),
-                      final_warmup=_int_setting(halving, "warmup", hw), models=len(models))
+    return GridConfig(
+        path=path,
+        raw=raw,
+        name=name,
+        accel=accel,
+        axes=axes,
+        objective=objective,
+        constraints={str(k): float(v) for k, v in constraint.items()},
+        mode=mode,
+        keep=_int_setting(halving, "keep", hw),
+        final_repetitions=_int_setting(halving, "repetitions", hw),
+        final_warmup=_int_setting(halving, "warmup", hw),
+        models=len(models),
+    )

@@ -36,8 +36,17 @@ from .schema import INSTRUCTIONS_COLUMN, KEY_COLUMNS, ContractError, Results, lo
 
 EXIT_PASS, EXIT_REGRESSION, EXIT_BAD_INPUT, EXIT_REMEASURE = 0, 1, 2, 3
 
-EXACT_COUNTS = ["nodes", "leaves", "max_depth", "prim_tests", "node_visits", "rays", "hits",
-                "shadow_rays", "shadow_hits"]
+EXACT_COUNTS = [
+    "nodes",
+    "leaves",
+    "max_depth",
+    "prim_tests",
+    "node_visits",
+    "rays",
+    "hits",
+    "shadow_rays",
+    "shadow_hits",
+]
 # Hit errors against the `reference` accelerator are as deterministic as the counts: a change is
 # a structure answering differently. Compared where the baseline has them (older
 # baselines predate the columns).
@@ -92,11 +101,13 @@ class Comparison:
 
     @property
     def verdict(self) -> str:
-        return {EXIT_PASS: "PASS", EXIT_REGRESSION: "FAIL",
-                EXIT_REMEASURE: "NEEDS A SECOND MEASUREMENT"}[self.exit_code]
+        return {EXIT_PASS: "PASS", EXIT_REGRESSION: "FAIL", EXIT_REMEASURE: "NEEDS A SECOND MEASUREMENT"}[
+            self.exit_code
+        ]
 
 
 # ---- matching combinations across files ---------------------------------------------------
+
 
 def _has_combo_id(df: pd.DataFrame) -> bool:
     return "combo_id" in df.columns and (df["combo_id"].astype(str).str.strip() != "").all()
@@ -135,6 +146,7 @@ def labels(rows: list[pd.Series], keys: list[str]) -> dict[str, str]:
 
 # ---- formatting ----------------------------------------------------------------------------
 
+
 def _missing(x) -> bool:
     return x is None or (isinstance(x, float) and math.isnan(x))
 
@@ -165,6 +177,7 @@ def _fmt_value(metric: str, v) -> str:
 
 # ---- tier 1: deterministic counts -----------------------------------------------------------
 
+
 def _count_changed(metric: str, old, new) -> bool:
     if _missing(old) and _missing(new):
         return False
@@ -176,8 +189,9 @@ def _count_changed(metric: str, old, new) -> bool:
 
 
 def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
-    t = Tier("1. Deterministic counts",
-             header=["combination", "metric", "baseline", "current", "current/baseline"])
+    t = Tier(
+        "1. Deterministic counts", header=["combination", "metric", "baseline", "current", "current/baseline"]
+    )
     changed_combos = set()
     unchecked_errors: set[str] = set()
     common = [k for k in base if k in cur]
@@ -195,27 +209,44 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
         for metric in EXACT_COUNTS + [SAH_COLUMN] + errors:
             old, new = b[metric], c.get(metric)
             if _count_changed(metric, old, new):
-                t.rows.append([name[k], metric, _fmt_value(metric, old), _fmt_value(metric, new),
-                               fmt_ratio(_ratio(new, old))])
+                t.rows.append(
+                    [
+                        name[k],
+                        metric,
+                        _fmt_value(metric, old),
+                        _fmt_value(metric, new),
+                        fmt_ratio(_ratio(new, old)),
+                    ]
+                )
                 changed_combos.add(k)
     missing = [k for k in base if k not in cur]
     added = [k for k in cur if k not in base]
     if missing:
-        t.notes.append("Missing from this run (a failure: the baseline measured them): "
-                       + "; ".join(name[k] for k in missing) + ".")
+        t.notes.append(
+            "Missing from this run (a failure: the baseline measured them): "
+            + "; ".join(name[k] for k in missing)
+            + "."
+        )
     if unchecked_errors:
-        t.notes.append("Error columns not in the baseline, so not compared: "
-                       + ", ".join(sorted(unchecked_errors)) + ". Update the baseline to cover them.")
+        t.notes.append(
+            "Error columns not in the baseline, so not compared: "
+            + ", ".join(sorted(unchecked_errors))
+            + ". Update the baseline to cover them."
+        )
     if added:
-        t.notes.append("New in this run (not in the baseline; not compared): "
-                       + "; ".join(name[k] for k in added)
-                       + ". Update the baseline to cover them.")
+        t.notes.append(
+            "New in this run (not in the baseline; not compared): "
+            + "; ".join(name[k] for k in added)
+            + ". Update the baseline to cover them."
+        )
     t.verdict = FAIL if (t.rows or missing) else PASS
-    t.summary = (f"{len(common)} combinations compared on {len(EXACT_COUNTS) + 1} metrics "
-                 f"{'and the error counts ' if not unchecked_errors else ''}"
-                 f"(+ status): {plural(len(t.rows), 'value')} changed in "
-                 f"{plural(len(changed_combos), 'combination')}; {len(missing)} missing, "
-                 f"{len(added)} added")
+    t.summary = (
+        f"{len(common)} combinations compared on {len(EXACT_COUNTS) + 1} metrics "
+        f"{'and the error counts ' if not unchecked_errors else ''}"
+        f"(+ status): {plural(len(t.rows), 'value')} changed in "
+        f"{plural(len(changed_combos), 'combination')}; {len(missing)} missing, "
+        f"{len(added)} added"
+    )
     if not t.rows:
         t.header = []
     return t
@@ -223,9 +254,12 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
 
 # ---- tier 2: instruction counts ---------------------------------------------------------------
 
+
 def tier_instructions(base: dict, cur: dict, name: dict, tolerance: float) -> Tier:
-    t = Tier("2. Instruction counts (callgrind Ir of the measured render)",
-             header=["combination", "baseline Ir", "current Ir", "current/baseline", "verdict"])
+    t = Tier(
+        "2. Instruction counts (callgrind Ir of the measured render)",
+        header=["combination", "baseline Ir", "current Ir", "current/baseline", "verdict"],
+    )
     failed = improved = compared = unmeasured = 0
     for k in (k for k in base if k in cur):
         old, new = base[k][INSTRUCTIONS_COLUMN], cur[k][INSTRUCTIONS_COLUMN]
@@ -249,24 +283,30 @@ def tier_instructions(base: dict, cur: dict, name: dict, tolerance: float) -> Ti
             else:
                 verdict = "pass"
             failed += verdict == FAIL
-        t.rows.append([name[k], fmt_count(old), fmt_count(new), fmt_ratio(_ratio(new, old)),
-                       verdict])
+        t.rows.append([name[k], fmt_count(old), fmt_count(new), fmt_ratio(_ratio(new, old)), verdict])
     if not t.rows:
         t.verdict, t.header = NOT_CHECKED, []
-        t.summary = ("no instruction counts in the baseline or this run (the `instructions` "
-                     "column is absent or empty): tier 2 was not checked")
+        t.summary = (
+            "no instruction counts in the baseline or this run (the `instructions` "
+            "column is absent or empty): tier 2 was not checked"
+        )
         return t
     t.verdict = FAIL if failed else PASS
-    t.summary = (f"{compared} combinations compared: {failed} above +{tolerance:.0%}, "
-                 f"{improved} below -{tolerance:.0%}"
-                 + (f", {unmeasured} not measured in this run" if unmeasured else ""))
+    t.summary = (
+        f"{compared} combinations compared: {failed} above +{tolerance:.0%}, "
+        f"{improved} below -{tolerance:.0%}"
+        + (f", {unmeasured} not measured in this run" if unmeasured else "")
+    )
     if improved:
-        t.notes.append(f"{improved} combinations need {tolerance:.0%} fewer instructions than "
-                       f"the baseline: run `make update-baseline` and say why in the commit.")
+        t.notes.append(
+            f"{improved} combinations need {tolerance:.0%} fewer instructions than "
+            f"the baseline: run `make update-baseline` and say why in the commit."
+        )
     return t
 
 
 # ---- tier 3: time relative to Embree ----------------------------------------------------------
+
 
 @dataclass
 class EmbreeRatio:
@@ -297,23 +337,31 @@ def embree_ratios(results: Results, by_id: bool, path: str) -> dict[str, EmbreeR
         if e is None:
             out[k] = EmbreeRatio(math.nan, "no Embree row with this model and render settings")
             continue
-        out[k] = EmbreeRatio(float(r["render_s_median"]) / float(e["render_s_median"]),
-                             f"embree [{e['params']}]")
+        out[k] = EmbreeRatio(
+            float(r["render_s_median"]) / float(e["render_s_median"]), f"embree [{e['params']}]"
+        )
     return out
 
 
-def tier_time(base: dict[str, EmbreeRatio], cur: dict[str, EmbreeRatio],
-              prev: dict[str, EmbreeRatio] | None, name: dict, factor: float) -> Tier:
-    t = Tier("3. Render time relative to Embree in the same run",
-             header=["combination", "baseline ratio", "current ratio", "current/baseline"]
-             + (["previous ratio"] if prev is not None else []) + ["verdict"])
+def tier_time(
+    base: dict[str, EmbreeRatio],
+    cur: dict[str, EmbreeRatio],
+    prev: dict[str, EmbreeRatio] | None,
+    name: dict,
+    factor: float,
+) -> Tier:
+    t = Tier(
+        "3. Render time relative to Embree in the same run",
+        header=["combination", "baseline ratio", "current ratio", "current/baseline"]
+        + (["previous ratio"] if prev is not None else [])
+        + ["verdict"],
+    )
     counts = {FAIL: 0, REMEASURE: 0, "once": 0, "no ratio": 0, "pass": 0}
     for k in (k for k in base if k in cur):
         b, c = base[k], cur[k]
         p = prev.get(k) if prev is not None else None
         if _missing(b.ratio) or _missing(c.ratio):
-            verdict = "no ratio: " + (c.denominator if _missing(c.ratio) else
-                                      "baseline has " + b.denominator)
+            verdict = "no ratio: " + (c.denominator if _missing(c.ratio) else "baseline has " + b.denominator)
             counts["no ratio"] += 1
         elif c.ratio <= b.ratio * factor:
             verdict = "pass"
@@ -325,8 +373,11 @@ def tier_time(base: dict[str, EmbreeRatio], cur: dict[str, EmbreeRatio],
             verdict = "exceeded once (the previous measurement was within): warning"
             counts["once"] += 1
         else:
-            why = ("no previous measurement given (--history)" if prev is None else
-                   "the previous measurement has no ratio for it")
+            why = (
+                "no previous measurement given (--history)"
+                if prev is None
+                else "the previous measurement has no ratio for it"
+            )
             verdict = f"exceeded once, {why}: measure again"
             counts[REMEASURE] += 1
         row = [name[k], fmt_sig(b.ratio), fmt_sig(c.ratio), fmt_ratio(_ratio(c.ratio, b.ratio))]
@@ -339,39 +390,52 @@ def tier_time(base: dict[str, EmbreeRatio], cur: dict[str, EmbreeRatio],
         t.verdict = REMEASURE
     if not any(counts[v] for v in (FAIL, REMEASURE, "once", "pass")):
         t.verdict = NOT_CHECKED
-    t.summary = (f"limit: {factor:g} x the baseline ratio, exceeded in two consecutive "
-                 f"measurements; {counts['pass']} within, {counts[FAIL]} failed (exceeded now "
-                 f"and in the previous measurement), {counts[REMEASURE]} exceeded once with no "
-                 f"second measurement, {counts['once']} exceeded once after a good previous "
-                 f"measurement, {counts['no ratio']} without a ratio")
+    t.summary = (
+        f"limit: {factor:g} x the baseline ratio, exceeded in two consecutive "
+        f"measurements; {counts['pass']} within, {counts[FAIL]} failed (exceeded now "
+        f"and in the previous measurement), {counts[REMEASURE]} exceeded once with no "
+        f"second measurement, {counts['once']} exceeded once after a good previous "
+        f"measurement, {counts['no ratio']} without a ratio"
+    )
     if counts[REMEASURE]:
-        t.notes.append("A single exceedance may be noise. Measure again and rerun with the "
-                       "first run as history: `python -m accelbench_analysis regress --baseline "
-                       "BASE --current SECOND.csv --history FIRST.csv`.")
+        t.notes.append(
+            "A single exceedance may be noise. Measure again and rerun with the "
+            "first run as history: `python -m accelbench_analysis regress --baseline "
+            "BASE --current SECOND.csv --history FIRST.csv`."
+        )
     if counts["once"]:
-        t.notes.append("An exceedance after a previous measurement within the limit is a "
-                       "warning only; it fails if the next run exceeds again.")
+        t.notes.append(
+            "An exceedance after a previous measurement within the limit is a "
+            "warning only; it fails if the next run exceeds again."
+        )
     return t
 
 
 # ---- the comparison ------------------------------------------------------------------------------
+
 
 def _provenance_lines(role: str, results: Results) -> list[str]:
     lines = []
     for g in results.groups:
         stamps = sorted(results.rows.loc[results.rows["prov_group"] == g.label, "timestamp"])
         when = f", measured {stamps[0]}" + (f" .. {stamps[-1]}" if stamps[-1] != stamps[0] else "")
-        lines.append(f"{role}: commit {g.fields['git_sha']}"
-                     f"{' (dirty)' if g.fields['git_dirty'] == 'true' else ''}, cpu "
-                     f"{g.fields['cpu']}, {g.fields['compiler']}, {g.fields['build_type']}, "
-                     f"Embree {g.fields['embree_version']}{when} ({g.rows} rows of "
-                     f"{', '.join(g.files)})")
+        lines.append(
+            f"{role}: commit {g.fields['git_sha']}"
+            f"{' (dirty)' if g.fields['git_dirty'] == 'true' else ''}, cpu "
+            f"{g.fields['cpu']}, {g.fields['compiler']}, {g.fields['build_type']}, "
+            f"Embree {g.fields['embree_version']}{when} ({g.rows} rows of "
+            f"{', '.join(g.files)})"
+        )
     return lines
 
 
-def compare(baseline: Path, current: Path, history: Path | None = None,
-            time_factor: float = DEFAULT_TIME_FACTOR,
-            instructions_tolerance: float = INSTRUCTIONS_TOLERANCE) -> Comparison:
+def compare(
+    baseline: Path,
+    current: Path,
+    history: Path | None = None,
+    time_factor: float = DEFAULT_TIME_FACTOR,
+    instructions_tolerance: float = INSTRUCTIONS_TOLERANCE,
+) -> Comparison:
     """Loads the files (ContractError on bad input) and runs the three tiers."""
     if time_factor <= 1:
         raise ContractError(f"--time-factor must be above 1 (got {time_factor:g})")
@@ -380,27 +444,29 @@ def compare(baseline: Path, current: Path, history: Path | None = None,
         files.append(("previous", history))
     loaded = {role: load_results([path]) for role, path in files}
     by_id = all(_has_combo_id(r.rows) for r in loaded.values())
-    rows = {role: keyed(r.rows, by_id, str(path)) for (role, path), r in
-            zip(files, loaded.values())}
+    rows = {role: keyed(r.rows, by_id, str(path)) for (role, path), r in zip(files, loaded.values())}
     union = {**rows["current"], **rows["baseline"]}
     name = labels(list(union.values()), list(union.keys()))
 
-    tiers = [tier_counts(rows["baseline"], rows["current"], name),
-             tier_instructions(rows["baseline"], rows["current"], name, instructions_tolerance)]
-    ratios = {role: embree_ratios(r, by_id, str(path)) for (role, path), r in
-              zip(files, loaded.values())}
-    tiers.append(tier_time(ratios["baseline"], ratios["current"], ratios.get("previous"), name,
-                           time_factor))
+    tiers = [
+        tier_counts(rows["baseline"], rows["current"], name),
+        tier_instructions(rows["baseline"], rows["current"], name, instructions_tolerance),
+    ]
+    ratios = {role: embree_ratios(r, by_id, str(path)) for (role, path), r in zip(files, loaded.values())}
+    tiers.append(tier_time(ratios["baseline"], ratios["current"], ratios.get("previous"), name, time_factor))
 
     provenance = [line for role, r in loaded.items() for line in _provenance_lines(role, r)]
     warnings = [f"{role}: {w}" for role, r in loaded.items() for w in r.warnings]
     cpus = {role: {g.fields["cpu"] for g in r.groups} for role, r in loaded.items()}
     if any(c != cpus["baseline"] for c in cpus.values()):
-        warnings.append("the files were measured on different CPUs "
-                        f"({'; '.join(f'{k}: {sorted(v)}' for k, v in cpus.items())}): tier 3 "
-                        f"ratios to Embree may differ for that reason alone")
-    matched_by = ("combo_id" if by_id else
-                  "(config, model, accel, params): not every file has a combo_id column")
+        warnings.append(
+            "the files were measured on different CPUs "
+            f"({'; '.join(f'{k}: {sorted(v)}' for k, v in cpus.items())}): tier 3 "
+            f"ratios to Embree may differ for that reason alone"
+        )
+    matched_by = (
+        "combo_id" if by_id else "(config, model, accel, params): not every file has a combo_id column"
+    )
     return Comparison(tiers, provenance, warnings, matched_by)
 
 
@@ -410,8 +476,9 @@ def to_markdown(cmp: Comparison, exit_code_note: bool = True) -> str:
     out += [f"- combinations matched by {cmp.matched_by}", ""]
     for w in cmp.warnings:
         out += [f"> **Warning:** {w}", ""]
-    out += md_table(["tier", "verdict", "summary"],
-                    [[t.name, t.verdict, t.summary] for t in cmp.tiers], align="lll")
+    out += md_table(
+        ["tier", "verdict", "summary"], [[t.name, t.verdict, t.summary] for t in cmp.tiers], align="lll"
+    )
     for t in cmp.tiers:
         out += ["", f"## {t.name}: {t.verdict}", "", t.summary + "."]
         if t.header:
@@ -420,9 +487,15 @@ def to_markdown(cmp: Comparison, exit_code_note: bool = True) -> str:
         for n in t.notes:
             out += ["", n]
     if exit_code_note:
-        out += ["", f"Exit code {cmp.exit_code} (0 pass, 1 regression, 2 bad input, 3 a time "
-                    f"exceedance needs a second measurement)."]
+        out += [
+            "",
+            f"Exit code {cmp.exit_code} (0 pass, 1 regression, 2 bad input, 3 a time "
+            f"exceedance needs a second measurement).",
+        ]
     if cmp.exit_code != EXIT_PASS:
-        out += ["", "If a change is intended, `make update-baseline` rewrites the baseline from "
-                    "a fresh run; the commit that changes it says why."]
+        out += [
+            "",
+            "If a change is intended, `make update-baseline` rewrites the baseline from "
+            "a fresh run; the commit that changes it says why.",
+        ]
     return "\n".join(out) + "\n"

@@ -9,16 +9,15 @@ from pathlib import Path
 from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow
 from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
 from .figures import FIGURES, Skipped
-from .report_numbers import REPORT_MACHINE, REPORT_MODELS
 from .formatting import md_escape
+from .report_numbers import REPORT_MACHINE, REPORT_MODELS
 from .schema import Results
 
 TABLE_CAPTIONS = {
     "table2": "Table 2: kd-tree maxPrims and maxDepth sweeps on the Stanford bunny.",
     "table4": "Table 4: BVH, LBVH and kd-tree (plus binned-SAH BVH and Embree) on bunny, Igea, "
-              "dragon and Buddha; with a 'relative to BVH' table.",
-    "table5": "Table 5: the complex scenes (procedural forest and city); with a 'relative to "
-              "BVH' table.",
+    "dragon and Buddha; with a 'relative to BVH' table.",
+    "table5": "Table 5: the complex scenes (procedural forest and city); with a 'relative to BVH' table.",
 }
 REGENERATE = "make reproduce-tables"
 
@@ -31,12 +30,16 @@ def provenance_lines(results: Results) -> list[str]:
     for g in results.groups:
         f = g.fields
         head = f"group {g.label}: " if results.mixed else ""
-        out.append(f"- {head}**Machine:** {f['cpu']}" +
-                   (f" (threads: {', '.join(threads)})" if threads and not results.mixed else ""))
-        out.append(f"  **Commit:** `{f['git_sha']}`" +
-                   (" **(dirty work tree)**" if f["git_dirty"] == "true" else "") +
-                   f"; {f['compiler']}, {f['build_type']}; Embree {f['embree_version']}; "
-                   f"{g.rows} rows")
+        out.append(
+            f"- {head}**Machine:** {f['cpu']}"
+            + (f" (threads: {', '.join(threads)})" if threads and not results.mixed else "")
+        )
+        out.append(
+            f"  **Commit:** `{f['git_sha']}`"
+            + (" **(dirty work tree)**" if f["git_dirty"] == "true" else "")
+            + f"; {f['compiler']}, {f['build_type']}; Embree {f['embree_version']}; "
+            f"{g.rows} rows"
+        )
     if ts:
         out.append(f"- **Measured:** {ts[0]}" + (f" to {ts[-1]}" if ts[-1] != ts[0] else ""))
     out.append("- **CSV:** " + ", ".join(f"`{f}`" for f in results.files))
@@ -54,25 +57,37 @@ def claims_lines(rows: list[ClaimRow] | None) -> list[str]:
     if not rows:
         return ["- [The report's claims, checked](tables/claims.md)"]
     n = {v: sum(r.ours.verdict == v for r in rows) for v in (HOLDS, FAILS, NOT_COMPARABLE)}
-    out = [f"- [The report's claims, checked](tables/claims.md): each claim of sections 5.1-6 "
-           f"evaluated on the report's numbers and on ours. Ours: **{n[HOLDS]} hold, "
-           f"{n[FAILS]} do not hold, {n[NOT_COMPARABLE]} not comparable**."]
+    out = [
+        f"- [The report's claims, checked](tables/claims.md): each claim of sections 5.1-6 "
+        f"evaluated on the report's numbers and on ours. Ours: **{n[HOLDS]} hold, "
+        f"{n[FAILS]} do not hold, {n[NOT_COMPARABLE]} not comparable**."
+    ]
     fails = [r for r in rows if r.ours.verdict == FAILS]
     if fails:
-        out.append("  Not holding here: " + "; ".join(f"{r.claim.id} {md_escape(r.claim.text)}"
-                                                     for r in fails) + ".")
+        out.append(
+            "  Not holding here: " + "; ".join(f"{r.claim.id} {md_escape(r.claim.text)}" for r in fails) + "."
+        )
     dependent = [r for r in rows if r.machine_dependent]
     if dependent:
-        out.append("  Machine-dependent (the verdict differs on the committed reference run): "
-                   + "; ".join(f"{r.claim.id} (here {r.ours.verdict}, reference run "
-                               f"{r.reference.verdict})" for r in dependent) + ".")
+        out.append(
+            "  Machine-dependent (the verdict differs on the committed reference run): "
+            + "; ".join(
+                f"{r.claim.id} (here {r.ours.verdict}, reference run {r.reference.verdict})"
+                for r in dependent
+            )
+            + "."
+        )
     elif any(r.reference is not None for r in rows):
-        out.append("  Every claim judged on both has the same verdict here as on the committed "
-                   "reference run.")
+        out.append(
+            "  Every claim judged on both has the same verdict here as on the committed reference run."
+        )
     unsupported = [r for r in rows if r.report.verdict == FAILS]
     if unsupported:
-        out.append("  Not supported by the report's own numbers: " + "; ".join(
-            f"{r.claim.id} ({md_escape(r.report.evidence)})" for r in unsupported) + ".")
+        out.append(
+            "  Not supported by the report's own numbers: "
+            + "; ".join(f"{r.claim.id} ({md_escape(r.report.evidence)})" for r in unsupported)
+            + "."
+        )
     return out
 
 
@@ -86,8 +101,7 @@ def figure_lines(out_dir: Path, figures: dict | None) -> list[str]:
         elif (out_dir / rel).is_file():
             out.append(f"- [{caption}]({rel})")
         else:
-            out.append(f"- {caption}: not generated yet (`python -m accelbench_analysis "
-                       f"figures ...`).")
+            out.append(f"- {caption}: not generated yet (`python -m accelbench_analysis figures ...`).")
     return out
 
 
@@ -96,58 +110,87 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
     `cost-images` commands) when they exist in out_dir."""
     out = []
     if (out_dir / "figures" / "scaling.png").is_file():
-        out.append("- [Build and render time against triangles, log-log, with fitted slopes per "
-                   "structure](figures/scaling.png) ([slopes](tables/scaling.md)): the Stanford "
-                   "dragon decimated with OpenMesh and the bunny Loop-subdivided.")
+        out.append(
+            "- [Build and render time against triangles, log-log, with fitted slopes per "
+            "structure](figures/scaling.png) ([slopes](tables/scaling.md)): the Stanford "
+            "dragon decimated with OpenMesh and the bunny Loop-subdivided."
+        )
     # `make robustness` writes results/robustness/ (beside results/reference/, the committed
     # run); `tables`/`all` write tables/robustness.md when given a robustness run's CSV.
-    for rel in ("robustness/robustness.md", "tables/robustness.md", "robustness.md",
-                "../robustness/robustness.md"):
+    for rel in (
+        "robustness/robustness.md",
+        "tables/robustness.md",
+        "robustness.md",
+        "../robustness/robustness.md",
+    ):
         if (out_dir / rel).is_file():
-            out.append(f"- [Robustness]({rel}): a pass/FAIL verdict per extreme case "
-                       f"(configs/robustness.yaml) and accelerator, the failures with their "
-                       f"counts, and the stiff-parameter runs with memory and errors.")
+            out.append(
+                f"- [Robustness]({rel}): a pass/FAIL verdict per extreme case "
+                f"(configs/robustness.yaml) and accelerator, the failures with their "
+                f"counts, and the stiff-parameter runs with memory and errors."
+            )
             break
     if (out_dir / "tables" / "ray_sets.md").is_file():
-        out.append("- [Mrays/s per ray set](tables/ray_sets.md) (primary, shadow, ambient "
-                   "occlusion, diffuse bounces, random rays; each structure also as a ratio to "
-                   "Embree), the [ranking of structures by ray set](tables/ray_set_ranking.md) "
-                   "marking where their order changes, and [the figure](figures/ray_sets.png).")
+        out.append(
+            "- [Mrays/s per ray set](tables/ray_sets.md) (primary, shadow, ambient "
+            "occlusion, diffuse bounces, random rays; each structure also as a ratio to "
+            "Embree), the [ranking of structures by ray set](tables/ray_set_ranking.md) "
+            "marking where their order changes, and [the figure](figures/ray_sets.png)."
+        )
     if (out_dir / "tables" / "thread_scaling.md").is_file():
-        out.append("- [Thread scaling](tables/thread_scaling.md): wall and CPU time, speedup and "
-                   "parallel efficiency at 1..nproc render threads "
-                   "([figure](figures/thread_scaling.png)).")
+        out.append(
+            "- [Thread scaling](tables/thread_scaling.md): wall and CPU time, speedup and "
+            "parallel efficiency at 1..nproc render threads "
+            "([figure](figures/thread_scaling.png))."
+        )
     for png in sorted((out_dir / "figures").glob("cost-*.png")):
-        model = png.stem[len("cost-"):]
-        out.append(f"- [Cost images, {model}](figures/{png.name}): node visits and triangle "
-                   f"tests per pixel for each structure beside the shaded image — where each "
-                   f"structure spends its work.")
+        model = png.stem[len("cost-") :]
+        out.append(
+            f"- [Cost images, {model}](figures/{png.name}): node visits and triangle "
+            f"tests per pixel for each structure beside the shaded image — where each "
+            f"structure spends its work."
+        )
     return ["", "## Beyond the report", ""] + out if out else []
 
 
-def comparison_lines(comparison: list[ThreeWay] | None, results: Results,
-                     reference: Results | None, reference_dir: Path | None) -> list[str]:
+def comparison_lines(
+    comparison: list[ThreeWay] | None, results: Results, reference: Results | None, reference_dir: Path | None
+) -> list[str]:
     """The times of the three-way comparison inline; every metric in tables/comparison.md."""
     if comparison is None:
         return []
-    out = ["", "## This run beside the report and the committed reference run", "",
-           "Per structure and model: the report's number, this run's, the committed reference "
-           "run's, and this/report, this/reference. A time ratio this/reference near 1 means "
-           "this machine reproduces ours; compare the report by orderings (its machine and "
-           "implementation were much slower). The counts (primitive tests, nodes), which must "
-           "equal the reference run's: [tables/comparison.md](tables/comparison.md).", ""]
-    return out + comparison_markdown(comparison, results, reference, reference_dir,
-                                     metrics=TIME_METRICS)[:-1]
+    out = [
+        "",
+        "## This run beside the report and the committed reference run",
+        "",
+        "Per structure and model: the report's number, this run's, the committed reference "
+        "run's, and this/report, this/reference. A time ratio this/reference near 1 means "
+        "this machine reproduces ours; compare the report by orderings (its machine and "
+        "implementation were much slower). The counts (primitive tests, nodes), which must "
+        "equal the reference run's: [tables/comparison.md](tables/comparison.md).",
+        "",
+    ]
+    return out + comparison_markdown(comparison, results, reference, reference_dir, metrics=TIME_METRICS)[:-1]
 
 
-def report_markdown(results: Results, out_dir: Path, claims: list[ClaimRow] | None,
-                    figures: dict | None, comparison: list[ThreeWay] | None = None,
-                    reference: Results | None = None, reference_dir: Path | None = None) -> str:
-    out = ["# accelbench results", "",
-           "A reproduction of the report \"Implementation and Analysis of Acceleration Data "
-           "Structures in Ray Tracing\" (Freiburg 2022): its Tables 2, 4 and 5 and the claims "
-           "of its sections 5.1-6, measured again, plus structures it did not have (binned-SAH "
-           "BVH, Embree).", ""]
+def report_markdown(
+    results: Results,
+    out_dir: Path,
+    claims: list[ClaimRow] | None,
+    figures: dict | None,
+    comparison: list[ThreeWay] | None = None,
+    reference: Results | None = None,
+    reference_dir: Path | None = None,
+) -> str:
+    out = [
+        "# accelbench results",
+        "",
+        'A reproduction of the report "Implementation and Analysis of Acceleration Data '
+        'Structures in Ray Tracing" (Freiburg 2022): its Tables 2, 4 and 5 and the claims '
+        "of its sections 5.1-6, measured again, plus structures it did not have (binned-SAH "
+        "BVH, Embree).",
+        "",
+    ]
     out += [f"> **Warning:** {md_escape(w)}\n" for w in results.warnings]
     out += ["## Where these numbers come from", ""] + provenance_lines(results)
     out += comparison_lines(comparison, results, reference, reference_dir)
@@ -159,31 +202,42 @@ def report_markdown(results: Results, out_dir: Path, claims: list[ClaimRow] | No
         else:
             out.append(f"- {caption} Not generated yet.")
     out += claims_lines(claims)
-    out += ["- [The report's numbers](report/report-tables.csv) as printed "
-            "([provenance](report/README.md))."]
+    out += ["- [The report's numbers](report/report-tables.csv) as printed ([provenance](report/README.md))."]
     out += ["", "## Figures", ""] + figure_lines(out_dir, figures)
     out += beyond_report_lines(out_dir)
-    out += ["", "## Reading the comparison", "",
-            f"- The report measured on another machine ({REPORT_MACHINE}) with a much slower "
-            f"implementation: compare orderings and ratios (the 'relative to BVH' tables and "
-            f"figure), not seconds.",
-            "- The report's \"#Primitives\" are vertex counts (bunny, Igea) and its Table 4 BVH "
-            "node counts are 2 x #Primitives - 1; the tables show our triangle and vertex counts "
-            "side by side and check both facts in their notes.",
-            "- Our \"#int. tests\" are primitive tests summed over all rays (primary + shadow); "
-            "the report does not define its count.",
-            "", "## Regenerate", "",
-            f"`{REGENERATE}` (measures on this machine into a new results/runs/<time>-<sha>/, "
-            f"then `python -m accelbench_analysis all <csv> --out <that directory>`; see "
-            f"README.md and analysis/README.md).", ""]
+    out += [
+        "",
+        "## Reading the comparison",
+        "",
+        f"- The report measured on another machine ({REPORT_MACHINE}) with a much slower "
+        f"implementation: compare orderings and ratios (the 'relative to BVH' tables and "
+        f"figure), not seconds.",
+        '- The report\'s "#Primitives" are vertex counts (bunny, Igea) and its Table 4 BVH '
+        "node counts are 2 x #Primitives - 1; the tables show our triangle and vertex counts "
+        "side by side and check both facts in their notes.",
+        '- Our "#int. tests" are primitive tests summed over all rays (primary + shadow); '
+        "the report does not define its count.",
+        "",
+        "## Regenerate",
+        "",
+        f"`{REGENERATE}` (measures on this machine into a new results/runs/<time>-<sha>/, "
+        f"then `python -m accelbench_analysis all <csv> --out <that directory>`; see "
+        f"README.md and analysis/README.md).",
+        "",
+    ]
     return "\n".join(out)
 
 
-def write_report(results: Results, out_dir: Path, claims: list[ClaimRow] | None = None,
-                 figures: dict | None = None, comparison: list[ThreeWay] | None = None,
-                 reference: Results | None = None, reference_dir: Path | None = None) -> Path:
+def write_report(
+    results: Results,
+    out_dir: Path,
+    claims: list[ClaimRow] | None = None,
+    figures: dict | None = None,
+    comparison: list[ThreeWay] | None = None,
+    reference: Results | None = None,
+    reference_dir: Path | None = None,
+) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     path = out_dir / "REPORT.md"
-    path.write_text(report_markdown(results, out_dir, claims, figures, comparison, reference,
-                                    reference_dir))
+    path.write_text(report_markdown(results, out_dir, claims, figures, comparison, reference, reference_dir))
     return path

@@ -33,7 +33,7 @@ import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 RUN_JSON = "run.json"
@@ -43,10 +43,10 @@ DRY_RUN_COUNT = re.compile(r"^(\d+) combinations", re.M)
 
 # ---- provenance and the resume decision ---------------------------------------------------
 
+
 def build_provenance(accelbench: Path) -> dict[str, str]:
     """What the harness will write into every row (`accelbench provenance`, NAME=VALUE)."""
-    out = subprocess.run([str(accelbench), "provenance"], check=True, capture_output=True,
-                         text=True).stdout
+    out = subprocess.run([str(accelbench), "provenance"], check=True, capture_output=True, text=True).stdout
     prov = {}
     for line in out.splitlines():
         name, sep, value = line.partition("=")
@@ -64,8 +64,10 @@ def provenance_differences(recorded: dict[str, str], current: dict[str, str]) ->
     for name in list(recorded) + [n for n in current if n not in recorded]:
         old, new = recorded.get(name), current.get(name)
         if old != new:
-            out.append(f"{name}: {old if old is not None else '(absent)'} -> "
-                       f"{new if new is not None else '(absent)'}")
+            out.append(
+                f"{name}: {old if old is not None else '(absent)'} -> "
+                f"{new if new is not None else '(absent)'}"
+            )
     return out
 
 
@@ -113,8 +115,7 @@ def new_run_dir(runs: Path, provenance: dict[str, str], tag: str, now: datetime)
     return runs / (name + (f"-{tag}" if tag else ""))
 
 
-def decide(runs: Path, job: dict, provenance: dict[str, str], fresh: bool,
-           now: datetime) -> Decision:
+def decide(runs: Path, job: dict, provenance: dict[str, str], fresh: bool, now: datetime) -> Decision:
     """Resume the newest run of this job only when it is unfinished and was measured by a
     build with the same provenance; otherwise a new directory, saying why."""
     last = newest_run_of_job(runs, job)
@@ -128,23 +129,30 @@ def decide(runs: Path, job: dict, provenance: dict[str, str], fresh: bool,
         return Decision(new, False, f"FRESH=1: not resuming the unfinished run {d}")
     diffs = provenance_differences(meta.get("provenance", {}), provenance)
     if diffs:
-        return Decision(new, False, f"the last run {d} is unfinished but was measured by "
-                                    f"another build or machine ({'; '.join(diffs)})")
-    return Decision(d, True, f"the last run {d} is unfinished and its provenance matches "
-                             f"this build's")
+        return Decision(
+            new,
+            False,
+            f"the last run {d} is unfinished but was measured by "
+            f"another build or machine ({'; '.join(diffs)})",
+        )
+    return Decision(d, True, f"the last run {d} is unfinished and its provenance matches this build's")
 
 
 def tree_changes(repo: Path) -> list[str]:
     """Uncommitted changes to tracked files (`git status --porcelain`, untracked files not
     counted: the harness's git_dirty uses the same test). Raises when repo is no checkout."""
-    out = subprocess.run(["git", "-C", str(repo), "status", "--porcelain", "--untracked-files=no"],
-                         capture_output=True, text=True)
+    out = subprocess.run(
+        ["git", "-C", str(repo), "status", "--porcelain", "--untracked-files=no"],
+        capture_output=True,
+        text=True,
+    )
     if out.returncode != 0:
         raise RuntimeError(f"{repo}: not a git work tree ({out.stderr.strip()})")
     return [line for line in out.stdout.splitlines() if line.strip()]
 
 
 # ---- measuring ------------------------------------------------------------------------------
+
 
 def csv_rows(path: Path) -> int:
     """Complete data rows of a results CSV (a line cut by an interruption does not count;
@@ -162,8 +170,9 @@ def csv_rows(path: Path) -> int:
 
 def combinations_in(accelbench: Path, config: Path) -> int:
     """The combination count of a config (`accelbench run --dry-run`; skipped ones get rows too)."""
-    out = subprocess.run([str(accelbench), "run", "--dry-run", str(config)], check=True,
-                         capture_output=True, text=True).stdout
+    out = subprocess.run(
+        [str(accelbench), "run", "--dry-run", str(config)], check=True, capture_output=True, text=True
+    ).stdout
     m = DRY_RUN_COUNT.search(out)
     if not m:
         raise RuntimeError(f"{accelbench} run --dry-run {config}: no combination count in its output")
@@ -178,8 +187,9 @@ def clock(seconds: float) -> str:
 @dataclass
 class Progress:
     """One line for the whole job: done / total over every config, elapsed, time left."""
+
     total: int
-    done_before: int           # rows already in the CSVs when this invocation started
+    done_before: int  # rows already in the CSVs when this invocation started
     start: float = field(default_factory=time.monotonic)
 
     def line(self, done: int) -> str:
@@ -189,23 +199,23 @@ class Progress:
         if here > 0 and done < self.total:
             left = f", about {clock(elapsed / here * (self.total - done))} left"
         pct = 100 * done // self.total if self.total else 100
-        return (f"reproduce: {done}/{self.total} combinations ({pct}%) over all configs, "
-                f"elapsed {clock(elapsed)}{left}")
+        return (
+            f"reproduce: {done}/{self.total} combinations ({pct}%) over all configs, "
+            f"elapsed {clock(elapsed)}{left}"
+        )
 
     def show(self, done: int) -> None:
         print(self.line(done), file=sys.stderr, flush=True)
 
 
-def run_config(accelbench: Path, config: Path, out_csv: Path, progress: Progress,
-               done_elsewhere: int) -> int:
+def run_config(accelbench: Path, config: Path, out_csv: Path, progress: Progress, done_elsewhere: int) -> int:
     """One config through the harness into out_csv (continued when it has rows). Its lines
     pass through; after a line, when the CSV has gained a row since the job's progress line
     was last shown, the line is shown again (the harness prints a line as each combination
     starts, so the job's line follows each per-combination line, whatever their format)."""
     resume = out_csv.is_file() and out_csv.stat().st_size > 0
     cmd = [str(accelbench), "run", str(config), "--out", str(out_csv)] + (["--resume"] if resume else [])
-    print(f"== {config.stem} -> {out_csv}{' (continuing)' if resume else ''}", file=sys.stderr,
-          flush=True)
+    print(f"== {config.stem} -> {out_csv}{' (continuing)' if resume else ''}", file=sys.stderr, flush=True)
     proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, bufsize=1)
     assert proc.stderr is not None
     shown = done_elsewhere + csv_rows(out_csv)
@@ -223,20 +233,21 @@ def run_config(accelbench: Path, config: Path, out_csv: Path, progress: Progress
 
 # ---- the job --------------------------------------------------------------------------------
 
+
 @dataclass
 class Job:
     accelbench: Path
     configs: list[Path]
-    scaling: Path | None = None        # among configs: analysed by `scaling`, not `all`
-    tag: str = ""                      # "quick": its own run directories and job identity
+    scaling: Path | None = None  # among configs: analysed by `scaling`, not `all`
+    tag: str = ""  # "quick": its own run directories and job identity
     runs: Path = Path("results/runs")
     latest: Path | None = Path("results/latest")
-    into: Path | None = None           # a fixed directory, always fresh (the reference run)
+    into: Path | None = None  # a fixed directory, always fresh (the reference run)
     reference_run: Path | None = None  # the committed reference run, for the three-way table
     report_numbers: Path | None = None
     cost_images: list[str] | None = None  # command writing OUT/figures/cost-*.png, OUT appended
     fresh: bool = False
-    require_clean_tree: bool = False   # refuse uncommitted changes (the reference run)
+    require_clean_tree: bool = False  # refuse uncommitted changes (the reference run)
     analyse: bool = True
 
 
@@ -264,13 +275,21 @@ def start(job: Job, provenance: dict[str, str], now: datetime) -> tuple[Path, di
     else:
         d = decide(job.runs, ident, provenance, job.fresh, now)
         run_dir = d.run_dir
-        print(f"reproduce: {'continuing' if d.resume else 'starting'} {run_dir}: {d.reason}",
-              file=sys.stderr, flush=True)
+        print(
+            f"reproduce: {'continuing' if d.resume else 'starting'} {run_dir}: {d.reason}",
+            file=sys.stderr,
+            flush=True,
+        )
         meta = read_run_json(run_dir) if d.resume else None
     (run_dir / "csv").mkdir(parents=True, exist_ok=True)
     if meta is None:
-        meta = {"job": ident, "provenance": provenance, "started": utc(now), "complete": False,
-                "continued": []}
+        meta = {
+            "job": ident,
+            "provenance": provenance,
+            "started": utc(now),
+            "complete": False,
+            "continued": [],
+        }
     else:
         meta["continued"].append(utc(now))
     write_run_json(run_dir, meta)
@@ -289,8 +308,7 @@ def analysis_commands(job: Job, run_dir: Path) -> list[list[str]]:
         if job.report_numbers is not None:
             cmd += ["--report-numbers", str(job.report_numbers)]
         ref_csv = job.reference_run / "csv" if job.reference_run is not None else None
-        if (ref_csv is not None and ref_csv.is_dir()
-                and ref_csv.resolve() != (run_dir / "csv").resolve()):
+        if ref_csv is not None and ref_csv.is_dir() and ref_csv.resolve() != (run_dir / "csv").resolve():
             cmd += ["--reference-run", str(job.reference_run)]
         cmds.append(cmd)
     return cmds
@@ -309,13 +327,16 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
     when every config measured and the analysis ran."""
     from .cli import main as analysis_main
 
-    now = now or datetime.now(timezone.utc)
+    now = now or datetime.now(UTC)
     if job.require_clean_tree:
         changes = tree_changes(Path.cwd())
         if changes:
-            print("reproduce: refusing to measure the reference run from a work tree with "
-                  "uncommitted changes (its rows would name a commit that is not the code that "
-                  "ran); commit or stash them first:\n  " + "\n  ".join(changes), file=sys.stderr)
+            print(
+                "reproduce: refusing to measure the reference run from a work tree with "
+                "uncommitted changes (its rows would name a commit that is not the code that "
+                "ran); commit or stash them first:\n  " + "\n  ".join(changes),
+                file=sys.stderr,
+            )
             return 2, Path()
     for c in job.configs:
         if not c.is_file():
@@ -325,8 +346,11 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
         job.configs.append(job.scaling)
     provenance = build_provenance(job.accelbench)
     if job.require_clean_tree and provenance.get("git_dirty") != "false":
-        print(f"reproduce: refusing: {job.accelbench} reports git_dirty="
-              f"{provenance.get('git_dirty')} for the tree it was built from", file=sys.stderr)
+        print(
+            f"reproduce: refusing: {job.accelbench} reports git_dirty="
+            f"{provenance.get('git_dirty')} for the tree it was built from",
+            file=sys.stderr,
+        )
         return 2, Path()
     run_dir, meta = start(job, provenance, now)
     csvs = [run_dir / "csv" / f"{c.stem}.csv" for c in job.configs]
@@ -337,8 +361,11 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
         before = sum(csv_rows(p) for p in csvs[:i])
         rc = run_config(job.accelbench, config, out_csv, progress, before)
         if rc != 0:
-            print(f"reproduce: {config} exited with {rc}; {run_dir} stays unfinished (run the "
-                  f"job again with the same build to continue it)", file=sys.stderr)
+            print(
+                f"reproduce: {config} exited with {rc}; {run_dir} stays unfinished (run the "
+                f"job again with the same build to continue it)",
+                file=sys.stderr,
+            )
             return rc, run_dir
     if job.analyse:
         if job.cost_images:
@@ -350,57 +377,82 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
             if rc != 0:
                 return rc, run_dir
     meta["complete"] = True
-    meta["finished"] = utc(datetime.now(timezone.utc))
+    meta["finished"] = utc(datetime.now(UTC))
     write_run_json(run_dir, meta)
     if job.latest is not None and job.into is None:
         point_latest(job.latest, run_dir)
     took = clock(time.monotonic() - progress.start)
-    print(f"reproduce: done in {took}; see {run_dir / 'REPORT.md'}"
-          + (f" (also {job.latest})" if job.latest is not None and job.into is None else ""),
-          file=sys.stderr)
+    print(
+        f"reproduce: done in {took}; see {run_dir / 'REPORT.md'}"
+        + (f" (also {job.latest})" if job.latest is not None and job.into is None else ""),
+        file=sys.stderr,
+    )
     return 0, run_dir
 
 
 # ---- command line (python -m accelbench_analysis reproduce ...) -----------------------------
 
+
 def add_reproduce(sub) -> None:
     s = sub.add_parser(
-        "reproduce", help="the main job: measure configs into a run directory of their own, "
-                          "then analyse it",
+        "reproduce",
+        help="the main job: measure configs into a run directory of their own, then analyse it",
         description="Measures every CONFIG with the harness into RUNS/<UTC time>-<sha>[-TAG]/"
-                    "csv/ and analyses them there (tables/, figures/, REPORT.md); LATEST then "
-                    "points at it. Continues the newest run of the same configs only when it "
-                    "is unfinished and `accelbench provenance` matches what it recorded.")
+        "csv/ and analyses them there (tables/, figures/, REPORT.md); LATEST then "
+        "points at it. Continues the newest run of the same configs only when it "
+        "is unfinished and `accelbench provenance` matches what it recorded.",
+    )
     s.add_argument("configs", nargs="+", type=Path, help="configs/NAME.yaml, in order")
     s.add_argument("--accelbench", type=Path, default=Path("build/accelbench"))
     s.add_argument("--scaling", type=Path, help="the config among them analysed by `scaling`")
-    s.add_argument("--tag", default="", help="suffix of the run directory and part of the "
-                                             "job's identity (e.g. quick)")
+    s.add_argument(
+        "--tag", default="", help="suffix of the run directory and part of the job's identity (e.g. quick)"
+    )
     s.add_argument("--runs", type=Path, default=Path("results/runs"))
     s.add_argument("--latest", type=Path, default=Path("results/latest"))
-    s.add_argument("--into", type=Path, help="write this directory from scratch instead "
-                                             "(the committed reference run)")
-    s.add_argument("--reference-run", type=Path, default=Path("results/reference"),
-                   help="the committed reference run compared with (default results/reference)")
+    s.add_argument(
+        "--into", type=Path, help="write this directory from scratch instead (the committed reference run)"
+    )
+    s.add_argument(
+        "--reference-run",
+        type=Path,
+        default=Path("results/reference"),
+        help="the committed reference run compared with (default results/reference)",
+    )
     s.add_argument("--report-numbers", type=Path)
-    s.add_argument("--cost-images", help="command (split at spaces) writing OUT/figures/"
-                                         "cost-*.png; the run directory is appended")
+    s.add_argument(
+        "--cost-images",
+        help="command (split at spaces) writing OUT/figures/cost-*.png; the run directory is appended",
+    )
     s.add_argument("--fresh", action="store_true", help="never continue an unfinished run")
-    s.add_argument("--require-clean-tree", action="store_true",
-                   help="refuse when tracked files have uncommitted changes (the reference run)")
+    s.add_argument(
+        "--require-clean-tree",
+        action="store_true",
+        help="refuse when tracked files have uncommitted changes (the reference run)",
+    )
 
 
 def run_reproduce(args: argparse.Namespace) -> int:
-    job = Job(accelbench=args.accelbench, configs=list(args.configs), scaling=args.scaling,
-              tag=args.tag, runs=args.runs, latest=args.latest, into=args.into,
-              reference_run=args.reference_run, report_numbers=args.report_numbers,
-              cost_images=args.cost_images.split() if args.cost_images else None,
-              fresh=args.fresh, require_clean_tree=args.require_clean_tree)
+    job = Job(
+        accelbench=args.accelbench,
+        configs=list(args.configs),
+        scaling=args.scaling,
+        tag=args.tag,
+        runs=args.runs,
+        latest=args.latest,
+        into=args.into,
+        reference_run=args.reference_run,
+        report_numbers=args.report_numbers,
+        cost_images=args.cost_images.split() if args.cost_images else None,
+        fresh=args.fresh,
+        require_clean_tree=args.require_clean_tree,
+    )
     try:
         rc, _ = reproduce(job)
     except KeyboardInterrupt:
         # The harness got the same signal; what it finished is in the CSVs.
-        print("\nreproduce: interrupted; run the job again with the same build to continue it",
-              file=sys.stderr)
+        print(
+            "\nreproduce: interrupted; run the job again with the same build to continue it", file=sys.stderr
+        )
         return 130
     return rc

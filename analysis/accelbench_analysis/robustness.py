@@ -31,7 +31,7 @@ PASS, FAIL, NO_ROW = "pass", "**FAIL**", "—"
 
 def case_id(model: str) -> tuple[str, str]:
     """("2a", "closed-meshes-translated-1.5e5") from "case-2a:closed-meshes-translated-1.5e5"."""
-    label = model[len(CASE_PREFIX):] if model.startswith(CASE_PREFIX) else model
+    label = model[len(CASE_PREFIX) :] if model.startswith(CASE_PREFIX) else model
     cid, _, name = label.partition(":")
     return cid, name
 
@@ -57,8 +57,9 @@ def varying_params(rows: pd.DataFrame) -> dict[str, list[str]]:
     return out
 
 
-def setting_label(accel: str, params: dict[str, str], varying: list[str],
-                  full_when_alone: bool = False) -> str:
+def setting_label(
+    accel: str, params: dict[str, str], varying: list[str], full_when_alone: bool = False
+) -> str:
     """accel plus the parameters that tell its rows apart ("embree robust=true")."""
     keys = varying or (sorted(params) if full_when_alone else [])
     shown = " ".join(f"{k}={params[k]}" for k in keys if k in params)
@@ -88,13 +89,12 @@ def mib(x) -> str:
 def verdict_section(cases: pd.DataFrame) -> tuple[list[str], list[str]]:
     """(a) and (b): the case x setting table and the failure list."""
     if cases.empty:
-        return (["No catalogue case rows (model `case-<id>:<name>`) in the CSV."],
-                ["None (no case rows)."])
+        return (["No catalogue case rows (model `case-<id>:<name>`) in the CSV."], ["None (no case rows)."])
     varying = varying_params(cases)
-    cases = cases.assign(setting=[setting_label(a, p, varying.get(a, []))
-                                  for a, p in zip(cases["accel"], cases["param_dict"])])
-    settings = sorted(set(zip(cases["accel"], cases["setting"])),
-                      key=lambda t: (accel_sort_key(t[0]), t[1]))
+    cases = cases.assign(
+        setting=[setting_label(a, p, varying.get(a, [])) for a, p in zip(cases["accel"], cases["param_dict"])]
+    )
+    settings = sorted(set(zip(cases["accel"], cases["setting"])), key=lambda t: (accel_sort_key(t[0]), t[1]))
     columns = [s for _, s in settings]
     models = sorted(set(cases["model"]), key=case_sort_key)
     chosen: dict[tuple[str, str], pd.Series] = {}
@@ -112,25 +112,31 @@ def verdict_section(cases: pd.DataFrame) -> tuple[list[str], list[str]]:
         table_rows.append(cells)
     table_rows.append(["", "**not passed**"] + [str(fails_per_column[c]) for c in columns])
     counts = pd.Series([verdict_cell(r) for r in chosen.values()]).value_counts()
-    summary = (f"{len(models)} cases x {len(columns)} accelerator settings: "
-               f"{counts.get(PASS, 0)} pass, {counts.get(FAIL, 0)} FAIL, "
-               f"{sum(v for k, v in counts.items() if k not in (PASS, FAIL))} did not complete "
-               f"or have no verdict, {len(models) * len(columns) - len(chosen)} combinations "
-               f"without a row (—).")
+    summary = (
+        f"{len(models)} cases x {len(columns)} accelerator settings: "
+        f"{counts.get(PASS, 0)} pass, {counts.get(FAIL, 0)} FAIL, "
+        f"{sum(v for k, v in counts.items() if k not in (PASS, FAIL))} did not complete "
+        f"or have no verdict, {len(models) * len(columns) - len(chosen)} combinations "
+        f"without a row (—)."
+    )
     verdicts = [summary, ""] + md_table(["case", "name"] + columns, table_rows, align="ll")
 
     failures = []
-    for (model, setting), r in sorted(chosen.items(),
-                                      key=lambda kv: (case_sort_key(kv[0][0]), kv[0][1])):
+    for (model, setting), r in sorted(chosen.items(), key=lambda kv: (case_sort_key(kv[0][0]), kv[0][1])):
         cell = verdict_cell(r)
         if cell == PASS:
             continue
         cid, name = case_id(model)
-        failures.append([cid, name, setting, cell.strip("*"), one_line(r["verdict_counts"]),
-                         one_line(r["message"])])
-    fail_lines = (md_table(["case", "name", "accelerator", "verdict / status", "counts",
-                            "message"], failures, align="llllll")
-                  if failures else ["None: every case row passed."])
+        failures.append(
+            [cid, name, setting, cell.strip("*"), one_line(r["verdict_counts"]), one_line(r["message"])]
+        )
+    fail_lines = (
+        md_table(
+            ["case", "name", "accelerator", "verdict / status", "counts", "message"], failures, align="llllll"
+        )
+        if failures
+        else ["None: every case row passed."]
+    )
     return verdicts, fail_lines
 
 
@@ -139,52 +145,98 @@ def timed_section(timed: pd.DataFrame) -> list[str]:
     if timed.empty:
         return ["No timed rows in the CSV."]
     varying = varying_params(timed)
-    metrics = [ERROR_METRIC[c] for c in ("false_misses", "false_hits", "prim_mismatches",
-                                          "nan_results", "t_err_ulp_p50", "t_err_ulp_max")]
+    metrics = [
+        ERROR_METRIC[c]
+        for c in (
+            "false_misses",
+            "false_hits",
+            "prim_mismatches",
+            "nan_results",
+            "t_err_ulp_p50",
+            "t_err_ulp_max",
+        )
+    ]
     metrics += [m for m in shown_metrics(timed) if m.image]
-    header = (["model", "accelerator", "status", "build (s)", "render (s)", "nodes",
-               "max depth", "memory (MiB)", "peak RSS (MiB)"] + [m.short for m in metrics]
-              + ["message"])
+    header = (
+        [
+            "model",
+            "accelerator",
+            "status",
+            "build (s)",
+            "render (s)",
+            "nodes",
+            "max depth",
+            "memory (MiB)",
+            "peak RSS (MiB)",
+        ]
+        + [m.short for m in metrics]
+        + ["message"]
+    )
     out = []
     order = timed.assign(_a=timed["accel"].map(accel_sort_key)).sort_values(
-        ["model", "_a", "params"], kind="stable")
+        ["model", "_a", "params"], kind="stable"
+    )
     for _, r in order.iterrows():
         ok = r["status"] == "ok"
-        label = setting_label(r["accel"], r["param_dict"], varying.get(r["accel"], []),
-                              full_when_alone=True)
-        out.append([r["model"], label, r["status"] if ok else f"**{r['status']}**",
-                    fmt_sig(r["build_s_median"]), fmt_sig(r["render_s_median"]),
-                    fmt_count(r["nodes"]), fmt_count(r["max_depth"]), mib(r["memory_bytes"]),
-                    mib(r["peak_rss_bytes"])]
-                   + [error_text(r, m) if ok else "—" for m in metrics]
-                   + [one_line(r["message"]) if not ok else ""])
+        label = setting_label(r["accel"], r["param_dict"], varying.get(r["accel"], []), full_when_alone=True)
+        out.append(
+            [
+                r["model"],
+                label,
+                r["status"] if ok else f"**{r['status']}**",
+                fmt_sig(r["build_s_median"]),
+                fmt_sig(r["render_s_median"]),
+                fmt_count(r["nodes"]),
+                fmt_count(r["max_depth"]),
+                mib(r["memory_bytes"]),
+                mib(r["peak_rss_bytes"]),
+            ]
+            + [error_text(r, m) if ok else "—" for m in metrics]
+            + [one_line(r["message"]) if not ok else ""]
+        )
     return md_table(header, out, align="lll" + "r" * (len(header) - 4) + "l")
 
 
 def robustness_markdown(results: Results) -> str:
     from .report import provenance_lines  # the same provenance block as REPORT.md
+
     cases, timed = results.case_rows(), results.measured_rows()
     verdicts, failures = verdict_section(cases)
     out = ["# Robustness: the extreme-case catalogue and stiff parameters", ""]
     out += [f"> **Warning:** {md_escape(w)}\n" for w in results.warnings]
     out += provenance_lines(results)
-    out += ["", "## Verdicts per case and accelerator setting", "",
-            "Each cell is the harness's verdict for the case's scene and rays on that "
-            "configuration (what a correct implementation must do is written beside each case in "
-            "core/accelbench/robustness_cases.cpp; `accelbench list` prints it). A status (error, timeout, skipped) means the case did "
-            "not complete; — means no row. Columns show only the parameters that vary "
-            "between the accelerator's case rows.", ""]
+    out += [
+        "",
+        "## Verdicts per case and accelerator setting",
+        "",
+        "Each cell is the harness's verdict for the case's scene and rays on that "
+        "configuration (what a correct implementation must do is written beside each case in "
+        "core/accelbench/robustness_cases.cpp; `accelbench list` prints it). A status (error, timeout, skipped) means the case did "
+        "not complete; — means no row. Columns show only the parameters that vary "
+        "between the accelerator's case rows.",
+        "",
+    ]
     out += verdicts
-    out += ["", "## Failures", "", "Every cell above that is not a pass, with the counts "
-            "behind the verdict and the harness's message.", ""] + failures
-    out += ["", "## Stiff parameters (timed rows)", "",
-            "Extreme parameter values on real models: they must terminate with bounded memory "
-            "or be refused with a message naming the limit. Memory is the structure's own "
-            "(memory_bytes); peak RSS is the measuring process's high-water mark, loaded "
-            "model included. Errors are counts over the primary rays against the "
-            f"`reference` accelerator ({NOT_MEASURED}: the comparison did not run). "
-            "Accelerator labels show the parameters that vary between its rows (all of "
-            "them when it has one row).", ""]
+    out += [
+        "",
+        "## Failures",
+        "",
+        "Every cell above that is not a pass, with the counts behind the verdict and the harness's message.",
+        "",
+    ] + failures
+    out += [
+        "",
+        "## Stiff parameters (timed rows)",
+        "",
+        "Extreme parameter values on real models: they must terminate with bounded memory "
+        "or be refused with a message naming the limit. Memory is the structure's own "
+        "(memory_bytes); peak RSS is the measuring process's high-water mark, loaded "
+        "model included. Errors are counts over the primary rays against the "
+        f"`reference` accelerator ({NOT_MEASURED}: the comparison did not run). "
+        "Accelerator labels show the parameters that vary between its rows (all of "
+        "them when it has one row).",
+        "",
+    ]
     out += timed_section(timed)
     return "\n".join(out) + "\n"
 

@@ -35,8 +35,7 @@ def scaling_frame(results: Results) -> pd.DataFrame:
     sizes of one source model form one series."""
     rows = results.rows[results.rows["status"] == "ok"].copy()
     split_col = PARAM_PREFIX + "split"
-    split = rows[split_col] if split_col in rows.columns else pd.Series([None] * len(rows),
-                                                                          index=rows.index)
+    split = rows[split_col] if split_col in rows.columns else pd.Series([None] * len(rows), index=rows.index)
     rows["structure"] = [structure_label(a, s) for a, s in zip(rows["accel"], split)]
     rows["family"] = rows["model"].str.split("@").str[0]
     keep = ["family", "model", "structure", "triangles", *TIMES]
@@ -54,13 +53,22 @@ def fit_slopes(frame: pd.DataFrame) -> pd.DataFrame:
                 continue
             x, y = np.log10(ok["triangles"].astype(float)), np.log10(ok[col].astype(float))
             slope, intercept = np.polyfit(x, y, 1)
-            out.append({"family": family, "structure": structure, "time": what,
-                        "slope": float(slope), "intercept": float(intercept), "n": len(ok),
-                        "min_triangles": int(ok["triangles"].min()),
-                        "max_triangles": int(ok["triangles"].max())})
-    return pd.DataFrame.from_records(out, columns=["family", "structure", "time", "slope",
-                                                   "intercept", "n", "min_triangles",
-                                                   "max_triangles"])
+            out.append(
+                {
+                    "family": family,
+                    "structure": structure,
+                    "time": what,
+                    "slope": float(slope),
+                    "intercept": float(intercept),
+                    "n": len(ok),
+                    "min_triangles": int(ok["triangles"].min()),
+                    "max_triangles": int(ok["triangles"].max()),
+                }
+            )
+    return pd.DataFrame.from_records(
+        out,
+        columns=["family", "structure", "time", "slope", "intercept", "n", "min_triangles", "max_triangles"],
+    )
 
 
 def _structure_order(labels) -> list[str]:
@@ -88,17 +96,31 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
                 g = frame[(frame["structure"] == s) & (frame["family"] == fam) & (frame[col] > 0)]
                 if g.empty:
                     continue
-                fit = slopes[(slopes["structure"] == s) & (slopes["family"] == fam) &
-                             (slopes["time"] == what)]
+                fit = slopes[
+                    (slopes["structure"] == s) & (slopes["family"] == fam) & (slopes["time"] == what)
+                ]
                 label = f"{s}, {fam}"
                 if not fit.empty:
                     f = fit.iloc[0]
                     xs = np.array([g["triangles"].min(), g["triangles"].max()], dtype=float)
-                    ax.plot(xs, 10 ** (f["intercept"] + f["slope"] * np.log10(xs)), "-",
-                            color=colour, lw=1.2, alpha=0.8)
+                    ax.plot(
+                        xs,
+                        10 ** (f["intercept"] + f["slope"] * np.log10(xs)),
+                        "-",
+                        color=colour,
+                        lw=1.2,
+                        alpha=0.8,
+                    )
                     label += f": slope {f['slope']:.2f}"
-                ax.plot(g["triangles"], g[col], FAMILY_MARKERS[k % len(FAMILY_MARKERS)],
-                        color=colour, ms=6, mfc="white" if k else colour, label=label)
+                ax.plot(
+                    g["triangles"],
+                    g[col],
+                    FAMILY_MARKERS[k % len(FAMILY_MARKERS)],
+                    color=colour,
+                    ms=6,
+                    mfc="white" if k else colour,
+                    label=label,
+                )
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("triangles")
@@ -108,8 +130,7 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
         plain_log_ticks(ax, "y")
         ax.xaxis.set_major_formatter(mticker.FuncFormatter(_triangles_tick))
         # Below the axes: inside, the legend would hide the smallest sizes' points.
-        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2,
-                  frameon=False)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI, metadata={"Software": None})
     plt.close(fig)
@@ -120,23 +141,30 @@ def slopes_markdown(slopes: pd.DataFrame, files: list[str]) -> str:
     """OUT/tables/scaling.md: one row per structure, build and render slopes per model."""
     families = sorted(slopes["family"].unique())
     head = ["structure"] + [f"{what} slope, {fam}" for fam in families for what in TIMES.values()]
-    lines = ["# Scaling: time ~ triangles^slope", "",
-             "Least-squares fit of log10(median time) against log10(triangles) over the sizes "
-             "of each source model (dragon: OpenMesh quadric decimation; bunny: Loop "
-             "subdivision). A slope of 1 is linear growth; n log n over 10k..1M triangles fits "
-             "about 1.1. Render times are for a fixed image (the config's size), so they "
-             "grow with the depth of the structure, not with the triangle count itself.", "",
-             "Sizes per fit: " + "; ".join(
-                 f"{fam} {int(g['n'].max())} sizes, {int(g['min_triangles'].min()):,}–"
-                 f"{int(g['max_triangles'].max()):,} triangles"
-                 for fam, g in slopes.groupby("family")),
-             "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines = [
+        "# Scaling: time ~ triangles^slope",
+        "",
+        "Least-squares fit of log10(median time) against log10(triangles) over the sizes "
+        "of each source model (dragon: OpenMesh quadric decimation; bunny: Loop "
+        "subdivision). A slope of 1 is linear growth; n log n over 10k..1M triangles fits "
+        "about 1.1. Render times are for a fixed image (the config's size), so they "
+        "grow with the depth of the structure, not with the triangle count itself.",
+        "",
+        "Sizes per fit: "
+        + "; ".join(
+            f"{fam} {int(g['n'].max())} sizes, {int(g['min_triangles'].min()):,}–"
+            f"{int(g['max_triangles'].max()):,} triangles"
+            for fam, g in slopes.groupby("family")
+        ),
+        "",
+        "| " + " | ".join(head) + " |",
+        "|" + "---|" * len(head),
+    ]
     for s in _structure_order(slopes["structure"]):
         cells = [s]
         for fam in families:
             for what in TIMES.values():
-                f = slopes[(slopes["structure"] == s) & (slopes["family"] == fam) &
-                           (slopes["time"] == what)]
+                f = slopes[(slopes["structure"] == s) & (slopes["family"] == fam) & (slopes["time"] == what)]
                 cells.append(f"{f.iloc[0]['slope']:.2f}" if not f.empty else "–")
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "Data: " + ", ".join(files), ""]
@@ -179,16 +207,19 @@ def read_cost_csv(path: Path) -> dict[str, np.ndarray]:
     for col in ("x", "y"):
         bad = df[col].isna() | (df[col] != df[col].round())
         if not problems and bad.any():
-            problems.append(f"column {col!r} has values that are not pixel coordinates on "
-                            f"{_lines(starts, df.index[bad])}")
+            problems.append(
+                f"column {col!r} has values that are not pixel coordinates on {_lines(starts, df.index[bad])}"
+            )
     if problems:
         raise ContractError(f"{path}: " + "; ".join(problems))
     x, y = df["x"].astype(int).to_numpy(), df["y"].astype(int).to_numpy()
     w, h = int(x.max()) + 1, int(y.max()) + 1
     seen = pd.Series(y * w + x).duplicated()
     if seen.any():
-        raise ContractError(f"{path}: pixel ({x[seen.idxmax()]}, {y[seen.idxmax()]}) a second time on "
-                            f"{_lines(starts, seen.index[seen])}")
+        raise ContractError(
+            f"{path}: pixel ({x[seen.idxmax()]}, {y[seen.idxmax()]}) a second time on "
+            f"{_lines(starts, seen.index[seen])}"
+        )
     if len(df) != w * h:
         raise ContractError(f"{path}: {len(df)} rows for a {w}x{h} image")
     out = {}
@@ -211,8 +242,13 @@ def cost_figure(model: str, shaded: Path | None, costs: dict[str, Path], path: P
     cols = len(data) + (1 if shaded else 0)
     h, w = shapes.pop()
     panel = 3.4
-    fig, axes = plt.subplots(len(COST_METRICS), cols, squeeze=False, constrained_layout=True,
-                             figsize=(panel * cols + 0.8, panel * h / w * len(COST_METRICS) + 0.9))
+    fig, axes = plt.subplots(
+        len(COST_METRICS),
+        cols,
+        squeeze=False,
+        constrained_layout=True,
+        figsize=(panel * cols + 0.8, panel * h / w * len(COST_METRICS) + 0.9),
+    )
     for r, (metric, name) in enumerate(COST_METRICS.items()):
         row = axes[r]
         c0 = 0
@@ -220,8 +256,10 @@ def cost_figure(model: str, shaded: Path | None, costs: dict[str, Path], path: P
             row[0].imshow(plt.imread(shaded))
             row[0].set_title(f"{model}\nshaded", fontsize=9)
             c0 = 1
-        vmax = float(np.percentile(np.concatenate([d[metric].ravel() for d in data.values()]),
-                                   CLIP_PERCENTILE)) or 1.0
+        vmax = (
+            float(np.percentile(np.concatenate([d[metric].ravel() for d in data.values()]), CLIP_PERCENTILE))
+            or 1.0
+        )
         im = None
         for k, (label, d) in enumerate(data.items()):
             ax = row[c0 + k]
@@ -232,9 +270,11 @@ def cost_figure(model: str, shaded: Path | None, costs: dict[str, Path], path: P
             ax.set_yticks([])
         bar = fig.colorbar(im, ax=list(row[c0:]), shrink=0.9, pad=0.01, extend="max")
         bar.set_label(f"{name} per pixel\n(primary + shadow ray)", fontsize=8)
-    fig.suptitle(f"Traversal cost per pixel, {model}: brighter = more work "
-                 f"(scale shared per row, clipped at the {CLIP_PERCENTILE:g}th percentile)",
-                 fontsize=10)
+    fig.suptitle(
+        f"Traversal cost per pixel, {model}: brighter = more work "
+        f"(scale shared per row, clipped at the {CLIP_PERCENTILE:g}th percentile)",
+        fontsize=10,
+    )
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI, metadata={"Software": None})
     plt.close(fig)

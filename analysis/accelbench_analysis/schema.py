@@ -40,22 +40,43 @@ IDENTITY_COLUMNS = ["config", "model", "triangles", "vertices", "accel", "params
 STATUS_COLUMNS = ["status", "message", "repetitions"]
 TIMING_COLUMNS = stat_columns("build_s") + stat_columns("render_s")
 COUNT_COLUMNS = [
-    "rays", "hits", "shadow_rays", "shadow_hits", "mrays_per_s", "nodes", "leaves",
-    "max_depth", "memory_bytes", "sah_cost", "prim_tests", "node_visits",
+    "rays",
+    "hits",
+    "shadow_rays",
+    "shadow_hits",
+    "mrays_per_s",
+    "nodes",
+    "leaves",
+    "max_depth",
+    "memory_bytes",
+    "sah_cost",
+    "prim_tests",
+    "node_visits",
 ]
 PROVENANCE_COLUMNS = [
-    "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version",
+    "git_sha",
+    "git_dirty",
+    "compiler",
+    "build_type",
+    "cpu",
+    "threads",
+    "embree_version",
     "timestamp",
 ]
-REQUIRED_COLUMNS = (IDENTITY_COLUMNS + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
-                    + PROVENANCE_COLUMNS)
+REQUIRED_COLUMNS = IDENTITY_COLUMNS + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS + PROVENANCE_COLUMNS
 
 # Written by the harness when it compares with the `reference` accelerator; every consumer
 # must cope with their absence (older CSVs; has_error_columns()). Counts are over the primary rays
 # (`rays`) against the double-precision `reference` accelerator; empty = not measured.
 ERROR_COLUMNS = [
-    "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max",
-    "nan_results", "image_rmse", "hole_pixels",
+    "false_misses",
+    "false_hits",
+    "prim_mismatches",
+    "t_err_ulp_p50",
+    "t_err_ulp_max",
+    "nan_results",
+    "image_rmse",
+    "hole_pixels",
 ]
 # The measuring process's memory high-water mark (bytes, the loaded model included).
 PEAK_RSS_COLUMN = "peak_rss_bytes"
@@ -72,8 +93,14 @@ ERROR_MEMORY_VERDICT_COLUMNS = ERROR_COLUMNS + [PEAK_RSS_COLUMN] + VERDICT_COLUM
 # instruction count (Ir) of the measured render, empty where it was not measured.
 INSTRUCTIONS_COLUMN = "instructions"
 
-NUMERIC_COLUMNS = (["triangles", "vertices", "repetitions"] + TIMING_COLUMNS + COUNT_COLUMNS
-                   + ["threads"] + ERROR_COLUMNS + [PEAK_RSS_COLUMN, INSTRUCTIONS_COLUMN])
+NUMERIC_COLUMNS = (
+    ["triangles", "vertices", "repetitions"]
+    + TIMING_COLUMNS
+    + COUNT_COLUMNS
+    + ["threads"]
+    + ERROR_COLUMNS
+    + [PEAK_RSS_COLUMN, INSTRUCTIONS_COLUMN]
+)
 
 STATUSES = ("ok", "skipped", "timeout", "error")
 
@@ -122,10 +149,12 @@ class ProvenanceGroup:
     def describe(self) -> str:
         sha = self.fields["git_sha"]
         dirty = " (dirty)" if self.fields["git_dirty"] == "true" else ""
-        return (f"{self.label}: commit {sha[:12]}{dirty}, cpu {self.fields['cpu']}, "
-                f"{self.fields['compiler']}, {self.fields['build_type']}, isa {self.fields['isa']}, "
-                f"Embree {self.fields['embree_version']} ({self.rows} rows from "
-                f"{', '.join(self.files)})")
+        return (
+            f"{self.label}: commit {sha[:12]}{dirty}, cpu {self.fields['cpu']}, "
+            f"{self.fields['compiler']}, {self.fields['build_type']}, isa {self.fields['isa']}, "
+            f"Embree {self.fields['embree_version']} ({self.rows} rows from "
+            f"{', '.join(self.files)})"
+        )
 
 
 @dataclass
@@ -143,8 +172,10 @@ class Results:
         return len(self.groups) > 1
 
     def has_error_columns(self) -> bool:
-        return all(c in self.rows.columns for c in ("false_misses", "false_hits")) and \
-            self.rows[["false_misses", "false_hits"]].notna().any().any()
+        return (
+            all(c in self.rows.columns for c in ("false_misses", "false_hits"))
+            and self.rows[["false_misses", "false_hits"]].notna().any().any()
+        )
 
     def ok(self) -> pd.DataFrame:
         return self.rows[self.rows["status"] == "ok"]
@@ -218,7 +249,7 @@ def _scan_records(path: Path) -> list[int]:
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:
-        line = raw[:e.start].count(b"\n") + 1
+        line = raw[: e.start].count(b"\n") + 1
         raise ContractError(f"{path}: line {line}: not UTF-8 text ({e.reason})") from None
     starts: list[int] = []
     problems: list[str] = []
@@ -232,31 +263,39 @@ def _scan_records(path: Path) -> list[int]:
             if not record:
                 problems.append(f"line {start}: an empty line")
             elif len(record) != width:
-                problems.append(f"line {start} (row {row}): {len(record)} fields but the header has "
-                                f"{width}" + (" (the row is cut short)" if len(record) < width else ""))
+                problems.append(
+                    f"line {start} (row {row}): {len(record)} fields but the header has "
+                    f"{width}" + (" (the row is cut short)" if len(record) < width else "")
+                )
             starts.append(start)
     except StopIteration:
         raise ContractError(f"{path}: empty file (no header)") from None
     except csv.Error as e:
         raise ContractError(f"{path}: line {reader.line_num}: not a well-formed CSV ({e})") from None
     if text and not text.endswith("\n"):
-        problems.append(f"line {text.count(chr(10)) + 1} (the last row) has no line break at its end: "
-                        f"the file was cut while it was written")
+        problems.append(
+            f"line {text.count(chr(10)) + 1} (the last row) has no line break at its end: "
+            f"the file was cut while it was written"
+        )
     if problems:
-        raise ContractError(f"{path}: " + "; ".join(problems[:5])
-                            + (f"; and {len(problems) - 5} more" if len(problems) > 5 else ""))
+        raise ContractError(
+            f"{path}: "
+            + "; ".join(problems[:5])
+            + (f"; and {len(problems) - 5} more" if len(problems) > 5 else "")
+        )
     return starts
 
 
 def _lines(starts: list[int], index) -> str:
-    """"line 3 (row 2)" for up to five data rows (row: counted from 1 after the header)."""
+    """ "line 3 (row 2)" for up to five data rows (row: counted from 1 after the header)."""
     picked = [int(i) for i in list(index)[:5]]
     more = f" and {len(index) - 5} more" if len(index) > 5 else ""
     return ", ".join(f"line {starts[i]} (row {i + 1})" for i in picked) + more
 
 
-def _to_numbers(df: pd.DataFrame, columns: list[str], starts: list[int],
-                positive: list[str] = ()) -> list[str]:
+def _to_numbers(
+    df: pd.DataFrame, columns: list[str], starts: list[int], positive: list[str] = ()
+) -> list[str]:
     """Converts the columns in place (empty text = missing); returns the problems found,
     each naming the column, the lines and an example value. Non-empty cells must be finite
     and not negative; those of `positive` columns greater than 0."""
@@ -268,11 +307,17 @@ def _to_numbers(df: pd.DataFrame, columns: list[str], starts: list[int],
         nums = pd.to_numeric(text.where(text != ""), errors="coerce").astype(float)
         present = text != ""
         checks = [
-            (present & nums.isna() & ~text.str.lower().isin(["nan", "-nan", "+nan"]),
-             "non-numeric values", ""),
-            (present & ~np.isfinite(nums.fillna(0.0)) | present & nums.isna()
-             & text.str.lower().isin(["nan", "-nan", "+nan"]),
-             "values that are not finite", ""),
+            (
+                present & nums.isna() & ~text.str.lower().isin(["nan", "-nan", "+nan"]),
+                "non-numeric values",
+                "",
+            ),
+            (
+                present & ~np.isfinite(nums.fillna(0.0))
+                | present & nums.isna() & text.str.lower().isin(["nan", "-nan", "+nan"]),
+                "values that are not finite",
+                "",
+            ),
             (present & np.isfinite(nums.fillna(0.0)) & (nums < 0), "negative values", ""),
         ]
         if col in positive:
@@ -280,8 +325,9 @@ def _to_numbers(df: pd.DataFrame, columns: list[str], starts: list[int],
         for bad, what, note in checks:
             if bad.any():
                 idx = df.index[bad]
-                problems.append(f"column {col!r} has {what} on {_lines(starts, idx)} "
-                                f"(e.g. {text[bad].iloc[0]!r}){note}")
+                problems.append(
+                    f"column {col!r} has {what} on {_lines(starts, idx)} (e.g. {text[bad].iloc[0]!r}){note}"
+                )
                 break
         df[col] = nums
     return problems
@@ -293,8 +339,10 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     if not path.is_file():
         raise ContractError(f"{path}: no such file")
     if path.name.endswith(".reps.csv"):
-        raise ContractError(f"{path}: this is a per-repetition file; pass the summary CSV "
-                            f"beside it (its .reps.csv is read automatically)")
+        raise ContractError(
+            f"{path}: this is a per-repetition file; pass the summary CSV "
+            f"beside it (its .reps.csv is read automatically)"
+        )
     header = _read_header(path)
     starts = _scan_records(path)
     names = _rename_param_columns(header)
@@ -321,16 +369,20 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     status = df["status"].str.strip().str.lower()
     bad_status = ~status.isin(STATUSES)
     if bad_status.any():
-        problems.append(f"column 'status' must be one of {', '.join(STATUSES)}; found "
-                        f"{sorted(set(df['status'][bad_status]))} on {_lines(starts, df.index[bad_status])}")
+        problems.append(
+            f"column 'status' must be one of {', '.join(STATUSES)}; found "
+            f"{sorted(set(df['status'][bad_status]))} on {_lines(starts, df.index[bad_status])}"
+        )
     df["status"] = status
 
     if "verdict" in df.columns:
         verdict = df["verdict"].str.strip().str.lower()
         bad = ~verdict.isin(VERDICTS + ("",))
         if bad.any():
-            problems.append(f"column 'verdict' must be pass, fail or empty; found "
-                            f"{sorted(set(df['verdict'][bad]))} on {_lines(starts, df.index[bad])}")
+            problems.append(
+                f"column 'verdict' must be pass, fail or empty; found "
+                f"{sorted(set(df['verdict'][bad]))} on {_lines(starts, df.index[bad])}"
+            )
         df["verdict"] = verdict
 
     for col in ("model", "accel", "config"):
@@ -347,8 +399,10 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     dirty = dirty.replace({"1": "true", "0": "false", "yes": "true", "no": "false"})
     if not dirty.isin(["true", "false"]).all():
         bad = ~dirty.isin(["true", "false"])
-        problems.append(f"column 'git_dirty' must be true/false; found "
-                        f"{sorted(set(df['git_dirty'][bad]))} on {_lines(starts, df.index[bad])}")
+        problems.append(
+            f"column 'git_dirty' must be true/false; found "
+            f"{sorted(set(df['git_dirty'][bad]))} on {_lines(starts, df.index[bad])}"
+        )
     df["git_dirty"] = dirty
 
     if problems:
@@ -357,8 +411,10 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     dup = df.duplicated(KEY_COLUMNS, keep=False)
     if dup.any():
         keys = df.loc[dup, KEY_COLUMNS].drop_duplicates().head(3).to_dict("records")
-        raise ContractError(f"{path}: the key (config, model, accel, params, ray_set, threads) must be unique; "
-                            f"repeated: {keys}")
+        raise ContractError(
+            f"{path}: the key (config, model, accel, params, ray_set, threads) must be unique; "
+            f"repeated: {keys}"
+        )
     df["source"] = str(path)
     if ISA_COLUMN not in df.columns:
         df[ISA_COLUMN] = "unknown"
@@ -399,9 +455,11 @@ def _check_reps(rows: pd.DataFrame, reps: pd.DataFrame) -> list[str]:
         a, b = merged[f"{measure}_median"], merged[measure]
         bad = ~np.isclose(a, b, rtol=REPS_MEDIAN_RTOL, equal_nan=True)
         for _, r in merged[bad].head(5).iterrows():
-            warnings.append(f"{measure}_median of {r['accel']} [{r['params']}] on {r['model']} "
-                            f"is {r[f'{measure}_median']:.6g} but the median of its repetitions "
-                            f"in the .reps.csv is {r[measure]:.6g}")
+            warnings.append(
+                f"{measure}_median of {r['accel']} [{r['params']}] on {r['model']} "
+                f"is {r[f'{measure}_median']:.6g} but the median of its repetitions "
+                f"in the .reps.csv is {r[measure]:.6g}"
+            )
     return warnings
 
 
@@ -415,34 +473,42 @@ def _provenance_groups(df: pd.DataFrame) -> tuple[pd.Series, list[ProvenanceGrou
     groups = []
     for k, label in order.items():
         sel = labels == label
-        groups.append(ProvenanceGroup(
-            label=label, fields=dict(zip(PROVENANCE_IDENTITY, k)),
-            files=sorted(set(df.loc[sel, "source"])), rows=int(sel.sum())))
+        groups.append(
+            ProvenanceGroup(
+                label=label,
+                fields=dict(zip(PROVENANCE_IDENTITY, k)),
+                files=sorted(set(df.loc[sel, "source"])),
+                rows=int(sel.sum()),
+            )
+        )
     return labels, groups
 
 
 def _provenance_warnings(groups: list[ProvenanceGroup]) -> list[str]:
     warnings = []
     if len(groups) > 1:
-        differing = [f for f in PROVENANCE_IDENTITY
-                     if len({g.fields[f] for g in groups}) > 1]
+        differing = [f for f in PROVENANCE_IDENTITY if len({g.fields[f] for g in groups}) > 1]
         warnings.append(
             f"MIXED PROVENANCE: the rows come from {len(groups)} different builds/machines "
             f"(differing in {', '.join(differing)}). Table cells are tagged with their group; "
             f"claims comparing rows of different groups are marked not comparable. Groups: "
-            + "; ".join(g.describe() for g in groups))
+            + "; ".join(g.describe() for g in groups)
+        )
     for g in groups:
         if g.fields["git_dirty"] == "true":
-            warnings.append(f"Group {g.label} was measured from a dirty work tree "
-                            f"(git_dirty=true): commit {g.fields['git_sha'][:12]} does not "
-                            f"identify the code that ran.")
+            warnings.append(
+                f"Group {g.label} was measured from a dirty work tree "
+                f"(git_dirty=true): commit {g.fields['git_sha'][:12]} does not "
+                f"identify the code that ran."
+            )
         if g.fields["build_type"].lower() not in OPTIMISED_BUILD_TYPES:
-            warnings.append(f"Group {g.label} comes from build type "
-                            f"{g.fields['build_type']!r}: its timings are not representative "
-                            f"of an optimised build.")
+            warnings.append(
+                f"Group {g.label} comes from build type "
+                f"{g.fields['build_type']!r}: its timings are not representative "
+                f"of an optimised build."
+            )
         if g.fields["git_sha"] in ("", "unknown"):
-            warnings.append(f"Group {g.label} has no git commit (git_sha="
-                            f"{g.fields['git_sha']!r}).")
+            warnings.append(f"Group {g.label} has no git commit (git_sha={g.fields['git_sha']!r}).")
     return warnings
 
 
@@ -468,14 +534,15 @@ def load_results(paths: list[str | Path]) -> Results:
         dup = rows.duplicated(KEY_COLUMNS, keep=False)
         if dup.any():
             n = int(rows[dup].drop_duplicates(KEY_COLUMNS).shape[0])
-            warnings.append(f"{n} (config, model, accel, params, ray_set, threads) keys occur in more than one "
-                            f"file; where such a row fills a table cell the newest timestamp "
-                            f"is used and the cell's note says so.")
+            warnings.append(
+                f"{n} (config, model, accel, params, ray_set, threads) keys occur in more than one "
+                f"file; where such a row fills a table cell the newest timestamp "
+                f"is used and the cell's note says so."
+            )
     for col in ERROR_COLUMNS + [PEAK_RSS_COLUMN, INSTRUCTIONS_COLUMN]:
         if col not in rows.columns:
             rows[col] = np.nan
     for col in VERDICT_COLUMNS:
         rows[col] = rows[col].fillna("").astype(str).str.strip() if col in rows.columns else ""
     reps = pd.concat(rep_frames, ignore_index=True) if rep_frames else None
-    return Results(rows=rows, groups=groups, warnings=warnings, reps=reps,
-                   files=[str(p) for p in paths])
+    return Results(rows=rows, groups=groups, warnings=warnings, reps=reps, files=[str(p) for p in paths])

@@ -33,10 +33,8 @@ AUTO_TEXT = {"", "auto", "default"}
 
 SINGLE_THREAD = (("threads", "1"),)
 # pbrt-v4's kd-tree defaults, which the report (section 4.2.1) adopted.
-KD_PREFERRED = SINGLE_THREAD + (("isect_cost", "80"), ("traversal_cost", "1"),
-                                ("empty_bonus", "0.5"))
-EMBREE_PREFERRED = SINGLE_THREAD + (("quality", "medium"), ("robust", "false"),
-                                    ("compact", "false"))
+KD_PREFERRED = SINGLE_THREAD + (("isect_cost", "80"), ("traversal_cost", "1"), ("empty_bonus", "0.5"))
+EMBREE_PREFERRED = SINGLE_THREAD + (("quality", "medium"), ("robust", "false"), ("compact", "false"))
 SPLIT_BY = ("traversal",)
 
 
@@ -81,11 +79,16 @@ class Structure:
 
 
 STRUCTURES = [
-    Structure("bvh", "BVH (median)",
-              Spec("bvh", (("split", "median"), ("max_prims", "1"), ("max_depth", "50"))), "bvh"),
+    Structure(
+        "bvh",
+        "BVH (median)",
+        Spec("bvh", (("split", "median"), ("max_prims", "1"), ("max_depth", "50"))),
+        "bvh",
+    ),
     Structure("lbvh", "LBVH", Spec("lbvh", (("max_prims", "1"), ("max_depth", "50"))), "lbvh"),
-    Structure("kdtree", "kd-tree", Spec("kdtree", (("max_prims", "1"), ("max_depth", AUTO)),
-                                        KD_PREFERRED), "kdtree"),
+    Structure(
+        "kdtree", "kd-tree", Spec("kdtree", (("max_prims", "1"), ("max_depth", AUTO)), KD_PREFERRED), "kdtree"
+    ),
     Structure("bvh-sah", "BVH (binned SAH)", Spec("bvh", (("split", "sah"),)), None),
     Structure("wbvh8", "wide BVH (8, SIMD)", Spec("wbvh", (("width", "8"),)), None),
     Structure("wbvh4", "wide BVH (4, SIMD)", Spec("wbvh", (("width", "4"),)), None),
@@ -122,7 +125,7 @@ def param_matches(params: dict[str, str], triangles: float, name: str, want: str
 @dataclass
 class Pick:
     row: pd.Series | None
-    reason: str = ""                     # why there is no row (when row is None)
+    reason: str = ""  # why there is no row (when row is None)
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -177,8 +180,7 @@ class Picker:
             r = cands.iloc[0]
             msg = str(r.get("message", "")).strip()
             return Pick(None, r["status"] + (f": {msg}" if msg else ""))
-        score = ok["param_dict"].map(
-            lambda p: sum(1 for k, v in spec.preferred if p.get(k) == v))
+        score = ok["param_dict"].map(lambda p: sum(1 for k, v in spec.preferred if p.get(k) == v))
         best = ok[score == score.max()]
         best = best.sort_values("timestamp", ascending=False, kind="stable")
         chosen = best.iloc[0]
@@ -187,14 +189,18 @@ class Picker:
             distinct = {r["params"] for _, r in best.iterrows()}
             where = f"{spec.accel} on {model}"
             if len(distinct) > 1:
-                notes.append(f"{len(best)} rows fit {where} equally well "
-                             f"({'; '.join(sorted('[' + d + ']' for d in distinct))}); "
-                             f"used [{chosen['params']}] (newest)")
+                notes.append(
+                    f"{len(best)} rows fit {where} equally well "
+                    f"({'; '.join(sorted('[' + d + ']' for d in distinct))}); "
+                    f"used [{chosen['params']}] (newest)"
+                )
             else:
                 runs = sorted(f"{r['config']} in {r['source']}" for _, r in best.iterrows())
-                notes.append(f"{where} [{chosen['params']}] was measured {len(best)} times "
-                             f"({'; '.join(runs)}); used the newest ({chosen['timestamp']}, "
-                             f"{chosen['config']})")
+                notes.append(
+                    f"{where} [{chosen['params']}] was measured {len(best)} times "
+                    f"({'; '.join(runs)}); used the newest ({chosen['timestamp']}, "
+                    f"{chosen['config']})"
+                )
         return Pick(chosen, notes=notes)
 
     def _what_exists(self, model: str, spec: Spec) -> list[str]:
@@ -203,8 +209,10 @@ class Picker:
             return []
         shown = sorted(set(df["params"]))[:3]
         more = f" and {len(set(df['params'])) - 3} more" if len(set(df["params"])) > 3 else ""
-        return [f"no {spec.describe()} row on {model}; its {spec.accel} rows have "
-                f"{'; '.join('[' + s + ']' for s in shown)}{more}"]
+        return [
+            f"no {spec.describe()} row on {model}; its {spec.accel} rows have "
+            f"{'; '.join('[' + s + ']' for s in shown)}{more}"
+        ]
 
 
 def variant_of(params: dict[str, str]) -> str:
@@ -234,8 +242,7 @@ def depth_sweep_max_prims(picker: Picker, model: str, depths: list[str]) -> str 
     return min(cover, key=lambda mp: (-len(cover[mp]), float(mp)))
 
 
-def setting_spec(setting: str, structure: str, picker: Picker, model: str,
-                 depths: list[str]) -> Spec:
+def setting_spec(setting: str, structure: str, picker: Picker, model: str, depths: list[str]) -> Spec:
     """Our spec for one of the report's settings ("default" or a Table 2 setting)."""
     parsed = parse_setting(setting)
     if parsed is None:

@@ -19,15 +19,38 @@ from pathlib import Path
 
 import pandas as pd
 
-from .errors import (COMPACT_HEADER, NOT_MEASURED, any_error_values, compact_errors, error_text,
-                     note_errors, shown_metrics)
-from .report_numbers import (REPORT_MACHINE, REPORT_MODEL, REPORT_PRIMARY_RAYS, TABLE2_MODEL,
-                        TABLE4_MODELS, TABLE5_MODELS, our_model, report_value)
-from .formatting import (Cell, Section, TableDoc, fmt_count, fmt_measure, fmt_sig, is_missing,
-                     to_latex, to_markdown)
+from .errors import (
+    COMPACT_HEADER,
+    NOT_MEASURED,
+    any_error_values,
+    compact_errors,
+    error_text,
+    note_errors,
+    shown_metrics,
+)
+from .formatting import (
+    Cell,
+    Section,
+    TableDoc,
+    fmt_count,
+    fmt_measure,
+    fmt_sig,
+    is_missing,
+    to_latex,
+    to_markdown,
+)
+from .report_numbers import (
+    REPORT_MACHINE,
+    REPORT_MODEL,
+    REPORT_PRIMARY_RAYS,
+    TABLE2_MODEL,
+    TABLE4_MODELS,
+    TABLE5_MODELS,
+    our_model,
+    report_value,
+)
 from .schema import Results
-from .selection import (AUTO, STRUCTURE, STRUCTURES, Pick, Picker, Spec,
-                        Structure, setting_spec, variant_label)
+from .selection import AUTO, STRUCTURE, STRUCTURES, Pick, Picker, Spec, Structure, setting_spec, variant_label
 
 # Our traversal variant used wherever one BVH/LBVH row must stand for the structure (the
 # "relative to BVH" denominators and the claims): the report's own order first.
@@ -38,8 +61,8 @@ VARIANT_PREFERENCE = ("report", "ordered", "")
 class Metric:
     key: str
     label: str
-    ours: str          # our column (median for times)
-    report: str        # report-tables.csv column
+    ours: str  # our column (median for times)
+    report: str  # report-tables.csv column
     timed: bool
 
 
@@ -87,8 +110,11 @@ def ratio(ours, report) -> float | None:
 
 def triple(pick: Pick, metric: Metric, report_value, tag: str) -> list[Cell]:
     ours = pick.value(metric.ours)
-    rep = "—" if is_missing(report_value) else (
-        fmt_sig(report_value) if metric.timed else fmt_count(report_value))
+    rep = (
+        "—"
+        if is_missing(report_value)
+        else (fmt_sig(report_value) if metric.timed else fmt_count(report_value))
+    )
     return [Cell(ours_text(pick, metric), tag), Cell(rep), Cell(fmt_sig(ratio(ours, report_value)))]
 
 
@@ -97,6 +123,7 @@ def tag_of(pick: Pick) -> str:
 
 
 # ---- errors against the `reference` accelerator --------------------------------------------------
+
 
 def picked_rows(picks) -> pd.DataFrame:
     """The rows behind a table's cells, for deciding which error metrics it shows."""
@@ -108,12 +135,15 @@ def error_cell(pick: Pick, metric) -> Cell:
     return Cell(error_text(pick.row, metric) if pick.ok else missing_text(pick), tag_of(pick))
 
 
-NOT_MEASURED_SECTION = ("Error against the reference (false misses, false hits, wrong "
-                        "primitives, NaN results, t error in ulps): not measured in this CSV")
+NOT_MEASURED_SECTION = (
+    "Error against the reference (false misses, false hits, wrong "
+    "primitives, NaN results, t error in ulps): not measured in this CSV"
+)
 
 
-def error_sections(srows: list["StructureRow"], ours: list[str], pick_of, width: int,
-                   compact: bool = False) -> list:
+def error_sections(
+    srows: list[StructureRow], ours: list[str], pick_of, width: int, compact: bool = False
+) -> list:
     """Error rows for a table with models as column groups of `width` cells: our value
     first, the report's (it measured none) after. compact: the four counts in one cell per
     structure instead of a section per metric."""
@@ -127,15 +157,18 @@ def error_sections(srows: list["StructureRow"], ours: list[str], pick_of, width:
             cells = [Cell(sr.label)]
             for o in ours:
                 pick = pick_of(sr, o)
-                cells += [Cell(compact_errors(pick.row) if pick.ok else missing_text(pick),
-                               tag_of(pick))] + blank
+                cells += [
+                    Cell(compact_errors(pick.row) if pick.ok else missing_text(pick), tag_of(pick))
+                ] + blank
             out.append(cells)
         return out
     out = []
     for metric in shown_metrics(picked):
         out.append(Section(metric.label))
-        out += [[Cell(sr.label)] + [c for o in ours for c in [error_cell(pick_of(sr, o), metric)] + blank]
-                for sr in srows]
+        out += [
+            [Cell(sr.label)] + [c for o in ours for c in [error_cell(pick_of(sr, o), metric)] + blank]
+            for sr in srows
+        ]
     return out
 
 
@@ -148,23 +181,30 @@ def model_counts(results: Results, model: str) -> tuple[float | None, float | No
 
 # ---- notes shared by the tables ---------------------------------------------------------
 
+
 def note_times() -> str:
-    return (f"Absolute times: the report's come from another machine ({REPORT_MACHINE}) and a "
-            f"much slower implementation, so the ours/report column of a time compares the "
-            f"machines more than the structures. Compare orderings and ratios between "
-            f"structures instead (the 'relative to BVH' table).")
+    return (
+        f"Absolute times: the report's come from another machine ({REPORT_MACHINE}) and a "
+        f"much slower implementation, so the ours/report column of a time compares the "
+        f"machines more than the structures. Compare orderings and ratios between "
+        f"structures instead (the 'relative to BVH' table)."
+    )
 
 
 def note_prim_tests(report_nums: pd.DataFrame, models: list[str], table: int) -> str:
     sub = report_nums[(report_nums["table"] == table) & report_nums["model"].isin(models)]
     below = sub[sub["prim_tests"] < REPORT_PRIMARY_RAYS]
-    text = ("#int. tests: ours are primitive (ray/triangle) tests summed over every ray of "
-            "the render, primary and shadow. The report does not define its count")
+    text = (
+        "#int. tests: ours are primitive (ray/triangle) tests summed over every ray of "
+        "the render, primary and shadow. The report does not define its count"
+    )
     if len(below):
-        text += (f"; {len(below)} of its {len(sub)} values in this table lie below the "
-                 f"{REPORT_PRIMARY_RAYS:,} primary rays of its 640x480 image (e.g. "
-                 f"{below.iloc[0]['accelerator']} on {below.iloc[0]['model']}: "
-                 f"{int(below.iloc[0]['prim_tests']):,}), so they cannot be totals over all rays")
+        text += (
+            f"; {len(below)} of its {len(sub)} values in this table lie below the "
+            f"{REPORT_PRIMARY_RAYS:,} primary rays of its 640x480 image (e.g. "
+            f"{below.iloc[0]['accelerator']} on {below.iloc[0]['model']}: "
+            f"{int(below.iloc[0]['prim_tests']):,}), so they cannot be totals over all rays"
+        )
     return text + ". Compare how the counts move between structures and settings, not their size."
 
 
@@ -179,9 +219,9 @@ def note_primitives(report_nums: pd.DataFrame, results: Results, report_models: 
             continue
         (same if int(prims.iloc[0]) == int(vert) else differ).append(
             f"{REPORT_MODEL[rm].short} {int(prims.iloc[0]):,} vs our {int(vert):,} vertices / "
-            f"{int(tri):,} triangles")
-    text = ("#Primitives: we show both our triangle and vertex counts against the report's "
-            "single #Primitives.")
+            f"{int(tri):,} triangles"
+        )
+    text = "#Primitives: we show both our triangle and vertex counts against the report's single #Primitives."
     if same:
         text += " The report's number equals the VERTEX count for " + "; ".join(same) + "."
     if differ:
@@ -190,23 +230,31 @@ def note_primitives(report_nums: pd.DataFrame, results: Results, report_models: 
 
 
 def note_bvh_nodes(report_nums: pd.DataFrame, report_models: list[str]) -> str | None:
-    sub = report_nums[(report_nums["accelerator"] == "bvh") & report_nums["model"].isin(report_models)
-              & (report_nums["setting"] == "default")]
+    sub = report_nums[
+        (report_nums["accelerator"] == "bvh")
+        & report_nums["model"].isin(report_models)
+        & (report_nums["setting"] == "default")
+    ]
     if sub.empty:
         return None
     exact = sub["nodes"] == 2 * sub["primitives"] - 1
     if exact.all():
-        return (f"The report's BVH #nodes equal 2 x #Primitives - 1 on all {len(sub)} models: "
-                f"a one-primitive-per-leaf tree over its #Primitives, i.e. over vertex counts. "
-                f"Ours with max_prims=1 has 2 x triangles - 1 nodes, so the ratio follows "
-                f"2 x triangles / #Primitives rather than the structures.")
+        return (
+            f"The report's BVH #nodes equal 2 x #Primitives - 1 on all {len(sub)} models: "
+            f"a one-primitive-per-leaf tree over its #Primitives, i.e. over vertex counts. "
+            f"Ours with max_prims=1 has 2 x triangles - 1 nodes, so the ratio follows "
+            f"2 x triangles / #Primitives rather than the structures."
+        )
     odd = sub[~exact].iloc[0]
     names = [REPORT_MODEL[m].short for m in sub.loc[exact, "model"]]
-    return (f"The report's BVH #nodes equal 2 x #Primitives - 1 on {int(exact.sum())} of "
-            f"{len(sub)} models" + (f" ({', '.join(names)})" if names else "") +
-            f"; not on e.g. {REPORT_MODEL[odd['model']].short} ({int(odd['nodes']):,} nodes for "
-            f"{int(odd['primitives']):,} primitives), so there its trees did not have one "
-            f"primitive per leaf or its #Primitives counts something else.")
+    return (
+        f"The report's BVH #nodes equal 2 x #Primitives - 1 on {int(exact.sum())} of "
+        f"{len(sub)} models"
+        + (f" ({', '.join(names)})" if names else "")
+        + f"; not on e.g. {REPORT_MODEL[odd['model']].short} ({int(odd['nodes']):,} nodes for "
+        f"{int(odd['primitives']):,} primitives), so there its trees did not have one "
+        f"primitive per leaf or its #Primitives counts something else."
+    )
 
 
 def note_stand_ins(report_models: list[str], present: set[str]) -> list[str]:
@@ -221,28 +269,38 @@ def note_stand_ins(report_models: list[str], present: set[str]) -> list[str]:
 
 
 def note_structures(variant_seen: bool, embree_counters_missing: bool) -> list[str]:
-    out = ["Structures: BVH (median), LBVH and kd-tree use the report's Table 3 parameters "
-           "(BVH split=median, max_prims=1, max_depth=50; LBVH max_prims=1, max_depth=50; "
-           "kd-tree max_prims=1, max_depth = 8 + 1.3 log2 N, N = triangles). BVH (binned SAH) "
-           "and Embree go beyond the report and have no report numbers."]
+    out = [
+        "Structures: BVH (median), LBVH and kd-tree use the report's Table 3 parameters "
+        "(BVH split=median, max_prims=1, max_depth=50; LBVH max_prims=1, max_depth=50; "
+        "kd-tree max_prims=1, max_depth = 8 + 1.3 log2 N, N = triangles). BVH (binned SAH) "
+        "and Embree go beyond the report and have no report numbers."
+    ]
     if variant_seen:
-        out.append("[traversal=...] rows are the same structure run with each of the "
-                   "harness's traversal modes: 'ordered' visits the nearer child first, "
-                   "'report' keeps the report's fixed child order (its Algorithm 1).")
+        out.append(
+            "[traversal=...] rows are the same structure run with each of the "
+            "harness's traversal modes: 'ordered' visits the nearer child first, "
+            "'report' keeps the report's fixed child order (its Algorithm 1)."
+        )
     if embree_counters_missing:
-        out.append("Embree exposes no node or primitive-test counters: its #int. tests and "
-                   "#nodes are n/a (missing, not zero).")
+        out.append(
+            "Embree exposes no node or primitive-test counters: its #int. tests and "
+            "#nodes are n/a (missing, not zero)."
+        )
     return out
 
 
 def note_tags(results: Results) -> list[str]:
     if not results.mixed:
         return []
-    return ["Superscript letters tag each of our cells with its provenance group: "
-            + "; ".join(g.describe() for g in results.groups) + "."]
+    return [
+        "Superscript letters tag each of our cells with its provenance group: "
+        + "; ".join(g.describe() for g in results.groups)
+        + "."
+    ]
 
 
 # ---- Tables 4 and 5 ---------------------------------------------------------------------
+
 
 @dataclass
 class StructureRow:
@@ -262,24 +320,28 @@ def structure_rows(picker: Picker, models: list[str]) -> list[StructureRow]:
     return rows
 
 
-def model_table(results: Results, report_nums: pd.DataFrame, number: int,
-                report_models: list[str]) -> list[TableDoc]:
+def model_table(
+    results: Results, report_nums: pd.DataFrame, number: int, report_models: list[str]
+) -> list[TableDoc]:
     picker = Picker(results)
     present = picker.models
     ours = [our_model(rm, present) for rm in report_models]
     srows = structure_rows(picker, ours)
-    groups = [(REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 3)
-              for rm, o in zip(report_models, ours)]
+    groups = [
+        (REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 3)
+        for rm, o in zip(report_models, ours)
+    ]
     header = [""] + SUBCOLUMNS * len(report_models)
     rows: list = [Section("#Primitives (report) vs our counts")]
     for label, idx in (("#triangles (ours)", 0), ("#vertices (ours)", 1)):
         cells = [Cell(label)]
         for rm, o in zip(report_models, ours):
             ours_v = model_counts(results, o)[idx]
-            rep = report_nums.loc[(report_nums["model"] == rm) & (report_nums["table"] == number), "primitives"]
+            rep = report_nums.loc[
+                (report_nums["model"] == rm) & (report_nums["table"] == number), "primitives"
+            ]
             rep_v = None if rep.empty else float(rep.iloc[0])
-            cells += [Cell(fmt_count(ours_v)), Cell(fmt_count(rep_v)),
-                      Cell(fmt_sig(ratio(ours_v, rep_v)))]
+            cells += [Cell(fmt_count(ours_v)), Cell(fmt_count(rep_v)), Cell(fmt_sig(ratio(ours_v, rep_v)))]
         rows.append(cells)
 
     notes: list[str] = []
@@ -294,15 +356,23 @@ def model_table(results: Results, report_nums: pd.DataFrame, number: int,
                 if key not in picks:
                     picks[key] = picker.pick(o, sr.structure.spec, sr.variant)
                 pick = picks[key]
-                rep = (report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report)
-                       if sr.structure.report_accel else None)
+                rep = (
+                    report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report)
+                    if sr.structure.report_accel
+                    else None
+                )
                 cells += triple(pick, metric, rep, tag_of(pick))
-                if (sr.structure.key == "embree" and pick.ok and not metric.timed
-                        and is_missing(pick.value(metric.ours))):
+                if (
+                    sr.structure.key == "embree"
+                    and pick.ok
+                    and not metric.timed
+                    and is_missing(pick.value(metric.ours))
+                ):
                     embree_missing_counters = True
             rows.append(cells)
-    rows += error_sections(srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)],
-                           len(SUBCOLUMNS))
+    rows += error_sections(
+        srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)], len(SUBCOLUMNS)
+    )
     for (o, skey, variant), pick in picks.items():
         label = STRUCTURE[skey].label + (f" [traversal={variant}]" if variant else "")
         if not pick.ok:
@@ -310,24 +380,46 @@ def model_table(results: Results, report_nums: pd.DataFrame, number: int,
         notes += [n + "." for n in pick.notes]
 
     variant_seen = any(sr.variant for sr in srows)
-    fixed = [note_primitives(report_nums, results, report_models), note_bvh_nodes(report_nums, report_models),
-             note_prim_tests(report_nums, report_models, number), note_times()]
+    fixed = [
+        note_primitives(report_nums, results, report_models),
+        note_bvh_nodes(report_nums, report_models),
+        note_prim_tests(report_nums, report_models, number),
+        note_times(),
+    ]
     fixed += note_structures(variant_seen, embree_missing_counters)
     fixed += [note_errors(picked_rows(picks.values()))]
     fixed += note_stand_ins(report_models, present) + note_tags(results)
-    title = {4: "Table 4: BVH, LBVH and kd-tree on four models",
-             5: "Table 5: much more complex scenes"}[number]
-    caption = (f"Report's Table {number} beside our measurement of the same structures "
-               f"(plus the binned-SAH BVH and Embree). Each model: our median with its 95% "
-               f"confidence interval, the report's number, and ours/report.")
-    main = TableDoc(f"table{number}", title, caption, groups, header, rows,
-                    notes=[n for n in fixed if n] + notes, warnings=list(results.warnings),
-                    show_tags=results.mixed)
+    title = {4: "Table 4: BVH, LBVH and kd-tree on four models", 5: "Table 5: much more complex scenes"}[
+        number
+    ]
+    caption = (
+        f"Report's Table {number} beside our measurement of the same structures "
+        f"(plus the binned-SAH BVH and Embree). Each model: our median with its 95% "
+        f"confidence interval, the report's number, and ours/report."
+    )
+    main = TableDoc(
+        f"table{number}",
+        title,
+        caption,
+        groups,
+        header,
+        rows,
+        notes=[n for n in fixed if n] + notes,
+        warnings=list(results.warnings),
+        show_tags=results.mixed,
+    )
     return [main, relative_table(results, report_nums, number, report_models, picker, srows, ours)]
 
 
-def relative_table(results: Results, report_nums: pd.DataFrame, number: int, report_models: list[str],
-                   picker: Picker, srows: list[StructureRow], ours: list[str]) -> TableDoc:
+def relative_table(
+    results: Results,
+    report_nums: pd.DataFrame,
+    number: int,
+    report_models: list[str],
+    picker: Picker,
+    srows: list[StructureRow],
+    ours: list[str],
+) -> TableDoc:
     """Times relative to the median-split BVH on the same model: survives a change of machine."""
     bvh = STRUCTURE["bvh"]
     bvh_variants = picker.variants(ours, bvh.spec)
@@ -335,16 +427,27 @@ def relative_table(results: Results, report_nums: pd.DataFrame, number: int, rep
 
     def denominator_variant(variant: str | None) -> str | None:
         # Same traversal as the numerator where the BVH has it, else the report's order.
-        return variant if variant in bvh_variants and len(bvh_variants) > 1 else (
-            bvh_default if len(bvh_variants) > 1 else None)
+        return (
+            variant
+            if variant in bvh_variants and len(bvh_variants) > 1
+            else (bvh_default if len(bvh_variants) > 1 else None)
+        )
 
-    denominators = {(o, v): picker.pick(o, bvh.spec, v) for o in ours
-                    for v in {denominator_variant(sr.variant) for sr in srows}}
-    groups = [(REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 2)
-              for rm, o in zip(report_models, ours)]
+    denominators = {
+        (o, v): picker.pick(o, bvh.spec, v)
+        for o in ours
+        for v in {denominator_variant(sr.variant) for sr in srows}
+    }
+    groups = [
+        (REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 2)
+        for rm, o in zip(report_models, ours)
+    ]
     header = [""] + ["ours", "report"] * len(report_models)
-    picks = {(o, sr.structure.key, sr.variant): picker.pick(o, sr.structure.spec, sr.variant)
-             for sr in srows for o in ours}
+    picks = {
+        (o, sr.structure.key, sr.variant): picker.pick(o, sr.structure.spec, sr.variant)
+        for sr in srows
+        for o in ours
+    }
     rows: list = []
     for metric in (METRIC["build"], METRIC["render"]):
         rows.append(Section(f"{metric.label} / BVH (median) {metric.label.split(' (')[0].lower()}"))
@@ -358,28 +461,46 @@ def relative_table(results: Results, report_nums: pd.DataFrame, number: int, rep
                 r_ours = ratio(pick.value(metric.ours), den.value(metric.ours))
                 r_rep = None
                 if sr.structure.report_accel:
-                    r_rep = ratio(report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report),
-                                  report_value(report_nums, rm, "bvh", "default", metric.report))
+                    r_rep = ratio(
+                        report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report),
+                        report_value(report_nums, rm, "bvh", "default", metric.report),
+                    )
                 tag = tag_of(pick) if tag_of(pick) == tag_of(den) else f"{tag_of(pick)}/{tag_of(den)}"
                 cells += [Cell(fmt_sig(r_ours), tag if r_ours is not None else ""), Cell(fmt_sig(r_rep))]
             rows.append(cells)
-    rows += error_sections(srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)], 2,
-                           compact=True)
-    caption = ("Build and render time of each structure divided by that of BVH (median) on the "
-               "same model, ours beside the report's: ratios within one machine are what can be "
-               "compared across machines. The last rows: how wrong each of our rows is.")
+    rows += error_sections(
+        srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)], 2, compact=True
+    )
+    caption = (
+        "Build and render time of each structure divided by that of BVH (median) on the "
+        "same model, ours beside the report's: ratios within one machine are what can be "
+        "compared across machines. The last rows: how wrong each of our rows is."
+    )
     if len(bvh_variants) > 1:
-        caption += (f" A [traversal=X] row is divided by the BVH with the same traversal; "
-                    f"structures without traversal modes by the BVH with traversal={bvh_default}.")
+        caption += (
+            f" A [traversal=X] row is divided by the BVH with the same traversal; "
+            f"structures without traversal modes by the BVH with traversal={bvh_default}."
+        )
     notes = [note_errors(picked_rows(picks.values()))]
     if results.mixed:
-        notes.append("A tag X/Y means numerator and denominator come from different provenance "
-                     "groups: that ratio mixes builds or machines.")
-    return TableDoc(f"table{number}-relative", f"Table {number}, relative to BVH (median)",
-                    caption, groups, header, rows, notes=notes, show_tags=results.mixed)
+        notes.append(
+            "A tag X/Y means numerator and denominator come from different provenance "
+            "groups: that ratio mixes builds or machines."
+        )
+    return TableDoc(
+        f"table{number}-relative",
+        f"Table {number}, relative to BVH (median)",
+        caption,
+        groups,
+        header,
+        rows,
+        notes=notes,
+        show_tags=results.mixed,
+    )
 
 
 # ---- Table 2 ----------------------------------------------------------------------------
+
 
 def table2(results: Results, report_nums: pd.DataFrame) -> list[TableDoc]:
     picker = Picker(results)
@@ -401,9 +522,19 @@ def table2(results: Results, report_nums: pd.DataFrame) -> list[TableDoc]:
             fixed_mp = dict(spec.required).get("max_prims")
         pick = picker.pick(model, spec)
         row_picks.append(pick)
-        rows.append([Cell(setting), Cell(kd_params_text(pick, spec))] +
-                    [c for m in metrics for c in
-                     triple(pick, m, report_value(report_nums, TABLE2_MODEL, "kdtree", setting, m.report), tag_of(pick))])
+        rows.append(
+            [Cell(setting), Cell(kd_params_text(pick, spec))]
+            + [
+                c
+                for m in metrics
+                for c in triple(
+                    pick,
+                    m,
+                    report_value(report_nums, TABLE2_MODEL, "kdtree", setting, m.report),
+                    tag_of(pick),
+                )
+            ]
+        )
         if not pick.ok:
             notes.append(f"{setting} ({spec.describe()}): {pick.reason}.")
         notes += [n + "." for n in pick.notes]
@@ -412,11 +543,13 @@ def table2(results: Results, report_nums: pd.DataFrame) -> list[TableDoc]:
     rows.append(Section("Beyond the report: other structures on the same model (no report numbers)"))
     for s in extra:
         variants = picker.variants([model], s.spec)
-        for v in (variants if len(variants) > 1 else [None]):
+        for v in variants if len(variants) > 1 else [None]:
             pick = picker.pick(model, s.spec, v)
             row_picks.append(pick)
-            rows.append([Cell(variant_label(s.label, v or "", variants)), Cell(s.spec.describe())] +
-                        [c for m in metrics for c in triple(pick, m, None, tag_of(pick))])
+            rows.append(
+                [Cell(variant_label(s.label, v or "", variants)), Cell(s.spec.describe())]
+                + [c for m in metrics for c in triple(pick, m, None, tag_of(pick))]
+            )
             if not pick.ok:
                 notes.append(f"{s.label} on {model}: {pick.reason}.")
 
@@ -426,26 +559,46 @@ def table2(results: Results, report_nums: pd.DataFrame) -> list[TableDoc]:
 
     tri, vert = model_counts(results, model)
     prims = sub["primitives"].iloc[0] if len(sub) else None
-    caption = (f"The report's Table 2 (kd-tree parameters on the Stanford bunny) beside ours. "
-               f"Model: ours {fmt_count(tri)} triangles / {fmt_count(vert)} vertices; the "
-               f"report's #Primitives {fmt_count(prims)}. Each metric: our median with its 95% "
-               f"CI, the report's number, ours/report.")
-    fixed = ["maxPrims=K rows are our kd-tree with max_prims=K at the automatic depth "
-             "(8 + 1.3 log2 N, N = triangles); maxDepth=D rows have max_depth=D at "
-             + (f"max_prims={fixed_mp}, the value our depth sweep was run with (the report does "
-                f"not state the maxPrims of its depth sweep)." if fixed_mp else
-                "whatever max_prims our depth sweep used (none found).")]
+    caption = (
+        f"The report's Table 2 (kd-tree parameters on the Stanford bunny) beside ours. "
+        f"Model: ours {fmt_count(tri)} triangles / {fmt_count(vert)} vertices; the "
+        f"report's #Primitives {fmt_count(prims)}. Each metric: our median with its 95% "
+        f"CI, the report's number, ours/report."
+    )
+    fixed = [
+        "maxPrims=K rows are our kd-tree with max_prims=K at the automatic depth "
+        "(8 + 1.3 log2 N, N = triangles); maxDepth=D rows have max_depth=D at "
+        + (
+            f"max_prims={fixed_mp}, the value our depth sweep was run with (the report does "
+            f"not state the maxPrims of its depth sweep)."
+            if fixed_mp
+            else "whatever max_prims our depth sweep used (none found)."
+        )
+    ]
     kd_default = report_value(report_nums, TABLE2_MODEL, "kdtree", "default", "nodes")
     mp1 = report_value(report_nums, TABLE2_MODEL, "kdtree", "maxPrims=1", "nodes")
     if kd_default is not None and mp1 is not None and kd_default != mp1:
-        fixed.append(f"The report's maxPrims=1 row ({int(mp1):,} nodes) and its Table 4 kd-tree "
-                     f"on the same bunny with the same maxPrims=1 default ({int(kd_default):,} "
-                     f"nodes) differ: the report's two runs were not identical.")
-    fixed += [note_prim_tests(report_nums, [TABLE2_MODEL], 2), note_times(),
-              note_errors(picked_rows(row_picks))] + note_tags(results)
-    doc = TableDoc("table2", "Table 2: kd-tree parameters on the Stanford bunny", caption,
-                   groups, header, rows, notes=fixed + notes, warnings=list(results.warnings),
-                   show_tags=results.mixed)
+        fixed.append(
+            f"The report's maxPrims=1 row ({int(mp1):,} nodes) and its Table 4 kd-tree "
+            f"on the same bunny with the same maxPrims=1 default ({int(kd_default):,} "
+            f"nodes) differ: the report's two runs were not identical."
+        )
+    fixed += [
+        note_prim_tests(report_nums, [TABLE2_MODEL], 2),
+        note_times(),
+        note_errors(picked_rows(row_picks)),
+    ] + note_tags(results)
+    doc = TableDoc(
+        "table2",
+        "Table 2: kd-tree parameters on the Stanford bunny",
+        caption,
+        groups,
+        header,
+        rows,
+        notes=fixed + notes,
+        warnings=list(results.warnings),
+        show_tags=results.mixed,
+    )
     return [doc]
 
 
@@ -472,10 +625,13 @@ def kd_params_text(pick: Pick, spec: Spec) -> str:
 
 # ---- output -----------------------------------------------------------------------------
 
+
 def build_tables(results: Results, report_nums: pd.DataFrame) -> dict[str, list[TableDoc]]:
-    return {"table2": table2(results, report_nums),
-            "table4": model_table(results, report_nums, 4, TABLE4_MODELS),
-            "table5": model_table(results, report_nums, 5, TABLE5_MODELS)}
+    return {
+        "table2": table2(results, report_nums),
+        "table4": model_table(results, report_nums, 4, TABLE4_MODELS),
+        "table5": model_table(results, report_nums, 5, TABLE5_MODELS),
+    }
 
 
 def write_tables(results: Results, report_nums: pd.DataFrame, out_dir: Path) -> list[Path]:
@@ -488,4 +644,3 @@ def write_tables(results: Results, report_nums: pd.DataFrame, out_dir: Path) -> 
         tex.write_text("\n".join(to_latex(d) for d in docs))
         written += [md, tex]
     return written
-

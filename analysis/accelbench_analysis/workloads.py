@@ -63,18 +63,23 @@ def ray_set_rows(results: Results) -> pd.DataFrame:
     if rows.empty:
         return rows
     rows["structure"] = structure_labels(rows)
-    rows["ray_set"] = pd.Categorical(rows["ray_set"], categories=[s for s in RAY_SETS
-                                                                   if s in set(rows["ray_set"])],
-                                     ordered=True)
+    rows["ray_set"] = pd.Categorical(
+        rows["ray_set"], categories=[s for s in RAY_SETS if s in set(rows["ray_set"])], ordered=True
+    )
     return rows
 
 
 def ray_set_table(rows: pd.DataFrame) -> pd.DataFrame:
     """One row per model, structure and set: Mrays/s and its ratio to Embree's."""
-    base = (rows[rows["accel"] == BASELINE].groupby(["model", "ray_set"], observed=True)
-            ["mrays_per_s"].median().rename("embree_mrays_per_s"))
-    t = rows[["model", "structure", "ray_set", "mrays_per_s", "rays", "false_misses",
-              "false_hits"]].merge(base.reset_index(), on=["model", "ray_set"], how="left")
+    base = (
+        rows[rows["accel"] == BASELINE]
+        .groupby(["model", "ray_set"], observed=True)["mrays_per_s"]
+        .median()
+        .rename("embree_mrays_per_s")
+    )
+    t = rows[["model", "structure", "ray_set", "mrays_per_s", "rays", "false_misses", "false_hits"]].merge(
+        base.reset_index(), on=["model", "ray_set"], how="left"
+    )
     t["ratio_to_embree"] = t["mrays_per_s"] / t["embree_mrays_per_s"]
     return t.sort_values(["model", "structure", "ray_set"]).reset_index(drop=True)
 
@@ -83,8 +88,11 @@ def ranking(rows: pd.DataFrame) -> pd.DataFrame:
     """Per model and set, each structure's rank by Mrays/s (1 = fastest), and whether it
     differs from its rank in the first set listed."""
     r = rows[["model", "structure", "ray_set", "mrays_per_s"]].copy()
-    r["rank"] = r.groupby(["model", "ray_set"], observed=True)["mrays_per_s"].rank(
-        ascending=False, method="min").astype(int)
+    r["rank"] = (
+        r.groupby(["model", "ray_set"], observed=True)["mrays_per_s"]
+        .rank(ascending=False, method="min")
+        .astype(int)
+    )
     first = r["ray_set"].cat.categories[0]
     ref = r[r["ray_set"] == first].set_index(["model", "structure"])["rank"].rename("first_rank")
     r = r.join(ref, on=["model", "structure"])
@@ -99,14 +107,21 @@ def _md_table(header: list[str], body: list[list[str]]) -> list[str]:
 
 
 def ray_set_markdown(table: pd.DataFrame) -> str:
-    sets = list(table["ray_set"].cat.categories) if hasattr(table["ray_set"], "cat") else \
-        sorted(set(table["ray_set"]))
-    out = ["# Mrays/s per ray set", "",
-           "Each structure's Mrays/s on each ray set (configs/ray-sets.yaml; every set made "
-           "once per model from the reference's hits, so every structure traces the same rays), "
-           f"and in parentheses its ratio to Embree's on the same model and set (> 1: faster than "
-           f"Embree). Wrong answers against the reference (false misses + false hits) are shown "
-           f"where there are any.", ""]
+    sets = (
+        list(table["ray_set"].cat.categories)
+        if hasattr(table["ray_set"], "cat")
+        else sorted(set(table["ray_set"]))
+    )
+    out = [
+        "# Mrays/s per ray set",
+        "",
+        "Each structure's Mrays/s on each ray set (configs/ray-sets.yaml; every set made "
+        "once per model from the reference's hits, so every structure traces the same rays), "
+        "and in parentheses its ratio to Embree's on the same model and set (> 1: faster than "
+        "Embree). Wrong answers against the reference (false misses + false hits) are shown "
+        "where there are any.",
+        "",
+    ]
     for model, g in table.groupby("model"):
         out += [f"## {md_escape(model)}", ""]
         body = []
@@ -121,8 +136,9 @@ def ray_set_markdown(table: pd.DataFrame) -> str:
                 cell = f"{r['mrays_per_s']:.3g}"
                 if pd.notna(r["ratio_to_embree"]):
                     cell += f" ({r['ratio_to_embree']:.2f}x)"
-                wrong = (r["false_misses"] if pd.notna(r["false_misses"]) else 0) + \
-                        (r["false_hits"] if pd.notna(r["false_hits"]) else 0)
+                wrong = (r["false_misses"] if pd.notna(r["false_misses"]) else 0) + (
+                    r["false_hits"] if pd.notna(r["false_hits"]) else 0
+                )
                 if wrong:
                     cell += f" [{int(wrong)} wrong]"
                 cells.append(cell)
@@ -133,10 +149,14 @@ def ray_set_markdown(table: pd.DataFrame) -> str:
 
 def ranking_markdown(rank: pd.DataFrame) -> str:
     sets = list(rank["ray_set"].cat.categories)
-    out = ["# Ranking by ray set", "",
-           f"Per model, each structure's rank by Mrays/s in each ray set (1 = fastest). A rank "
-           f"marked * differs from its rank on `{sets[0]}` rays: there the order of structures "
-           f"changes. The last column lists the sets in which the order changes.", ""]
+    out = [
+        "# Ranking by ray set",
+        "",
+        f"Per model, each structure's rank by Mrays/s in each ray set (1 = fastest). A rank "
+        f"marked * differs from its rank on `{sets[0]}` rays: there the order of structures "
+        f"changes. The last column lists the sets in which the order changes.",
+        "",
+    ]
     for model, g in rank.groupby("model"):
         out += [f"## {md_escape(model)}", ""]
         body = []
@@ -147,8 +167,11 @@ def ranking_markdown(rank: pd.DataFrame) -> str:
             cells = [md_escape(structure)]
             for rs in sets:
                 hit = s[s["ray_set"] == rs]
-                cells.append("-" if hit.empty else f"{int(hit.iloc[0]['rank'])}" +
-                             ("*" if hit.iloc[0]["changed"] else ""))
+                cells.append(
+                    "-"
+                    if hit.empty
+                    else f"{int(hit.iloc[0]['rank'])}" + ("*" if hit.iloc[0]["changed"] else "")
+                )
             body.append(cells)
         changed = [rs for rs in sets if g[(g["ray_set"] == rs)]["changed"].any()]
         out += _md_table(["structure"] + sets, body)
@@ -157,8 +180,18 @@ def ranking_markdown(rank: pd.DataFrame) -> str:
 
 
 def ray_set_figure(rows: pd.DataFrame, path: Path) -> Path:
-    g = sns.catplot(data=rows, kind="bar", x="ray_set", y="mrays_per_s", hue="structure",
-                    col="model", sharey=False, height=3.6, aspect=1.3, errorbar=None)
+    g = sns.catplot(
+        data=rows,
+        kind="bar",
+        x="ray_set",
+        y="mrays_per_s",
+        hue="structure",
+        col="model",
+        sharey=False,
+        height=3.6,
+        aspect=1.3,
+        errorbar=None,
+    )
     g.set_axis_labels("ray set", "Mrays/s")
     g.set_titles("{col_name}")
     g.figure.suptitle("Mrays/s per ray set, structure and model", y=1.03)
@@ -184,31 +217,48 @@ def thread_scaling_rows(results: Results) -> pd.DataFrame:
 
 
 def thread_scaling_markdown(rows: pd.DataFrame) -> str:
-    out = ["# Thread scaling", "",
-           "Render wall time (median) and the process's CPU time per thread count "
-           "(configs/thread-scaling.yaml); speedup = wall time at 1 thread / wall time at t "
-           "threads, parallel efficiency = speedup / t. CPU / wall near t means the threads were "
-           "busy; a speedup below that means they competed (memory, the machine's other load).",
-           ""]
+    out = [
+        "# Thread scaling",
+        "",
+        "Render wall time (median) and the process's CPU time per thread count "
+        "(configs/thread-scaling.yaml); speedup = wall time at 1 thread / wall time at t "
+        "threads, parallel efficiency = speedup / t. CPU / wall near t means the threads were "
+        "busy; a speedup below that means they competed (memory, the machine's other load).",
+        "",
+    ]
     has_cpu = "render_cpu_s_median" in rows.columns
     for model, g in rows.groupby("model"):
         out += [f"## {md_escape(model)}", ""]
         body = []
         for _, r in g.iterrows():
-            body.append([md_escape(r["structure"]), f"{int(r['threads'])}",
-                         f"{r['render_s_median'] * 1e3:.2f}",
-                         f"{r['render_cpu_s_median'] * 1e3:.2f}" if has_cpu and
-                         pd.notna(r["render_cpu_s_median"]) else "-",
-                         f"{r['speedup']:.2f}" if pd.notna(r["speedup"]) else "-",
-                         f"{r['efficiency']:.2f}" if pd.notna(r["efficiency"]) else "-"])
-        out += _md_table(["structure", "threads", "wall ms", "CPU ms", "speedup", "efficiency"],
-                         body) + [""]
+            body.append(
+                [
+                    md_escape(r["structure"]),
+                    f"{int(r['threads'])}",
+                    f"{r['render_s_median'] * 1e3:.2f}",
+                    f"{r['render_cpu_s_median'] * 1e3:.2f}"
+                    if has_cpu and pd.notna(r["render_cpu_s_median"])
+                    else "-",
+                    f"{r['speedup']:.2f}" if pd.notna(r["speedup"]) else "-",
+                    f"{r['efficiency']:.2f}" if pd.notna(r["efficiency"]) else "-",
+                ]
+            )
+        out += _md_table(["structure", "threads", "wall ms", "CPU ms", "speedup", "efficiency"], body) + [""]
     return "\n".join(out)
 
 
 def thread_scaling_figure(rows: pd.DataFrame, path: Path) -> Path:
-    g = sns.relplot(data=rows, kind="line", x="threads", y="speedup", hue="structure",
-                    col="model", marker="o", height=3.4, aspect=1.2)
+    g = sns.relplot(
+        data=rows,
+        kind="line",
+        x="threads",
+        y="speedup",
+        hue="structure",
+        col="model",
+        marker="o",
+        height=3.4,
+        aspect=1.2,
+    )
     top = rows["threads"].max()
     for ax in g.axes.flat:
         ax.plot([1, top], [1, top], ls="--", color="grey", lw=1, label="ideal")
@@ -234,17 +284,36 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
         table.to_csv(tables / "ray_sets.csv", index=False)
         (tables / "ray_sets.md").write_text(ray_set_markdown(table))
         (tables / "ray_set_ranking.md").write_text(ranking_markdown(ranking(rows)))
-        written += [tables / "ray_sets.md", tables / "ray_sets.csv", tables / "ray_set_ranking.md",
-                    ray_set_figure(rows, figures / "ray_sets.png")]
+        written += [
+            tables / "ray_sets.md",
+            tables / "ray_sets.csv",
+            tables / "ray_set_ranking.md",
+            ray_set_figure(rows, figures / "ray_sets.png"),
+        ]
     ts = thread_scaling_rows(results)
     if not ts.empty:
         tables.mkdir(parents=True, exist_ok=True)
         figures.mkdir(parents=True, exist_ok=True)
-        cols = [c for c in ["config", "model", "structure", "threads", "render_s_median",
-                            "render_cpu_s_median", "speedup", "efficiency", "cpu_per_wall"]
-                if c in ts.columns]
+        cols = [
+            c
+            for c in [
+                "config",
+                "model",
+                "structure",
+                "threads",
+                "render_s_median",
+                "render_cpu_s_median",
+                "speedup",
+                "efficiency",
+                "cpu_per_wall",
+            ]
+            if c in ts.columns
+        ]
         ts[cols].to_csv(tables / "thread_scaling.csv", index=False)
         (tables / "thread_scaling.md").write_text(thread_scaling_markdown(ts))
-        written += [tables / "thread_scaling.md", tables / "thread_scaling.csv",
-                    thread_scaling_figure(ts, figures / "thread_scaling.png")]
+        written += [
+            tables / "thread_scaling.md",
+            tables / "thread_scaling.csv",
+            thread_scaling_figure(ts, figures / "thread_scaling.png"),
+        ]
     return written

@@ -1,10 +1,10 @@
 from pathlib import Path
 
 import pytest
+from synthetic import realistic_rows, write_csv
 
 from accelbench_analysis.report_numbers import load_report_numbers
 from accelbench_analysis.schema import load_results
-from synthetic import realistic_rows, write_csv
 
 
 @pytest.fixture(scope="session")
@@ -14,8 +14,7 @@ def report_nums():
 
 @pytest.fixture(scope="session")
 def realistic_csv(tmp_path_factory) -> Path:
-    return write_csv(tmp_path_factory.mktemp("realistic") / "run.csv", realistic_rows(),
-                     with_errors=True)
+    return write_csv(tmp_path_factory.mktemp("realistic") / "run.csv", realistic_rows(), with_errors=True)
 
 
 @pytest.fixture(scope="session")

@@ -4,11 +4,20 @@ each claim's verdict, then our side (missing rows, mixed provenance, traversal c
 import math
 
 import pytest
-
-from accelbench_analysis.claims import (CLAIMS, FAILS, HOLDS, NOT_COMPARABLE, OurSource,
-                                        ReportSource, approx, approx_range, evaluate)
-from accelbench_analysis.schema import load_results
 from synthetic import BVH, KD, LBVH, row, write_csv
+
+from accelbench_analysis.claims import (
+    CLAIMS,
+    FAILS,
+    HOLDS,
+    NOT_COMPARABLE,
+    OurSource,
+    ReportSource,
+    approx,
+    approx_range,
+    evaluate,
+)
+from accelbench_analysis.schema import load_results
 
 CLAIM = {c.id: c for c in CLAIMS}
 # What the report's own numbers say (computed by hand from report-tables.csv):
@@ -27,7 +36,11 @@ def test_every_claim_on_the_report_numbers(report_nums):
 
 
 def setv(report_nums, model, accel, setting, column, value):
-    sel = (report_nums["model"] == model) & (report_nums["accelerator"] == accel) & (report_nums["setting"] == setting)
+    sel = (
+        (report_nums["model"] == model)
+        & (report_nums["accelerator"] == accel)
+        & (report_nums["setting"] == setting)
+    )
     assert sel.sum() == 1
     report_nums.loc[sel, column] = value
 
@@ -35,18 +48,26 @@ def setv(report_nums, model, accel, setting, column, value):
 def scale(report_nums, models, accel, column, factor, like=None):
     for m in models:
         src = like or accel
-        base = report_nums.loc[(report_nums["model"] == m) & (report_nums["accelerator"] == src) & (report_nums["setting"] == "default"), column].iloc[0]
+        base = report_nums.loc[
+            (report_nums["model"] == m)
+            & (report_nums["accelerator"] == src)
+            & (report_nums["setting"] == "default"),
+            column,
+        ].iloc[0]
         setv(report_nums, m, accel, "default", column, base * factor)
 
 
-B, I, D, H, T, C = "stanford-bunny", "igea", "asian-dragon", "happy-buddha", "trees", "sci-fi-city"
+B, I, D, H, T, C = "stanford-bunny", "igea", "asian-dragon", "happy-buddha", "trees", "sci-fi-city"  # noqa: E741 (the report's model initials)
 K2 = (B, "kdtree")
 FLIPS = {
     "5.1-a": lambda r: setv(r, *K2, "maxPrims=100", "build_s", 5.214),
     "5.1-b": lambda r: setv(r, *K2, "maxPrims=100", "nodes", 1000),
     "5.1-c": lambda r: setv(r, *K2, "maxPrims=100", "prim_tests", 1921710),
     "5.1-d": lambda r: setv(r, *K2, "maxPrims=100", "render_s", 20.845),
-    "5.1-e": lambda r: (setv(r, *K2, "maxPrims=1", "build_s", 1.0), setv(r, *K2, "maxPrims=1", "render_s", 10.0)),
+    "5.1-e": lambda r: (
+        setv(r, *K2, "maxPrims=1", "build_s", 1.0),
+        setv(r, *K2, "maxPrims=1", "render_s", 10.0),
+    ),
     "5.1-f": lambda r: setv(r, *K2, "maxDepth=100", "render_s", 20.0),
     "5.1-g": lambda r: setv(r, *K2, "maxDepth=5", "render_s", 11.566),
     "5.1-h": lambda r: setv(r, *K2, "maxDepth=28", "render_s", 11.048),
@@ -62,7 +83,10 @@ FLIPS = {
     "5.2-h": lambda r: setv(r, D, "kdtree", "default", "nodes", 2_000_000),
     "5.2-i": lambda r: setv(r, H, "kdtree", "default", "prim_tests", 4_000_000),
     "5.3-a": lambda r: setv(r, T, "bvh", "default", "render_s", 10.0),
-    "5.3-b": lambda r: (setv(r, T, "bvh", "default", "render_s", 50.0), setv(r, T, "lbvh", "default", "render_s", 50.0)),
+    "5.3-b": lambda r: (
+        setv(r, T, "bvh", "default", "render_s", 50.0),
+        setv(r, T, "lbvh", "default", "render_s", 50.0),
+    ),
     "5.3-c": lambda r: setv(r, T, "kdtree", "default", "build_s", 5.0),
     "5.3-d": lambda r: setv(r, C, "lbvh", "default", "render_s", 100.0),
     "5.3-e": lambda r: setv(r, C, "lbvh", "default", "render_s", 60.0),
@@ -110,6 +134,7 @@ def test_approx_tolerance():
 
 # ---- our side ------------------------------------------------------------------------------
 
+
 def ours(tmp_path, rows, report_nums, name="o.csv", more=()):
     res = load_results([write_csv(tmp_path / name, rows)] + list(more))
     return OurSource(res, report_nums)
@@ -118,16 +143,18 @@ def ours(tmp_path, rows, report_nums, name="o.csv", more=()):
 def bunny_igea_rows(**prov):
     out = []
     for m, f in (("stanford-bunny", 1.0), ("igea", 4.0), ("stanford-dragon", 12), ("happy-buddha-100k", 2)):
-        out += [row(m, "bvh", BVH, build=0.1 * f, render=1.0 * f, **prov),
-                row(m, "lbvh", LBVH, build=0.2 * f, render=1.05 * f, **prov),
-                row(m, "kdtree", KD, build=0.9 * f, render=0.8 * f, **prov)]
+        out += [
+            row(m, "bvh", BVH, build=0.1 * f, render=1.0 * f, **prov),
+            row(m, "lbvh", LBVH, build=0.2 * f, render=1.05 * f, **prov),
+            row(m, "kdtree", KD, build=0.9 * f, render=0.8 * f, **prov),
+        ]
     return out
 
 
 def test_ours_holds_and_fails(tmp_path, report_nums):
     src = ours(tmp_path, bunny_igea_rows(), report_nums)
     assert evaluate(CLAIM["5.2-a"], src).verdict == HOLDS
-    assert evaluate(CLAIM["5.2-c"], src).verdict == HOLDS   # LBVH/BVH build exactly 2
+    assert evaluate(CLAIM["5.2-c"], src).verdict == HOLDS  # LBVH/BVH build exactly 2
     assert evaluate(CLAIM["5.2-f"], src).verdict == HOLDS
     rows = bunny_igea_rows()
     rows[1] = row("stanford-bunny", "lbvh", LBVH, build=0.05, render=1.0)  # LBVH fastest on the bunny
@@ -144,9 +171,13 @@ def test_ours_missing_row_names_the_reason(tmp_path, report_nums):
 
 def test_ours_mixed_provenance_is_not_comparable(tmp_path, report_nums):
     rows = bunny_igea_rows()
-    other = write_csv(tmp_path / "other.csv", [row("igea", "kdtree", dict(KD, threads="2"), build=9, render=9,
-                                                   cpu="Other CPU")])
-    src = ours(tmp_path, rows[:5] + rows[6:], report_nums, more=[other])  # Igea's kd-tree only from the other machine
+    other = write_csv(
+        tmp_path / "other.csv",
+        [row("igea", "kdtree", dict(KD, threads="2"), build=9, render=9, cpu="Other CPU")],
+    )
+    src = ours(
+        tmp_path, rows[:5] + rows[6:], report_nums, more=[other]
+    )  # Igea's kd-tree only from the other machine
     f = evaluate(CLAIM["5.2-a"], src)
     assert f.verdict == NOT_COMPARABLE and "provenance groups (A, B)" in f.evidence
     # A claim that touches only one machine's rows is still judged.

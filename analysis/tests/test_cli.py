@@ -1,14 +1,24 @@
 """The command line end to end: outputs written, REPORT.md content, bad input rejected."""
 
 import pytest
-
-from accelbench_analysis.cli import main
 from synthetic import PROVENANCE, header
 
-EXPECTED = ["tables/table2.md", "tables/table2.tex", "tables/table4.md", "tables/table4.tex",
-            "tables/table5.md", "tables/table5.tex", "tables/claims.md",
-            "figures/build_vs_render.png", "figures/error_pareto.png", "report/report-tables.csv",
-            "report/README.md", "REPORT.md"]
+from accelbench_analysis.cli import main
+
+EXPECTED = [
+    "tables/table2.md",
+    "tables/table2.tex",
+    "tables/table4.md",
+    "tables/table4.tex",
+    "tables/table5.md",
+    "tables/table5.tex",
+    "tables/claims.md",
+    "figures/build_vs_render.png",
+    "figures/error_pareto.png",
+    "report/report-tables.csv",
+    "report/README.md",
+    "REPORT.md",
+]
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,8 @@ import math
 import matplotlib.image as mpimg
 import numpy as np
 import pytest
+from synthetic import BVH, EMBREE, KD, LBVH, SAH, ZERO_ERRORS, case_row, realistic_rows, row, write_csv
+from test_tables import cells_of, section_rows
 
 from accelbench_analysis import figures
 from accelbench_analysis.errors import NOT_MEASURED
@@ -13,9 +15,6 @@ from accelbench_analysis.formatting import Section, to_latex, to_markdown
 from accelbench_analysis.schema import ContractError, load_results, read_csv
 from accelbench_analysis.selection import STRUCTURE, Picker
 from accelbench_analysis.tables import NOT_MEASURED_SECTION, model_table, table2
-from synthetic import (BVH, EMBREE, KD, LBVH, SAH, ZERO_ERRORS, case_row, realistic_rows, row,
-                       write_csv)
-from test_tables import cells_of, section_rows
 
 BUNNY = "stanford-bunny"
 
@@ -23,19 +22,51 @@ BUNNY = "stanford-bunny"
 @pytest.fixture
 def with_errors(tmp_path):
     rows = [
-        row(BUNNY, "bvh", BVH, build=0.5, render=2.0, nodes=138901, prim_tests=1_000_000,
-            errors={"false_misses": 3, "false_hits": 1, "prim_mismatches": 0, "nan_results": 0,
-                    "t_err_ulp_p50": 0.5, "t_err_ulp_max": 17, "peak_rss_bytes": 123 << 20}),
+        row(
+            BUNNY,
+            "bvh",
+            BVH,
+            build=0.5,
+            render=2.0,
+            nodes=138901,
+            prim_tests=1_000_000,
+            errors={
+                "false_misses": 3,
+                "false_hits": 1,
+                "prim_mismatches": 0,
+                "nan_results": 0,
+                "t_err_ulp_p50": 0.5,
+                "t_err_ulp_max": 17,
+                "peak_rss_bytes": 123 << 20,
+            },
+        ),
         # Measured, but no ray hit the same primitive as the reference: t error n/a.
-        row(BUNNY, "lbvh", LBVH, build=1.0, render=2.2, nodes=138901, prim_tests=1_100_000,
-            errors={"false_misses": 0, "false_hits": 0, "prim_mismatches": 2, "nan_results": 0}),
+        row(
+            BUNNY,
+            "lbvh",
+            LBVH,
+            build=1.0,
+            render=2.2,
+            nodes=138901,
+            prim_tests=1_100_000,
+            errors={"false_misses": 0, "false_hits": 0, "prim_mismatches": 2, "nan_results": 0},
+        ),
         # The comparison did not run for this row.
-        row(BUNNY, "kdtree", dict(KD, max_depth="29"), build=4.0, render=1.5, nodes=400000,
-            prim_tests=300_000),
-        row(BUNNY, "kdtree", dict(KD, max_prims="10"), build=3.0, render=1.7, nodes=90000,
-            prim_tests=600_000, config="table2", errors=dict(ZERO_ERRORS, false_misses=7)),
-        row(BUNNY, "bvh", SAH, build=1.2, render=1.0, nodes=40000, prim_tests=500_000,
-            errors=ZERO_ERRORS),
+        row(
+            BUNNY, "kdtree", dict(KD, max_depth="29"), build=4.0, render=1.5, nodes=400000, prim_tests=300_000
+        ),
+        row(
+            BUNNY,
+            "kdtree",
+            dict(KD, max_prims="10"),
+            build=3.0,
+            render=1.7,
+            nodes=90000,
+            prim_tests=600_000,
+            config="table2",
+            errors=dict(ZERO_ERRORS, false_misses=7),
+        ),
+        row(BUNNY, "bvh", SAH, build=1.2, render=1.0, nodes=40000, prim_tests=500_000, errors=ZERO_ERRORS),
         row(BUNNY, "embree", EMBREE, build=0.05, render=0.3, errors=ZERO_ERRORS),
         row("igea", "kdtree", KD, status="timeout", message="build exceeded 600 s"),
     ]
@@ -44,13 +75,24 @@ def with_errors(tmp_path):
 
 @pytest.fixture
 def without_errors(tmp_path):
-    rows = [row(BUNNY, "bvh", BVH, build=0.5, render=2.0, nodes=138901, prim_tests=10),
-            row(BUNNY, "kdtree", dict(KD, max_prims="10"), build=3.0, render=1.7, nodes=9,
-                prim_tests=6, config="table2")]
+    rows = [
+        row(BUNNY, "bvh", BVH, build=0.5, render=2.0, nodes=138901, prim_tests=10),
+        row(
+            BUNNY,
+            "kdtree",
+            dict(KD, max_prims="10"),
+            build=3.0,
+            render=1.7,
+            nodes=9,
+            prim_tests=6,
+            config="table2",
+        ),
+    ]
     return load_results([write_csv(tmp_path / "old.csv", rows)])
 
 
 # ---- loading ------------------------------------------------------------------------------
+
 
 def test_new_columns_load_as_numbers_and_text(with_errors):
     bvh = with_errors.rows[with_errors.rows["accel"] == "bvh"].iloc[0]
@@ -66,28 +108,37 @@ def test_csv_without_the_new_columns_still_loads(without_errors):
 
 
 def test_verdict_rows_need_no_timings_and_unknown_verdicts_are_rejected(tmp_path):
-    path = write_csv(tmp_path / "v.csv", [case_row("case-2a:translated", "bvh", {}, "FAIL",
-                                                   "leaks=1"),
-                                          case_row("case-1a:sphere", "bvh", {}, "pass")],
-                     with_errors=True)
+    path = write_csv(
+        tmp_path / "v.csv",
+        [
+            case_row("case-2a:translated", "bvh", {}, "FAIL", "leaks=1"),
+            case_row("case-1a:sphere", "bvh", {}, "pass"),
+        ],
+        with_errors=True,
+    )
     df = read_csv(path)
     assert list(df["verdict"]) == ["fail", "pass"]
     assert df["build_s_median"].isna().all() and df["repetitions"].isna().all()
     text = path.read_text().replace(",pass,", ",maybe,")
     path.write_text(text)
-    with pytest.raises(ContractError, match=r"'verdict' must be pass, fail or empty; found \['maybe'\] on line 3 \(row 2\)"):
+    with pytest.raises(
+        ContractError, match=r"'verdict' must be pass, fail or empty; found \['maybe'\] on line 3 \(row 2\)"
+    ):
         read_csv(path)
 
 
 def test_case_rows_never_fill_a_report_cell(tmp_path):
-    rows = [case_row(BUNNY, "bvh", BVH, "pass"),  # a verdict on a real model's name
-            row(BUNNY, "bvh", dict(BVH, threads="2"), build=0.5, render=2.0)]
+    rows = [
+        case_row(BUNNY, "bvh", BVH, "pass"),  # a verdict on a real model's name
+        row(BUNNY, "bvh", dict(BVH, threads="2"), build=0.5, render=2.0),
+    ]
     res = load_results([write_csv(tmp_path / "c.csv", rows, with_errors=True)])
     pick = Picker(res).pick(BUNNY, STRUCTURE["bvh"].spec)
     assert pick.ok and pick.row["verdict"] == "" and pick.row["build_s_median"] == 0.5
 
 
 # ---- tables -------------------------------------------------------------------------------
+
 
 def test_table4_error_rows(with_errors, report_nums):
     doc, rel = model_table(with_errors, report_nums, 4, [BUNNY, "igea"])
@@ -109,8 +160,12 @@ def test_table4_error_rows(with_errors, report_nums):
     assert "| BVH (median) | 3 | — | — | no row |" in md
     assert "False misses (primary rays, vs the reference)" in to_latex(doc)
     # The relative table: the four counts in one cell per structure and model.
-    compact = {r[0]: r[1:] for r in section_rows(
-        rel, "Errors vs the reference, ours (false misses / false hits / wrong prims / NaN)")}
+    compact = {
+        r[0]: r[1:]
+        for r in section_rows(
+            rel, "Errors vs the reference, ours (false misses / false hits / wrong prims / NaN)"
+        )
+    }
     assert compact["BVH (median)"][:2] == ["3 / 1 / 0 / 0", "—"]
     assert compact["LBVH"][0] == "0 / 0 / 2 / 0" and compact["kd-tree"][0] == NOT_MEASURED
 
@@ -118,8 +173,7 @@ def test_table4_error_rows(with_errors, report_nums):
 def test_table2_error_columns(with_errors, report_nums):
     doc = table2(with_errors, report_nums)[0]
     assert doc.groups[-1] == ("Error vs the reference (ours; the report measured none)", 6)
-    assert doc.header[-6:] == ["false misses", "false hits", "wrong prims", "NaN", "t ulp p50",
-                               "t ulp max"]
+    assert doc.header[-6:] == ["false misses", "false hits", "wrong prims", "NaN", "t ulp p50", "t ulp max"]
     assert cells_of(doc, "maxPrims=10")[-6:] == ["7", "0", "0", "0", "0", "1"]
     assert cells_of(doc, "maxPrims=1")[-6:] == [NOT_MEASURED] * 6  # the max_depth=29 row
     assert cells_of(doc, "maxPrims=100")[-6:] == ["no row"] * 6
@@ -141,10 +195,19 @@ def test_tables_without_error_values_say_not_measured(without_errors, report_num
 
 def test_image_metrics_appear_when_measured(tmp_path, report_nums):
     errs = dict(ZERO_ERRORS, image_rmse=0.0123, hole_pixels=4)
-    res = load_results([write_csv(tmp_path / "img.csv", [
-        row(BUNNY, "bvh", BVH, build=0.5, render=2.0, errors=errs),
-        row(BUNNY, "lbvh", LBVH, build=0.5, render=2.0, errors=ZERO_ERRORS),
-        row(BUNNY, "bvh", SAH, build=0.5, render=1.0, errors=errs)], with_errors=True)])
+    res = load_results(
+        [
+            write_csv(
+                tmp_path / "img.csv",
+                [
+                    row(BUNNY, "bvh", BVH, build=0.5, render=2.0, errors=errs),
+                    row(BUNNY, "lbvh", LBVH, build=0.5, render=2.0, errors=ZERO_ERRORS),
+                    row(BUNNY, "bvh", SAH, build=0.5, render=1.0, errors=errs),
+                ],
+                with_errors=True,
+            )
+        ]
+    )
     doc = model_table(res, report_nums, 4, [BUNNY])[0]
     rmse = {r[0]: r[1] for r in section_rows(doc, "Image RMSE vs the reference image")}
     assert rmse["BVH (median)"] == "0.0123" and rmse["LBVH"] == "n/a"
@@ -157,14 +220,17 @@ def test_image_metrics_appear_when_measured(tmp_path, report_nums):
 
 # ---- the Pareto figure ----------------------------------------------------------------------
 
+
 def test_error_frame_sums_wrong_answers_and_leaves_out_case_rows(with_errors, tmp_path):
     df = figures.error_frame(with_errors)
     wrong = dict(zip(df["accel"] + ":" + df["params"].str[:9], df[figures.WRONG]))
     assert wrong["bvh:split=med"] == 4 and wrong["lbvh:max_prims"] == 2
     assert "kdtree" in set(df["accel"])  # the max_prims=10 row; the auto-depth one has no errors
     assert len(df) == 5
-    rows = [case_row("case-1a:sphere", "bvh", BVH, "pass"),
-            row(BUNNY, "bvh", BVH, build=0.5, render=2.0, errors=ZERO_ERRORS)]
+    rows = [
+        case_row("case-1a:sphere", "bvh", BVH, "pass"),
+        row(BUNNY, "bvh", BVH, build=0.5, render=2.0, errors=ZERO_ERRORS),
+    ]
     res = load_results([write_csv(tmp_path / "c.csv", rows, with_errors=True)])
     assert list(figures.error_frame(res)["model"]) == [BUNNY]
 
@@ -197,6 +263,7 @@ def test_harness_column_order_loads(tmp_path, report_nums):
     from pathlib import Path
 
     from accelbench_analysis.schema import ERROR_MEMORY_VERDICT_COLUMNS
+
     src = Path(__file__).resolve().parents[2] / "results" / "reference" / "csv" / "table4.csv"
     rows = list(csv.reader(src.open(newline="")))
     # Whatever the committed run has in these columns, replace it with known values.
@@ -207,8 +274,8 @@ def test_harness_column_order_loads(tmp_path, report_nums):
     status = head.index("status")
     filled = ["4", "0", "1", "0", "3", "0", "", "", str(200 << 20), "", ""]
     rows = [head[:at] + ERROR_MEMORY_VERDICT_COLUMNS + head[at:]] + [
-        r[:at] + (filled if r[status] == "ok" else [""] * len(filled)) + r[at:]
-        for r in rows[1:]]
+        r[:at] + (filled if r[status] == "ok" else [""] * len(filled)) + r[at:] for r in rows[1:]
+    ]
     path = tmp_path / "table4.csv"
     csv.writer(path.open("w", newline="")).writerows(rows)
     res = load_results([path])

@@ -4,10 +4,10 @@ when they cannot."""
 import matplotlib.image as mpimg
 import pandas as pd
 import pytest
+from synthetic import BVH, row, write_csv
 
 from accelbench_analysis import figures
 from accelbench_analysis.schema import load_results
-from synthetic import BVH, row, write_csv
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

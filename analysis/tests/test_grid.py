@@ -11,14 +11,12 @@ import pandas as pd
 import pytest
 import yaml
 from PIL import Image
+from synthetic import KD, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.grid import (CHEAP, FINAL, analyse, heatmap_data, marker_position,
-                                      published_settings)
-from accelbench_analysis.grid_config import (GridConfigError, expand_range, load_grid_config,
-                                             parse_objective)
+from accelbench_analysis.grid import CHEAP, FINAL, analyse, heatmap_data, marker_position, published_settings
+from accelbench_analysis.grid_config import GridConfigError, expand_range, load_grid_config, parse_objective
 from accelbench_analysis.schema import load_results, parse_params
-from synthetic import KD, row, write_csv
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -30,23 +28,40 @@ GRID = {"max_prims": [1, 2, 4], "max_depth": [10, 20, 30], "empty_bonus": [0, 0.
 # C           5     1.5      1.5      6.5           9.5 *
 # D           0.1   0.1      best everywhere, but 2 false misses
 # everything else: build 20, render 5; one timeout.
-SPECIAL = {(1, 30, 0.5): ("A", 10.0, 1.0), (4, 10, 0): ("B", 1.0, 3.0),
-           (2, 20, 0.5): ("C", 5.0, 1.5), (4, 30, 0.5): ("D", 0.1, 0.1)}
+SPECIAL = {
+    (1, 30, 0.5): ("A", 10.0, 1.0),
+    (4, 10, 0): ("B", 1.0, 3.0),
+    (2, 20, 0.5): ("C", 5.0, 1.5),
+    (4, 30, 0.5): ("D", 0.1, 0.1),
+}
 TIMEOUT = (1, 10, 0)
 WINNERS = {"render": (1, 30, 0.5), "build+render": (4, 10, 0), "build + k * render": (2, 20, 0.5)}
 
 
-def grid_config(tmp_path: Path, objective="build + k * render", frames=3, extra_grid=None,
-                params=None, name="grid-test") -> Path:
+def grid_config(
+    tmp_path: Path, objective="build + k * render", frames=3, extra_grid=None, params=None, name="grid-test"
+) -> Path:
     grid = {"objective": objective, "constraint": {"false_misses": 0}, **(extra_grid or {})}
     if frames is not None:
         grid["frames"] = frames
-    doc = {"name": name, "repetitions": 1, "models": [{"name": "stanford-bunny"}],
-           "accelerators": [{"name": "kdtree", "params": params or {
-               "max_prims": {"from": 1, "to": 4, "scale": "log2"},
-               "max_depth": {"from": 10, "to": 30, "step": 10},
-               "empty_bonus": [0, 0.5], "isect_cost": 80}}],
-           "grid": grid}
+    doc = {
+        "name": name,
+        "repetitions": 1,
+        "models": [{"name": "stanford-bunny"}],
+        "accelerators": [
+            {
+                "name": "kdtree",
+                "params": params
+                or {
+                    "max_prims": {"from": 1, "to": 4, "scale": "log2"},
+                    "max_depth": {"from": 10, "to": 30, "step": 10},
+                    "empty_bonus": [0, 0.5],
+                    "isect_cost": 80,
+                },
+            }
+        ],
+        "grid": grid,
+    }
     path = tmp_path / f"{name}-{abs(hash((objective, frames, str(extra_grid))))}.yaml"
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
     return path
@@ -59,17 +74,32 @@ def grid_rows(skip=(), config="grid-test", reps=1, only=None, changes=None) -> l
     for mp, md, eb in itertools.product(*GRID.values()):
         if (mp, md, eb) in skip or (only is not None and (mp, md, eb) not in only):
             continue
-        params = dict(KD, max_prims=str(mp), max_depth=str(md), empty_bonus=str(eb),
-                      isect_cost="80")
+        params = dict(KD, max_prims=str(mp), max_depth=str(md), empty_bonus=str(eb), isect_cost="80")
         if (mp, md, eb) == TIMEOUT:
-            rows.append(row("stanford-bunny", "kdtree", params, status="timeout",
-                            message="build exceeded 120 s", config=config))
+            rows.append(
+                row(
+                    "stanford-bunny",
+                    "kdtree",
+                    params,
+                    status="timeout",
+                    message="build exceeded 120 s",
+                    config=config,
+                )
+            )
             continue
         _, build, render = SPECIAL.get((mp, md, eb), ("", 20.0, 5.0))
         misses = 2 if (mp, md, eb) == (4, 30, 0.5) else 0
         build, render, misses = (changes or {}).get((mp, md, eb), (build, render, misses))
-        r = row("stanford-bunny", "kdtree", params, build=build, render=render, nodes=1001,
-                config=config, errors={"false_misses": misses, "false_hits": 0})
+        r = row(
+            "stanford-bunny",
+            "kdtree",
+            params,
+            build=build,
+            render=render,
+            nodes=1001,
+            config=config,
+            errors={"false_misses": misses, "false_hits": 0},
+        )
         r["repetitions"] = reps
         rows.append(r)
     return rows
@@ -87,6 +117,7 @@ def key(best_row) -> tuple:
 
 # ---- ranges and the config ------------------------------------------------------------------
 
+
 def test_ranges_expand_like_the_harness():
     assert expand_range({"from": 1, "to": 64, "scale": "log2"}, "x") == [1, 2, 4, 8, 16, 32, 64]
     assert expand_range({"from": 1, "to": 100, "scale": "log2"}, "x")[-1] == 64
@@ -98,19 +129,24 @@ def test_ranges_expand_like_the_harness():
     assert all(isinstance(v, int) for v in ints)
 
 
-@pytest.mark.parametrize("spec, message", [
-    ({"from": 4, "to": 1, "step": 1}, "is above `to`"),
-    ({"from": 1, "to": 4}, "exactly one of `step` or `scale`"),
-    ({"from": 1, "to": 4, "step": 1, "scale": "log2"}, "exactly one of"),
-    ({"from": 0, "to": 4, "scale": "log2"}, "starts above 0"),
-    ({"from": 1, "to": 4, "scale": "ln"}, "scale must be one of log2, log10"),
-    ({"from": 1, "to": 4, "step": -1}, "positive"),
-    ({"from": 1, "to": 4, "stp": 1}, "unknown range keys ['stp']"),
-    ({"from": 0, "to": 1, "step": 1e-6}, "more than 10000 values"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ({"from": 4, "to": 1, "step": 1}, "is above `to`"),
+        ({"from": 1, "to": 4}, "exactly one of `step` or `scale`"),
+        ({"from": 1, "to": 4, "step": 1, "scale": "log2"}, "exactly one of"),
+        ({"from": 0, "to": 4, "scale": "log2"}, "starts above 0"),
+        ({"from": 1, "to": 4, "scale": "ln"}, "scale must be one of log2, log10"),
+        ({"from": 1, "to": 4, "step": -1}, "positive"),
+        ({"from": 1, "to": 4, "stp": 1}, "unknown range keys ['stp']"),
+        ({"from": 0, "to": 1, "step": 1e-6}, "more than 10000 values"),
+    ],
+)
 def test_bad_ranges_are_refused(spec, message):
-    with pytest.raises(GridConfigError, match=message.replace("[", r"\[").replace("]", r"\]")
-                       .replace("(", r"\(").replace("`", "`")):
+    with pytest.raises(
+        GridConfigError,
+        match=message.replace("[", r"\[").replace("]", r"\]").replace("(", r"\(").replace("`", "`"),
+    ):
         expand_range(spec, "x")
 
 
@@ -133,8 +169,9 @@ def test_config_errors_name_the_key(tmp_path):
     with pytest.raises(GridConfigError, match=r"grid: unknown keys \['mdoe'\]"):
         load_grid_config(path)
     two = tmp_path / "two.yaml"
-    two.write_text("models: [{name: m}]\naccelerators: [{name: bvh}, {name: lbvh}]\n"
-                   "grid: {objective: render}\n")
+    two.write_text(
+        "models: [{name: m}]\naccelerators: [{name: bvh}, {name: lbvh}]\ngrid: {objective: render}\n"
+    )
     with pytest.raises(GridConfigError, match="exactly one accelerator"):
         load_grid_config(two)
     nogrid = tmp_path / "nogrid.yaml"
@@ -153,10 +190,10 @@ def test_example_config_loads_and_counts(tmp_path):
 
 # ---- ranking ---------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("objective", list(WINNERS))
 def test_best_for_each_objective(tmp_path, grid_csv, objective):
-    cfg = load_grid_config(grid_config(tmp_path, objective,
-                                       frames=3 if "k" in objective else None))
+    cfg = load_grid_config(grid_config(tmp_path, objective, frames=3 if "k" in objective else None))
     a = analyse(load_results([grid_csv]), cfg)
     assert key(a.best("stanford-bunny")) == WINNERS[objective]
     ranked = a.accepted("stanford-bunny")
@@ -166,8 +203,11 @@ def test_best_for_each_objective(tmp_path, grid_csv, objective):
 
 def test_constraint_rejects_and_says_why(tmp_path, grid_csv):
     a = analyse(load_results([grid_csv]), load_grid_config(grid_config(tmp_path)))
-    d = a.ranked[a.ranked["params"].str.contains("max_prims=4;max_depth=30;isect_cost=80;"
-                                                 "traversal_cost=1;empty_bonus=0.5")].iloc[0]
+    d = a.ranked[
+        a.ranked["params"].str.contains(
+            "max_prims=4;max_depth=30;isect_cost=80;traversal_cost=1;empty_bonus=0.5"
+        )
+    ].iloc[0]
     assert d["rejected"] and d["reason"] == "false_misses = 2 > 0" and pd.isna(d["rank"])
     t = a.ranked[a.ranked["status"] == "timeout"].iloc[0]
     assert t["rejected"] and t["reason"] == "status timeout: build exceeded 120 s"
@@ -180,22 +220,25 @@ def test_without_error_columns_the_constraint_is_reported_unchecked(tmp_path):
     a = analyse(load_results([csv]), load_grid_config(grid_config(tmp_path)))
     assert key(a.best("stanford-bunny")) == (4, 30, 0.5)  # D wins: nothing to reject it
     assert a.constraints_checked == {"false_misses": False}
-    assert any("constraint false_misses <= 0 NOT CHECKED" in n and "error columns" in n
-               for n in a.notes)
+    assert any("constraint false_misses <= 0 NOT CHECKED" in n and "error columns" in n for n in a.notes)
 
 
 def test_missing_grid_points_are_noted(tmp_path):
-    csv = write_csv(tmp_path / "part.csv", grid_rows(skip=[(2, 10, 0), (2, 20, 0)]),
-                    with_errors=True)
+    csv = write_csv(tmp_path / "part.csv", grid_rows(skip=[(2, 10, 0), (2, 20, 0)]), with_errors=True)
     a = analyse(load_results([csv]), load_grid_config(grid_config(tmp_path)))
-    assert "stanford-bunny: 2 of the config's 18 grid points have no row (run not finished, " \
-           "or a shard not merged)" in a.notes
+    assert (
+        "stanford-bunny: 2 of the config's 18 grid points have no row (run not finished, "
+        "or a shard not merged)" in a.notes
+    )
 
 
 def test_a_second_measurement_with_more_repetitions_wins(tmp_path):
     first = write_csv(tmp_path / "p1.csv", grid_rows(), with_errors=True)
-    rows = [r for r in grid_rows(config="grid-test-final", reps=5)
-            if "max_prims=2;max_depth=20" in r["params"] and "empty_bonus=0.5" in r["params"]]
+    rows = [
+        r
+        for r in grid_rows(config="grid-test-final", reps=5)
+        if "max_prims=2;max_depth=20" in r["params"] and "empty_bonus=0.5" in r["params"]
+    ]
     rows[0]["render_s_median"] = 4.0  # C measured properly: now worse than B
     second = write_csv(tmp_path / "p2.csv", rows, with_errors=True)
     cfg = load_grid_config(grid_config(tmp_path))
@@ -227,6 +270,7 @@ def test_published_settings():
 
 # ---- the command line: outputs ---------------------------------------------------------------
 
+
 @pytest.fixture(scope="module")
 def outputs(tmp_path_factory):
     """One full `grid` run (draws the heatmaps once for all the tests below)."""
@@ -241,9 +285,13 @@ def outputs(tmp_path_factory):
 def test_heatmaps_for_each_pair(outputs):
     out, _, _ = outputs
     maps = sorted(p.name for p in out.glob("heatmap-*.png"))
-    assert maps == sorted(["heatmap-stanford-bunny-max_prims-max_depth.png",
-                           "heatmap-stanford-bunny-max_prims-empty_bonus.png",
-                           "heatmap-stanford-bunny-max_depth-empty_bonus.png"])
+    assert maps == sorted(
+        [
+            "heatmap-stanford-bunny-max_prims-max_depth.png",
+            "heatmap-stanford-bunny-max_prims-empty_bonus.png",
+            "heatmap-stanford-bunny-max_depth-empty_bonus.png",
+        ]
+    )
     for name in maps:
         with Image.open(out / name) as im:
             assert im.size[0] > 300 and im.size[1] > 300
@@ -259,8 +307,9 @@ def test_best_yaml_round_trips_into_a_config(outputs, tmp_path):
     bunny = doc["best"]["stanford-bunny"]
     assert bunny["objective_s"] == pytest.approx(9.5) and bunny["accepted"] == 16
     accel = bunny["accelerators"]
-    assert accel == [{"name": "kdtree", "params": {"max_prims": 2, "max_depth": 20,
-                                                   "empty_bonus": 0.5, "isect_cost": 80}}]
+    assert accel == [
+        {"name": "kdtree", "params": {"max_prims": 2, "max_depth": 20, "empty_bonus": 0.5, "isect_cost": 80}}
+    ]
     # Pasted into another config, the snippet is exactly that one combination.
     other = yaml.safe_load(cfg_path.read_text())
     other["accelerators"] = accel
@@ -274,15 +323,26 @@ def test_ranked_csv(outputs):
     out, _, _ = outputs
     ranked = pd.read_csv(out / "ranked.csv")
     assert len(ranked) == 18
-    assert list(ranked.columns[:8]) == ["model", "rank", "objective", "rejected", "reason",
-                                        "param:max_prims", "param:max_depth", "param:empty_bonus"]
+    assert list(ranked.columns[:8]) == [
+        "model",
+        "rank",
+        "objective",
+        "rejected",
+        "reason",
+        "param:max_prims",
+        "param:max_depth",
+        "param:empty_bonus",
+    ]
     first = ranked.iloc[0]
     assert (first["rank"], first["param:max_prims"], first["param:max_depth"]) == (1, 2, 20)
     assert ranked["rejected"].sum() == 2 and ranked["rank"].isna().sum() == 2
     # Every candidate says how wrong it is: D's two false misses, the others none.
     assert {"false_hits", "prim_mismatches", "t_err_ulp_max"} <= set(ranked.columns)
-    d = ranked[(ranked["param:max_prims"] == 4) & (ranked["param:max_depth"] == 30)
-               & (ranked["param:empty_bonus"] == 0.5)].iloc[0]
+    d = ranked[
+        (ranked["param:max_prims"] == 4)
+        & (ranked["param:max_depth"] == 30)
+        & (ranked["param:empty_bonus"] == 0.5)
+    ].iloc[0]
     assert d["false_misses"] == 2 and ranked["false_misses"].sum() == 2
 
 
@@ -301,41 +361,51 @@ def test_grid_exit_codes(tmp_path, capsys):
     assert main(["grid", str(tmp_path / "none.csv"), "--config", str(cfg)]) == 2
     rows = [r for r in grid_rows() if r["status"] != "ok" or r["errors"]["false_misses"]]
     csv = write_csv(tmp_path / "bad.csv", rows, with_errors=True)
-    assert main(["grid", str(csv), "--config", str(cfg), "--out", str(tmp_path / "o"),
-                 "--no-heatmaps"]) == 1
+    assert main(["grid", str(csv), "--config", str(cfg), "--out", str(tmp_path / "o"), "--no-heatmaps"]) == 1
     assert "no accepted candidate" in capsys.readouterr().out
-    other = write_csv(tmp_path / "bvh.csv", [row("stanford-bunny", "bvh", {"split": "median"},
-                                                 build=1, render=1)])
+    other = write_csv(
+        tmp_path / "bvh.csv", [row("stanford-bunny", "bvh", {"split": "median"}, build=1, render=1)]
+    )
     assert main(["grid", str(other), "--config", str(cfg), "--no-heatmaps"]) == 2
     assert "no rows of accelerator 'kdtree'" in capsys.readouterr().err
 
 
 # ---- successive halving -----------------------------------------------------------------------
 
+
 def test_grid_halve_writes_the_second_pass(tmp_path, grid_csv, capsys):
-    cfg_path = grid_config(tmp_path, extra_grid={
-        "mode": "successive_halving",
-        "successive_halving": {"keep": 2, "repetitions": 5, "warmup": 1}})
+    cfg_path = grid_config(
+        tmp_path,
+        extra_grid={
+            "mode": "successive_halving",
+            "successive_halving": {"keep": 2, "repetitions": 5, "warmup": 1},
+        },
+    )
     nxt = tmp_path / "next.yaml"
     assert main(["grid-halve", str(grid_csv), "--config", str(cfg_path), "--out", str(nxt)]) == 0
     assert "the second pass runs 1 x 2 = 2 combinations at 5 repetitions" in capsys.readouterr().out
     doc = yaml.safe_load(nxt.read_text())
     assert doc["name"] == "grid-test-final" and doc["repetitions"] == 5 and doc["warmup"] == 1
     params = doc["accelerators"][0]["params"]
-    assert params == {"[max_prims, max_depth, empty_bonus]": [[2, 20, 0.5], [4, 10, 0]],
-                      "isect_cost": 80}
+    assert params == {"[max_prims, max_depth, empty_bonus]": [[2, 20, 0.5], [4, 10, 0]], "isect_cost": 80}
     assert list(params) == ["[max_prims, max_depth, empty_bonus]", "isect_cost"]  # config order
     assert "mode" not in doc["grid"] and doc["grid"]["halved_from"]["kept"] == 2
     second = load_grid_config(nxt)  # a valid grid config again, for `grid` on its CSV
     assert second.mode == "full" and second.combinations() == 2
     assert {(p["max_prims"], p["max_depth"]) for p in second.points()} == {(2, 20), (4, 10)}
     # --keep overrides the config; a config without keep needs --keep.
-    assert main(["grid-halve", str(grid_csv), "--config", str(cfg_path), "--keep", "3",
-                 "--out", str(nxt)]) == 0
-    assert len(yaml.safe_load(nxt.read_text())["accelerators"][0]["params"]
-               ["[max_prims, max_depth, empty_bonus]"]) == 3
-    assert main(["grid-halve", str(grid_csv), "--config", str(grid_config(tmp_path)),
-                 "--out", str(nxt)]) == 2
+    assert (
+        main(["grid-halve", str(grid_csv), "--config", str(cfg_path), "--keep", "3", "--out", str(nxt)]) == 0
+    )
+    assert (
+        len(
+            yaml.safe_load(nxt.read_text())["accelerators"][0]["params"][
+                "[max_prims, max_depth, empty_bonus]"
+            ]
+        )
+        == 3
+    )
+    assert main(["grid-halve", str(grid_csv), "--config", str(grid_config(tmp_path)), "--out", str(nxt)]) == 2
 
 
 # ---- successive halving: the final pass ranked, the cheap pass as context ------------------------
@@ -351,11 +421,14 @@ CHEAP_SKIP = [(1, 30, 0), (1, 30, 0.5)]
 def halving_csvs(tmp_path: Path) -> tuple[Path, Path]:
     """(final, cheap): the final pass re-measures B and C at 5 repetitions; C turns out
     worse (render 4: 5 + 3 * 4 = 17) than its cheap value (9.5), B stays at 10."""
-    cheap = write_csv(tmp_path / "pass-1.csv", grid_rows(skip=CHEAP_SKIP, changes=CHEAP_CHANGES),
-                      with_errors=True)
-    final = write_csv(tmp_path / "pass-2.csv",
-                      grid_rows(config="grid-test-final", reps=5, only=[B, C],
-                                changes={C: (5.0, 4.0, 0)}), with_errors=True)
+    cheap = write_csv(
+        tmp_path / "pass-1.csv", grid_rows(skip=CHEAP_SKIP, changes=CHEAP_CHANGES), with_errors=True
+    )
+    final = write_csv(
+        tmp_path / "pass-2.csv",
+        grid_rows(config="grid-test-final", reps=5, only=[B, C], changes={C: (5.0, 4.0, 0)}),
+        with_errors=True,
+    )
     return final, cheap
 
 
@@ -365,8 +438,7 @@ def ranked_row(a, point) -> pd.Series:
 
 def test_the_best_comes_from_the_final_pass_only(tmp_path):
     final, cheap = halving_csvs(tmp_path)
-    a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)),
-                cheap=load_results([cheap]))
+    a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)), cheap=load_results([cheap]))
     best = a.best("stanford-bunny")
     assert key(best) == B and best["objective"] == pytest.approx(10.0)
     assert best["pass"] == FINAL and best["repetitions"] == 5
@@ -378,12 +450,13 @@ def test_the_best_comes_from_the_final_pass_only(tmp_path):
     assert len(a.candidates()) == 2 and len(a.accepted()) == 2
     assert len(a.ranked) == 16  # 16 cheap rows, 2 of them re-measured, + 0 final-only
     assert (a.ranked["pass"] == CHEAP).sum() == 14
-    assert "2 cheap-pass rows were re-measured in the final pass: their final values are " \
-           "used" in a.notes
+    assert "2 cheap-pass rows were re-measured in the final pass: their final values are used" in a.notes
     assert not any("come from config" in n for n in a.notes)  # <name>-final is expected
     # Coverage counts both passes: only (1, 30, *) is missing, not the 16 cheap-only points.
-    assert "stanford-bunny: 2 of the config's 18 grid points have no row (run not finished, " \
-           "or a shard not merged)" in a.notes
+    assert (
+        "stanford-bunny: 2 of the config's 18 grid points have no row (run not finished, "
+        "or a shard not merged)" in a.notes
+    )
     # Without --cheap, feeding both passes as ranked CSVs is what let E win: it is noted.
     both = analyse(load_results([cheap, final]), load_grid_config(grid_config(tmp_path)))
     assert key(both.best("stanford-bunny")) == E
@@ -392,15 +465,14 @@ def test_the_best_comes_from_the_final_pass_only(tmp_path):
 
 def test_heatmap_cells_cover_the_cheap_pass_and_show_rejections(tmp_path):
     final, cheap = halving_csvs(tmp_path)
-    a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)),
-                cheap=load_results([cheap]))
+    a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)), cheap=load_results([cheap]))
     d = heatmap_data(a, "stanford-bunny", "max_prims", "max_depth")
     assert d.xs == ["1", "2", "4"] and d.ys == ["10", "20", "30"]
     obj, src = d.objective, d.source
     # The minimum over empty_bonus in every cell, from whichever pass measured it.
     assert obj.loc["10", "4"] == pytest.approx(10.0) and src.loc["10", "4"] == FINAL  # B
     assert obj.loc["20", "2"] == pytest.approx(17.0) and src.loc["20", "2"] == FINAL  # C
-    assert obj.loc["20", "1"] == pytest.approx(2.0) and src.loc["20", "1"] == CHEAP   # E
+    assert obj.loc["20", "1"] == pytest.approx(2.0) and src.loc["20", "1"] == CHEAP  # E
     assert obj.loc["10", "1"] == pytest.approx(35.0)  # the other row timed out
     assert src.loc["10", "1"] == CHEAP and obj.notna().sum().sum() == 7
     assert d.remeasured.loc["10", "4"] and d.remeasured.loc["20", "2"]  # outlined: B, C
@@ -418,8 +490,21 @@ def test_heatmap_cells_cover_the_cheap_pass_and_show_rejections(tmp_path):
 def test_grid_with_cheap_writes_both_passes(tmp_path):
     final, cheap = halving_csvs(tmp_path)
     out = tmp_path / "out"
-    assert main(["grid", str(final), "--cheap", str(cheap), "--config",
-                 str(grid_config(tmp_path)), "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "grid",
+                str(final),
+                "--cheap",
+                str(cheap),
+                "--config",
+                str(grid_config(tmp_path)),
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     bunny = yaml.safe_load((out / "best.yaml").read_text())
     assert bunny["csv"] == [str(final)] and bunny["cheap_csv"] == [str(cheap)]
     best = bunny["best"]["stanford-bunny"]
@@ -429,11 +514,15 @@ def test_grid_with_cheap_writes_both_passes(tmp_path):
     assert len(ranked) == 16 and list(ranked["pass"][:2]) == [FINAL, FINAL]
     assert list(ranked["rank"][:2]) == [1, 2] and ranked["rank"].notna().sum() == 2
     text = (out / "summary.md").read_text()
-    assert f"- final pass (ranked: the best is chosen among these only): {final}: 2 rows at " \
-           f"5 repetitions" in text
-    assert f"- cheap pass (context: heatmaps and ranked.csv, never ranked): {cheap}: 16 rows " \
-           f"at 1 repetition; 2 of them re-measured in the final pass, the other 14 shown " \
-           f"with their cheap values" in text
+    assert (
+        f"- final pass (ranked: the best is chosen among these only): {final}: 2 rows at "
+        f"5 repetitions" in text
+    )
+    assert (
+        f"- cheap pass (context: heatmaps and ranked.csv, never ranked): {cheap}: 16 rows "
+        f"at 1 repetition; 2 of them re-measured in the final pass, the other 14 shown "
+        f"with their cheap values" in text
+    )
     assert "| 2 of 2 |" in text
     assert len(list(out.glob("heatmap-*.png"))) == 3
 
@@ -442,5 +531,7 @@ def test_a_second_pass_alone_says_the_cheap_pass_is_missing(tmp_path):
     final, _ = halving_csvs(tmp_path)
     a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)))
     assert key(a.best("stanford-bunny")) == B and a.cheap is None
-    assert "stanford-bunny: 16 of the config's 18 grid points have no row (only the second " \
-           "pass was given: add the first with --cheap)" in a.notes
+    assert (
+        "stanford-bunny: 16 of the config's 18 grid points have no row (only the second "
+        "pass was given: add the first with --cheap)" in a.notes
+    )

@@ -3,17 +3,29 @@
 import numpy as np
 import pandas as pd
 import pytest
+from synthetic import row, write_csv
 
 from accelbench_analysis.schema import ContractError, load_results, parse_params, read_csv
-from synthetic import row, write_csv
 
 BUNNY_BVH = {"split": "median", "max_prims": "1", "max_depth": "50", "threads": "1"}
 
 
 def minimal(tmp_path, name="run.csv", **prov):
-    rows = [row("stanford-bunny", "bvh", BUNNY_BVH, build=0.5, render=2.0, nodes=138901,
-                prim_tests=10, node_visits=20, tree_depth=17, **prov),
-            row("stanford-bunny", "embree", {"threads": "1"}, build=0.1, render=0.5, **prov)]
+    rows = [
+        row(
+            "stanford-bunny",
+            "bvh",
+            BUNNY_BVH,
+            build=0.5,
+            render=2.0,
+            nodes=138901,
+            prim_tests=10,
+            node_visits=20,
+            tree_depth=17,
+            **prov,
+        ),
+        row("stanford-bunny", "embree", {"threads": "1"}, build=0.1, render=0.5, **prov),
+    ]
     return write_csv(tmp_path / name, rows)
 
 
@@ -22,8 +34,7 @@ def test_loads_and_resolves_duplicate_column_names(tmp_path):
     # max_depth is both a parameter and a statistic in the harness's header.
     assert df.loc[0, "param.max_depth"] == "50"
     assert df.loc[0, "max_depth"] == 17.0
-    assert df.loc[0, "param_dict"] == {"split": "median", "max_prims": "1", "max_depth": "50",
-                                       "threads": "1"}
+    assert df.loc[0, "param_dict"] == {"split": "median", "max_prims": "1", "max_depth": "50", "threads": "1"}
     assert df.loc[0, "build_s_median"] == 0.5
 
 
@@ -34,8 +45,11 @@ def test_empty_cells_are_missing_not_zero(tmp_path):
 
 
 def test_missing_columns_are_named(tmp_path):
-    path = write_csv(tmp_path / "bad.csv", [row("igea", "bvh", BUNNY_BVH, build=1, render=1)],
-                     drop=("build_s_median", "cpu"))
+    path = write_csv(
+        tmp_path / "bad.csv",
+        [row("igea", "bvh", BUNNY_BVH, build=1, render=1)],
+        drop=("build_s_median", "cpu"),
+    )
     with pytest.raises(ContractError, match=r"missing required columns: build_s_median, cpu"):
         read_csv(path)
 
@@ -45,13 +59,15 @@ def test_non_numeric_value_is_rejected_with_column_and_line(tmp_path):
     text = path.read_text().splitlines()
     text[2] = text[2].replace(",0.1,", ",fast,", 1)
     path.write_text("\n".join(text) + "\n")
-    with pytest.raises(ContractError, match=r"run.csv: column 'build_s_median' has non-numeric values on line 3 \(row 2\) \(e.g. 'fast'\)"):
+    with pytest.raises(
+        ContractError,
+        match=r"run.csv: column 'build_s_median' has non-numeric values on line 3 \(row 2\) \(e.g. 'fast'\)",
+    ):
         read_csv(path)
 
 
 def test_unknown_status_is_rejected(tmp_path):
-    path = write_csv(tmp_path / "s.csv", [row("igea", "bvh", BUNNY_BVH, build=1, render=1,
-                                              status="crashed")])
+    path = write_csv(tmp_path / "s.csv", [row("igea", "bvh", BUNNY_BVH, build=1, render=1, status="crashed")])
     with pytest.raises(ContractError, match="status"):
         read_csv(path)
 
@@ -100,10 +116,17 @@ def test_dirty_tree_and_debug_build_are_flagged(tmp_path):
 
 def test_reps_medians_are_checked(tmp_path):
     path = minimal(tmp_path)
-    reps = pd.DataFrame({"config": "table4", "model": "stanford-bunny", "accel": "bvh",
-                         "params": "split=median;max_prims=1;max_depth=50;threads=1",
-                         "repetition": [0, 1, 2], "build_s": [0.4, 0.5, 0.6],
-                         "render_s": [1.0, 3.0, 2.5]})
+    reps = pd.DataFrame(
+        {
+            "config": "table4",
+            "model": "stanford-bunny",
+            "accel": "bvh",
+            "params": "split=median;max_prims=1;max_depth=50;threads=1",
+            "repetition": [0, 1, 2],
+            "build_s": [0.4, 0.5, 0.6],
+            "render_s": [1.0, 3.0, 2.5],
+        }
+    )
     reps.to_csv(tmp_path / "run.reps.csv", index=False)
     res = load_results([path])
     assert res.reps is not None and len(res.reps) == 3
@@ -125,9 +148,11 @@ def test_ragged_csv_is_a_contract_error(tmp_path):
 
 # ---- hostile input: every loader refuses it, naming the file, the line/row and the column ----
 
+
 def _edit_cell(path, line, column, value):
     """Sets one cell (line: 1-based, header = 1) of a CSV written by write_csv."""
     import csv
+
     with path.open(newline="") as fh:
         rows = list(csv.reader(fh))
     rows[line - 1][rows[0].index(column)] = value
@@ -136,12 +161,21 @@ def _edit_cell(path, line, column, value):
     return path
 
 
-@pytest.mark.parametrize("column", ["build_s_median", "render_s_median", "render_s_mean",
-                                    "build_s_ci_lo", "render_s_ci_hi"])
-@pytest.mark.parametrize("value, what", [
-    ("nan", "values that are not finite"), ("NaN", "values that are not finite"),
-    ("inf", "values that are not finite"), ("-inf", "values that are not finite"),
-    ("-0.5", "negative values"), ("0", "zero times"), ("0.0e0", "zero times")])
+@pytest.mark.parametrize(
+    "column", ["build_s_median", "render_s_median", "render_s_mean", "build_s_ci_lo", "render_s_ci_hi"]
+)
+@pytest.mark.parametrize(
+    "value, what",
+    [
+        ("nan", "values that are not finite"),
+        ("NaN", "values that are not finite"),
+        ("inf", "values that are not finite"),
+        ("-inf", "values that are not finite"),
+        ("-0.5", "negative values"),
+        ("0", "zero times"),
+        ("0.0e0", "zero times"),
+    ],
+)
 def test_broken_times_are_refused_naming_file_line_and_column(tmp_path, column, value, what):
     path = _edit_cell(minimal(tmp_path), 3, column, value)
     with pytest.raises(ContractError) as e:
@@ -165,7 +199,7 @@ def test_zero_stddev_is_a_time_but_negative_or_nan_is_not(tmp_path):
 def test_a_last_row_cut_short_is_refused(tmp_path, cut):
     path = minimal(tmp_path)
     data = path.read_bytes()
-    path.write_bytes(data[:len(data) - cut])
+    path.write_bytes(data[: len(data) - cut])
     with pytest.raises(ContractError) as e:
         read_csv(path)
     msg = str(e.value)
@@ -178,7 +212,9 @@ def test_a_row_with_fields_missing_or_extra_is_refused(tmp_path):
     lines = path.read_text().splitlines()
     short = lines[:2] + [lines[2].rsplit(",", 3)[0]]
     path.write_text("\n".join(short) + "\n")
-    with pytest.raises(ContractError, match=r"line 3 \(row 2\): \d+ fields but the header has \d+ \(the row is cut short\)"):
+    with pytest.raises(
+        ContractError, match=r"line 3 \(row 2\): \d+ fields but the header has \d+ \(the row is cut short\)"
+    ):
         read_csv(path)
     path.write_text("\n".join(lines[:2] + [lines[2] + ",extra"]) + "\n")
     with pytest.raises(ContractError, match=r"line 3 \(row 2\): \d+ fields but the header has"):
@@ -191,8 +227,10 @@ def test_a_row_with_fields_missing_or_extra_is_refused(tmp_path):
 def test_rows_are_counted_by_record_not_by_physical_line(tmp_path):
     """A message with a line break in it (quoted) takes two lines; the row after it is
     still named by the line it starts on."""
-    rows = [row("igea", "bvh", BUNNY_BVH, status="error", message="line one\nline two"),
-            row("igea", "embree", {"threads": "1"}, build=0.1, render=-0.5)]
+    rows = [
+        row("igea", "bvh", BUNNY_BVH, status="error", message="line one\nline two"),
+        row("igea", "embree", {"threads": "1"}, build=0.1, render=-0.5),
+    ]
     path = write_csv(tmp_path / "m.csv", rows)
     with pytest.raises(ContractError, match=r"'render_s_median' has negative values on line 4 \(row 2\)"):
         read_csv(path)
@@ -208,8 +246,16 @@ REPS_HEADER = "config,model,accel,params,repetition,build_s,render_s\n"
 BVH_KEY = "table4,stanford-bunny,bvh,split=median;max_prims=1;max_depth=50;threads=1"
 
 
-@pytest.mark.parametrize("value, what", [("nan", "not finite"), ("inf", "not finite"),
-                                         ("-2.0", "negative"), ("0", "zero times"), ("x", "non-numeric")])
+@pytest.mark.parametrize(
+    "value, what",
+    [
+        ("nan", "not finite"),
+        ("inf", "not finite"),
+        ("-2.0", "negative"),
+        ("0", "zero times"),
+        ("x", "non-numeric"),
+    ],
+)
 def test_reps_with_broken_times_are_refused(tmp_path, value, what):
     path = _with_reps(tmp_path, REPS_HEADER + f"{BVH_KEY},1,0.5,2.0\n{BVH_KEY},2,0.5,{value}\n")
     with pytest.raises(ContractError) as e:
@@ -227,6 +273,7 @@ def test_reps_cut_short_is_refused(tmp_path):
 
 def test_check_refuses_with_exit_2_and_names_the_cell(tmp_path, capsys):
     from accelbench_analysis.cli import main
+
     path = _edit_cell(minimal(tmp_path), 3, "render_s_median", "nan")
     assert main(["check", str(path)]) == 2
     err = capsys.readouterr().err

@@ -5,29 +5,43 @@ from __future__ import annotations
 import copy
 
 import pytest
+from synthetic import BVH, EMBREE, KD, LBVH, PROVENANCE, row, write_csv
 
 from accelbench_analysis.cli import main
 from accelbench_analysis.regress import compare, embree_ratios, keyed
 from accelbench_analysis.schema import load_results
-from synthetic import BVH, EMBREE, KD, LBVH, PROVENANCE, row, write_csv
 
 EXTRA = ("combo_id", "instructions")
 
 
 def ci_rows() -> list[dict]:
     """A small CI run: four structures on the bunny and the forest, with exact counts."""
-    spec = [("bvh", BVH, 0.30, 138901, 1.2e9), ("kdtree", KD, 0.24, 402113, 0.9e9),
-            ("lbvh", LBVH, 0.33, 138901, 1.3e9), ("embree", EMBREE, 0.06, None, 2.5e8)]
+    spec = [
+        ("bvh", BVH, 0.30, 138901, 1.2e9),
+        ("kdtree", KD, 0.24, 402113, 0.9e9),
+        ("lbvh", LBVH, 0.33, 138901, 1.3e9),
+        ("embree", EMBREE, 0.06, None, 2.5e8),
+    ]
     rows = []
     for m, model in enumerate(("stanford-bunny", "procedural-forest")):
         for i, (accel, params, render, nodes, instr) in enumerate(spec):
             counted = nodes is not None
-            rows.append(row(model, accel, params, build=0.1, render=render * (1 + m),
-                            nodes=nodes, prim_tests=1_234_567 + i if counted else None,
-                            node_visits=9_876_543 + i if counted else None,
-                            tree_depth=28 if counted else None,
-                            sah_cost=61.234567891234 + i if counted else None, config="ci",
-                            extra={"combo_id": f"{m}{i}aa55aa55aa55aa", "instructions": int(instr)}))
+            rows.append(
+                row(
+                    model,
+                    accel,
+                    params,
+                    build=0.1,
+                    render=render * (1 + m),
+                    nodes=nodes,
+                    prim_tests=1_234_567 + i if counted else None,
+                    node_visits=9_876_543 + i if counted else None,
+                    tree_depth=28 if counted else None,
+                    sah_cost=61.234567891234 + i if counted else None,
+                    config="ci",
+                    extra={"combo_id": f"{m}{i}aa55aa55aa55aa", "instructions": int(instr)},
+                )
+            )
     return rows
 
 
@@ -38,11 +52,13 @@ def find(rows, model, accel):
 @pytest.fixture
 def run(tmp_path):
     """run(name, mutate) writes ci_rows() after mutate(rows) as name.csv."""
+
     def make(name, mutate=None, extra=EXTRA, **kw):
         rows = ci_rows()
         if mutate:
             mutate(rows)
         return write_csv(tmp_path / f"{name}.csv", rows, extra_columns=extra, **kw)
+
     return make
 
 
@@ -66,6 +82,7 @@ def test_changed_node_count_fails_with_a_table(run, capsys):
     def more_nodes(rows):
         find(rows, "stanford-bunny", "kdtree")["nodes"] += 1
         find(rows, "procedural-forest", "bvh")["prim_tests"] = 1_234_600
+
     code, out = regress(run("base"), run("cur", more_nodes), capsys=capsys)
     assert code == 1
     assert out.startswith("# Regression check: FAIL")
@@ -74,12 +91,14 @@ def test_changed_node_count_fails_with_a_table(run, capsys):
     assert "2 values changed in 2 combinations" in out
 
 
-@pytest.mark.parametrize("metric", ["leaves", "stat_max_depth", "hits", "shadow_hits", "rays",
-                                    "shadow_rays", "node_visits"])
+@pytest.mark.parametrize(
+    "metric", ["leaves", "stat_max_depth", "hits", "shadow_hits", "rays", "shadow_rays", "node_visits"]
+)
 def test_every_exact_count_is_checked(run, metric):
     def bump(rows):
         r = find(rows, "stanford-bunny", "bvh")
         r[metric] = int(r[metric]) + 1
+
     assert regress(run("base"), run("cur", bump))[0] == 1
 
 
@@ -88,7 +107,9 @@ def test_sah_cost_relative_tolerance(run, capsys):
         def f(rows):
             r = find(rows, "stanford-bunny", "lbvh")
             r["sah_cost"] = repr(float(r["sah_cost"]) * factor)
+
         return f
+
     assert regress(run("base"), run("tiny", nudge(1 + 1e-12)), capsys=capsys)[0] == 0
     code, out = regress(run("base"), run("big", nudge(1 + 1e-7)), capsys=capsys)
     assert code == 1 and "| stanford-bunny / lbvh | sah_cost | 63.23456789 |" in out
@@ -97,6 +118,7 @@ def test_sah_cost_relative_tolerance(run, capsys):
 def test_counter_appearing_where_baseline_had_none_is_a_change(run, capsys):
     def counted_embree(rows):
         find(rows, "stanford-bunny", "embree")["prim_tests"] = 5
+
     code, out = regress(run("base"), run("cur", counted_embree), capsys=capsys)
     assert code == 1 and "| stanford-bunny / embree | prim_tests | (empty) | 5 |" in out
 
@@ -112,6 +134,7 @@ def test_missing_combination_fails_added_one_is_reported(run, capsys):
         extra["param"]["max_prims"] = "4"
         extra["extra"]["combo_id"] = "ffffffffffffffff"
         rows.append(extra)
+
     code, out = regress(run("base"), run("more", added), capsys=capsys)
     assert code == 0
     assert "New in this run (not in the baseline; not compared): stanford-bunny / bvh (max_prims=4)" in out
@@ -121,8 +144,16 @@ def test_status_change_fails(run, capsys):
     def timeout(rows):
         i = rows.index(find(rows, "procedural-forest", "kdtree"))
         r = rows[i]
-        rows[i] = row(r["model"], "kdtree", KD, status="timeout", message="build exceeded 600 s",
-                      config="ci", extra=r["extra"])
+        rows[i] = row(
+            r["model"],
+            "kdtree",
+            KD,
+            status="timeout",
+            message="build exceeded 600 s",
+            config="ci",
+            extra=r["extra"],
+        )
+
     code, out = regress(run("base"), run("cur", timeout), capsys=capsys)
     assert code == 1
     assert "| procedural-forest / kdtree | status | ok | timeout: build exceeded 600 s |" in out
@@ -132,14 +163,18 @@ def scale_instructions(factor, model="stanford-bunny", accel="bvh"):
     def f(rows):
         r = find(rows, model, accel)
         r["extra"]["instructions"] = int(r["extra"]["instructions"] * factor)
+
     return f
 
 
-@pytest.mark.parametrize("factor, code, text", [
-    (1.09, 0, "| stanford-bunny / bvh | 1,200,000,000 | 1,308,000,000 | 1.0900 | pass |"),
-    (1.11, 1, "| stanford-bunny / bvh | 1,200,000,000 | 1,332,000,000 | 1.1100 | FAIL |"),
-    (0.89, 0, "| stanford-bunny / bvh | 1,200,000,000 | 1,068,000,000 | 0.8900 | improved"),
-])
+@pytest.mark.parametrize(
+    "factor, code, text",
+    [
+        (1.09, 0, "| stanford-bunny / bvh | 1,200,000,000 | 1,308,000,000 | 1.0900 | pass |"),
+        (1.11, 1, "| stanford-bunny / bvh | 1,200,000,000 | 1,332,000,000 | 1.1100 | FAIL |"),
+        (0.89, 0, "| stanford-bunny / bvh | 1,200,000,000 | 1,068,000,000 | 0.8900 | improved"),
+    ],
+)
 def test_instruction_tier(run, capsys, factor, code, text):
     got, out = regress(run("base"), run("cur", scale_instructions(factor)), capsys=capsys)
     assert got == code
@@ -156,9 +191,10 @@ def test_instructions_not_measured_is_reported_not_failed(run, capsys):
     code, out = regress(run("base"), run("cur", extra=("combo_id",)), capsys=capsys)
     assert code == 0
     assert "not measured in this run" in out
-    code, out = regress(run("b2", extra=("combo_id",)), run("c2", extra=("combo_id",)),
-                        capsys=capsys)
-    assert code == 0 and "| 2. Instruction counts (callgrind Ir of the measured render) | not checked |" in out
+    code, out = regress(run("b2", extra=("combo_id",)), run("c2", extra=("combo_id",)), capsys=capsys)
+    assert (
+        code == 0 and "| 2. Instruction counts (callgrind Ir of the measured render) | not checked |" in out
+    )
 
 
 def slower(factor, model="stanford-bunny", accel="kdtree"):
@@ -166,6 +202,7 @@ def slower(factor, model="stanford-bunny", accel="kdtree"):
         r = find(rows, model, accel)
         for s in ("median", "mean", "ci_lo", "ci_hi"):
             r[f"render_s_{s}"] *= factor
+
     return f
 
 
@@ -181,6 +218,7 @@ def test_whole_machine_slower_cancels_in_the_ratio(run, capsys):
         for r in rows:
             for s in ("median", "mean", "ci_lo", "ci_hi"):
                 r[f"render_s_{s}"] *= 3
+
     assert regress(run("base"), run("cur", everything_slower), capsys=capsys)[0] == 0
 
 
@@ -216,6 +254,7 @@ def test_a_failure_outranks_a_pending_time_measurement(run, capsys):
     def both(rows):
         slower(2.0)(rows)
         find(rows, "stanford-bunny", "bvh")["nodes"] += 2
+
     assert regress(run("base"), run("cur", both), capsys=capsys)[0] == 1
 
 
@@ -270,6 +309,7 @@ def test_bad_input_exits_2(run, tmp_path, capsys):
 
     def duplicate_id(rows):
         rows[1]["extra"]["combo_id"] = rows[0]["extra"]["combo_id"]
+
     assert regress(base, run("dup", duplicate_id))[0] == 2
     assert "occurs more than once" in capsys.readouterr().err
 
@@ -281,6 +321,7 @@ def test_error_counts_are_exact_counts_where_the_baseline_has_them(tmp_path, cap
             r["errors"] = {"false_misses": 0, "false_hits": 0, "prim_mismatches": 0, "nan_results": 0}
         find(rows, "stanford-bunny", "lbvh")["errors"]["false_misses"] = misses
         return write_csv(tmp_path / f"{name}.csv", rows, with_errors=with_errors, extra_columns=EXTRA)
+
     assert regress(write("base", 0), write("same", 0), capsys=capsys)[0] == 0
     code, out = regress(write("base", 0), write("leaky", 3), capsys=capsys)
     assert code == 1 and "| stanford-bunny / lbvh | false_misses | 0 | 3 |" in out

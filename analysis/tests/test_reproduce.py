@@ -7,42 +7,65 @@ from __future__ import annotations
 
 import json
 import subprocess
-from datetime import datetime, timedelta, timezone
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 import pytest
+from synthetic import BVH, KD, LBVH, row, write_csv
 
 from accelbench_analysis.claims import FAILS, HOLDS, evaluate_all
 from accelbench_analysis.cli import main
 from accelbench_analysis.comparison import three_way
-from accelbench_analysis.reproduce import (RUN_JSON, Job, Progress, csv_rows, decide,
-                                           provenance_differences, reproduce, tree_changes)
+from accelbench_analysis.reproduce import (
+    RUN_JSON,
+    Job,
+    Progress,
+    csv_rows,
+    decide,
+    provenance_differences,
+    reproduce,
+    tree_changes,
+)
 from accelbench_analysis.schema import load_results
-from synthetic import BVH, KD, LBVH, row, write_csv
 
 REPO = Path(__file__).resolve().parents[2]
 ACCELBENCH = REPO / "build" / "accelbench"
-NOW = datetime(2026, 12, 1, 20, 0, 0, tzinfo=timezone.utc)
-PROV = {"git_sha": "a" * 40, "git_dirty": "false", "compiler": "gcc 12.2.0",
-        "build_type": "RelWithDebInfo", "cpu": "AMD EPYC", "embree_version": "3.13.5"}
+NOW = datetime(2026, 12, 1, 20, 0, 0, tzinfo=UTC)
+PROV = {
+    "git_sha": "a" * 40,
+    "git_dirty": "false",
+    "compiler": "gcc 12.2.0",
+    "build_type": "RelWithDebInfo",
+    "cpu": "AMD EPYC",
+    "embree_version": "3.13.5",
+}
 JOB = {"configs": ["tiny.yaml"], "tag": ""}
 
 
 # ---- the resume decision on crafted run directories ------------------------------------------
 
+
 def make_run(runs: Path, name: str, *, complete: bool, prov=PROV, job=JOB, started="") -> Path:
     d = runs / name
     (d / "csv").mkdir(parents=True)
-    (d / RUN_JSON).write_text(json.dumps({"job": job, "provenance": prov, "complete": complete,
-                                          "started": started or name, "continued": []}))
+    (d / RUN_JSON).write_text(
+        json.dumps(
+            {
+                "job": job,
+                "provenance": prov,
+                "complete": complete,
+                "started": started or name,
+                "continued": [],
+            }
+        )
+    )
     return d
 
 
 def test_provenance_differences_name_fields_and_absent_ones():
     assert provenance_differences(PROV, dict(PROV)) == []
     newer = dict(PROV, isa="avx2", cpu="Intel Xeon")
-    assert provenance_differences(PROV, newer) == ["cpu: AMD EPYC -> Intel Xeon",
-                                                   "isa: (absent) -> avx2"]
+    assert provenance_differences(PROV, newer) == ["cpu: AMD EPYC -> Intel Xeon", "isa: (absent) -> avx2"]
     assert provenance_differences(dict(PROV, isa="sse2"), PROV) == ["isa: sse2 -> (absent)"]
 
 
@@ -62,14 +85,20 @@ def test_decide_resumes_only_an_unfinished_run_of_the_same_build_and_job(tmp_pat
     assert not decide(runs, JOB, PROV, True, NOW).resume  # FRESH=1
 
     # Another build (the dirty flag, or a column only one build records) starts afresh.
-    for other, said in ((dict(PROV, git_dirty="true"), "git_dirty: false -> true"),
-                        (dict(PROV, isa="avx2"), "isa: (absent) -> avx2")):
+    for other, said in (
+        (dict(PROV, git_dirty="true"), "git_dirty: false -> true"),
+        (dict(PROV, isa="avx2"), "isa: (absent) -> avx2"),
+    ):
         d = decide(runs, JOB, other, False, NOW)
         assert not d.resume and said in d.reason and d.run_dir != unfinished
 
     # A newer run of another job (QUICK's configs) does not hide this job's unfinished run.
-    make_run(runs, "20261201T150000Z-aaaaaaa-quick", complete=False,
-             job={"configs": ["quick.yaml"], "tag": "quick"})
+    make_run(
+        runs,
+        "20261201T150000Z-aaaaaaa-quick",
+        complete=False,
+        job={"configs": ["quick.yaml"], "tag": "quick"},
+    )
     assert decide(runs, JOB, PROV, False, NOW).run_dir == unfinished
     # The newest run of the job decides: a finished one after the unfinished one wins.
     make_run(runs, "20261201T160000Z-aaaaaaa", complete=True)
@@ -81,8 +110,9 @@ def test_progress_line_counts_over_all_configs():
     p.start -= 30  # 30 s into this invocation
     assert p.line(10) == "reproduce: 10/40 combinations (25%) over all configs, elapsed 0:30"
     # 10 combinations in 30 s here, 20 to go: about a minute.
-    assert p.line(20) == ("reproduce: 20/40 combinations (50%) over all configs, elapsed 0:30, "
-                          "about 1:00 left")
+    assert p.line(20) == (
+        "reproduce: 20/40 combinations (50%) over all configs, elapsed 0:30, about 1:00 left"
+    )
     assert "left" not in p.line(40)
 
 
@@ -121,8 +151,13 @@ def tiny_job(tmp_path: Path, broken: bool = False) -> Job:
     mesh.write_text(MESH_BAD if broken else MESH_GOOD)
     second = tmp_path / "second.yaml"
     second.write_text(TINY.format(name="second", model=f"{{path: {mesh}}}"))
-    return Job(accelbench=ACCELBENCH, configs=[first, second], runs=tmp_path / "runs",
-               latest=tmp_path / "latest", analyse=False)
+    return Job(
+        accelbench=ACCELBENCH,
+        configs=[first, second],
+        runs=tmp_path / "runs",
+        latest=tmp_path / "latest",
+        analyse=False,
+    )
 
 
 def run_json(d: Path) -> dict:
@@ -184,9 +219,13 @@ def test_an_interrupted_run_continues_with_the_same_build_only(tmp_path, capfd):
 
 # ---- the reference run's clean-tree rule ------------------------------------------------------
 
+
 def git(repo: Path, *args: str) -> None:
-    subprocess.run(["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t", *args],
-                   check=True, capture_output=True)
+    subprocess.run(
+        ["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t", *args],
+        check=True,
+        capture_output=True,
+    )
 
 
 def test_reference_run_refuses_a_dirty_tree(tmp_path, monkeypatch, capsys):
@@ -203,8 +242,17 @@ def test_reference_run_refuses_a_dirty_tree(tmp_path, monkeypatch, capsys):
     assert tree_changes(repo) == [" M code.cpp"]
 
     monkeypatch.chdir(repo)
-    rc = main(["reproduce", str(config), "--into", str(repo / "reference"), "--require-clean-tree",
-               "--accelbench", str(repo / "no-such-binary")])
+    rc = main(
+        [
+            "reproduce",
+            str(config),
+            "--into",
+            str(repo / "reference"),
+            "--require-clean-tree",
+            "--accelbench",
+            str(repo / "no-such-binary"),
+        ]
+    )
     assert rc == 2
     err = capsys.readouterr().err
     assert "uncommitted changes" in err and "code.cpp" in err
@@ -215,23 +263,29 @@ def test_reference_run_refuses_a_dirty_tree(tmp_path, monkeypatch, capsys):
 
 # ---- the three-way comparison and the claims' second verdict ---------------------------------
 
+
 def bvh_lbvh_kd(render_bvh: float, render_kd: float, cpu: str) -> list[dict]:
-    return [row("stanford-bunny", "bvh", BVH, build=0.1, render=render_bvh, nodes=1001, cpu=cpu),
-            row("stanford-bunny", "lbvh", LBVH, build=0.2, render=1.0, nodes=999, cpu=cpu),
-            row("stanford-bunny", "kdtree", KD, build=0.9, render=render_kd, nodes=5000, cpu=cpu)]
+    return [
+        row("stanford-bunny", "bvh", BVH, build=0.1, render=render_bvh, nodes=1001, cpu=cpu),
+        row("stanford-bunny", "lbvh", LBVH, build=0.2, render=1.0, nodes=999, cpu=cpu),
+        row("stanford-bunny", "kdtree", KD, build=0.9, render=render_kd, nodes=5000, cpu=cpu),
+    ]
 
 
 def test_three_way_values_and_ratios(tmp_path, report_nums):
     (tmp_path / "this").mkdir()
     (tmp_path / "ref" / "csv").mkdir(parents=True)
-    this = load_results([write_csv(tmp_path / "this" / "table4.csv",
-                                   bvh_lbvh_kd(2.0, 0.5, "This CPU"))])
-    ref = load_results([write_csv(tmp_path / "ref" / "csv" / "table4.csv",
-                                  bvh_lbvh_kd(1.0, 0.8, "Reference CPU"))])
+    this = load_results([write_csv(tmp_path / "this" / "table4.csv", bvh_lbvh_kd(2.0, 0.5, "This CPU"))])
+    ref = load_results(
+        [write_csv(tmp_path / "ref" / "csv" / "table4.csv", bvh_lbvh_kd(1.0, 0.8, "Reference CPU"))]
+    )
     rows = {(r.metric, r.model, r.structure): r for r in three_way(this, ref, report_nums)}
     bvh = rows[("render", "Stanford bunny", "BVH (median)")]
-    report_bvh = float(report_nums.query("model == 'stanford-bunny' and accelerator == 'bvh' "
-                                         "and setting == 'default'")["render_s"].iloc[0])
+    report_bvh = float(
+        report_nums.query("model == 'stanford-bunny' and accelerator == 'bvh' and setting == 'default'")[
+            "render_s"
+        ].iloc[0]
+    )
     assert (bvh.report, bvh.this, bvh.reference) == (report_bvh, 2.0, 1.0)
     assert bvh.this_over_reference == pytest.approx(2.0)
     assert bvh.this_over_report == pytest.approx(2.0 / report_bvh)
@@ -247,8 +301,19 @@ def test_three_way_values_and_ratios(tmp_path, report_nums):
     # Through the command line: REPORT.md shows the three values and ratios, comparison.md
     # the counts, claims.md the reference run's verdict and the machine-dependent flag.
     out = tmp_path / "out"
-    assert main(["report", str(tmp_path / "this" / "table4.csv"), "--out", str(out),
-                 "--reference-run", str(tmp_path / "ref")]) == 0
+    assert (
+        main(
+            [
+                "report",
+                str(tmp_path / "this" / "table4.csv"),
+                "--out",
+                str(out),
+                "--reference-run",
+                str(tmp_path / "ref"),
+            ]
+        )
+        == 0
+    )
     report = (out / "REPORT.md").read_text()
     assert "| Stanford bunny | BVH (median) | " + f"{report_bvh:.3g}" + " | 2.00 | 1.00 |" in report
     assert "Reference CPU" in report
@@ -258,9 +323,11 @@ def test_three_way_values_and_ratios(tmp_path, report_nums):
 def table4_rows(lbvh_build: float, cpu: str) -> list[dict]:
     out = []
     for m, f in (("stanford-bunny", 1.0), ("igea", 4.0), ("stanford-dragon", 12), ("happy-buddha-100k", 2)):
-        out += [row(m, "bvh", BVH, build=0.1 * f, render=1.0 * f, cpu=cpu),
-                row(m, "lbvh", LBVH, build=lbvh_build * f, render=1.05 * f, cpu=cpu),
-                row(m, "kdtree", KD, build=0.9 * f, render=0.8 * f, cpu=cpu)]
+        out += [
+            row(m, "bvh", BVH, build=0.1 * f, render=1.0 * f, cpu=cpu),
+            row(m, "lbvh", LBVH, build=lbvh_build * f, render=1.05 * f, cpu=cpu),
+            row(m, "kdtree", KD, build=0.9 * f, render=0.8 * f, cpu=cpu),
+        ]
     return out
 
 
@@ -277,8 +344,7 @@ def test_claims_flag_verdicts_that_differ_between_machines(tmp_path, report_nums
     f = by_id["5.2-f"]
     assert (f.ours.verdict, f.reference.verdict, f.machine_dependent) == (HOLDS, HOLDS, False)
     # Not comparable on one side is no machine dependence.
-    assert not any(r.machine_dependent for r in rows if FAILS not in
-                   (r.ours.verdict, r.reference.verdict))
+    assert not any(r.machine_dependent for r in rows if FAILS not in (r.ours.verdict, r.reference.verdict))
     alone, _ = evaluate_all(this, report_nums)
     assert all(r.reference is None and not r.machine_dependent for r in alone)
 

@@ -2,17 +2,18 @@
 stiff-parameter rows, and the command line."""
 
 import pytest
+from synthetic import EMBREE_LEAKS, realistic_rows, robustness_rows, write_csv
 
 from accelbench_analysis.cli import main
 from accelbench_analysis.robustness import case_sort_key, robustness_markdown
 from accelbench_analysis.schema import load_results
-from synthetic import EMBREE_LEAKS, realistic_rows, robustness_rows, write_csv
 
 
 @pytest.fixture(scope="module")
 def robust_csv(tmp_path_factory):
-    return write_csv(tmp_path_factory.mktemp("robust") / "robustness.csv", robustness_rows(),
-                     with_errors=True)
+    return write_csv(
+        tmp_path_factory.mktemp("robust") / "robustness.csv", robustness_rows(), with_errors=True
+    )
 
 
 @pytest.fixture(scope="module")
@@ -33,8 +34,17 @@ def test_verdict_table_cells(text):
     rows = table(section(text, "Verdicts per case and accelerator setting"))
     header = rows[0]
     # Embree's robust flag varies between its case rows: two columns; the others do not vary.
-    assert header == ["case", "name", "brute_force", "bvh", "lbvh", "kdtree",
-                      "embree robust=false", "embree robust=true", "reference"]
+    assert header == [
+        "case",
+        "name",
+        "brute_force",
+        "bvh",
+        "lbvh",
+        "kdtree",
+        "embree robust=false",
+        "embree robust=true",
+        "reference",
+    ]
     cells = {r[0]: dict(zip(header, r)) for r in rows[2:]}
     assert [r[0] for r in rows[2:-1]] == ["1a", "2a", "14a"]
     assert cells["2a"]["embree robust=false"] == "**FAIL**"
@@ -49,8 +59,10 @@ def test_verdict_table_cells(text):
 
 def test_failures_list_counts_and_messages(text):
     rows = table(section(text, "Failures")[2:])
-    assert [(r[0], r[2], r[3]) for r in rows] == [("2a", "embree robust=false", "FAIL"),
-                                                  ("14a", "kdtree", "error")]
+    assert [(r[0], r[2], r[3]) for r in rows] == [
+        ("2a", "embree robust=false", "FAIL"),
+        ("14a", "kdtree", "error"),
+    ]
     assert rows[0][4] == EMBREE_LEAKS
     assert "3 rays leaked through vertices at 1.5e5 \\| see case 2" in text
     assert rows[1][5] == "scene rejected: NaN vertex in face 3"
@@ -59,10 +71,18 @@ def test_failures_list_counts_and_messages(text):
 def test_timed_rows(text):
     lines = section(text, "Stiff parameters (timed rows)")
     header = table(lines[:1])[0]
-    assert header[:9] == ["model", "accelerator", "status", "build (s)", "render (s)", "nodes",
-                          "max depth", "memory (MiB)", "peak RSS (MiB)"]
-    assert header[9:15] == ["false misses", "false hits", "wrong prims", "NaN", "t ulp p50",
-                            "t ulp max"]
+    assert header[:9] == [
+        "model",
+        "accelerator",
+        "status",
+        "build (s)",
+        "render (s)",
+        "nodes",
+        "max depth",
+        "memory (MiB)",
+        "peak RSS (MiB)",
+    ]
+    assert header[9:15] == ["false misses", "false hits", "wrong prims", "NaN", "t ulp p50", "t ulp max"]
     rows = {r[1]: dict(zip(header, r)) for r in table(lines[2:])}
     kd = rows["kdtree max_depth=100"]
     assert (kd["nodes"], kd["max depth"], kd["peak RSS (MiB)"]) == ("4,000,000", "100", "900")
@@ -79,8 +99,13 @@ def test_timed_rows(text):
 
 def test_case_order_is_numeric():
     models = ["case-14a:x", "case-2b:y", "case-10:z", "case-2a:w", "case-1a:v"]
-    assert sorted(models, key=case_sort_key) == ["case-1a:v", "case-2a:w", "case-2b:y",
-                                                 "case-10:z", "case-14a:x"]
+    assert sorted(models, key=case_sort_key) == [
+        "case-1a:v",
+        "case-2a:w",
+        "case-2b:y",
+        "case-10:z",
+        "case-14a:x",
+    ]
 
 
 def test_without_case_rows_says_so(tmp_path):

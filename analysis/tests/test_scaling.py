@@ -6,22 +6,27 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from PIL import Image
-
-from accelbench_analysis.cli import main
-from accelbench_analysis.scaling import (cost_figure, fit_slopes, read_cost_csv,
-                                         scaling_frame)
-from accelbench_analysis.schema import load_results
-
 from synthetic import BVH, EMBREE, KD, SAH, row, write_csv
 
-SIZES = {"stanford-dragon@decimate=10000": 10000, "stanford-dragon@decimate=100000": 100000,
-         "stanford-dragon": 871414, "stanford-bunny": 69451,
-         "stanford-bunny@subdivide=1": 277804}
+from accelbench_analysis.cli import main
+from accelbench_analysis.scaling import cost_figure, fit_slopes, read_cost_csv, scaling_frame
+from accelbench_analysis.schema import load_results
+
+SIZES = {
+    "stanford-dragon@decimate=10000": 10000,
+    "stanford-dragon@decimate=100000": 100000,
+    "stanford-dragon": 871414,
+    "stanford-bunny": 69451,
+    "stanford-bunny@subdivide=1": 277804,
+}
 # Known exponents: time = c * triangles^slope.
-SLOPES = {"bvh-median": (1.2, 0.3), "bvh-sah": (1.1, 0.25), "kdtree": (1.3, 0.2),
-          "embree": (1.0, 0.15)}
-ACCELS = {"bvh-median": ("bvh", BVH), "bvh-sah": ("bvh", SAH), "kdtree": ("kdtree", KD),
-          "embree": ("embree", EMBREE)}
+SLOPES = {"bvh-median": (1.2, 0.3), "bvh-sah": (1.1, 0.25), "kdtree": (1.3, 0.2), "embree": (1.0, 0.15)}
+ACCELS = {
+    "bvh-median": ("bvh", BVH),
+    "bvh-sah": ("bvh", SAH),
+    "kdtree": ("kdtree", KD),
+    "embree": ("embree", EMBREE),
+}
 
 
 def scaling_rows(failing: str | None = None) -> list[dict]:
@@ -30,8 +35,15 @@ def scaling_rows(failing: str | None = None) -> list[dict]:
         for key, (accel, params) in ACCELS.items():
             b, r = SLOPES[key]
             status = "timeout" if model == failing and key == "kdtree" else "ok"
-            x = row(model, accel, params, build=2e-7 * tris ** b, render=0.01 * tris ** r,
-                    config="scaling", status=status)
+            x = row(
+                model,
+                accel,
+                params,
+                build=2e-7 * tris**b,
+                render=0.01 * tris**r,
+                config="scaling",
+                status=status,
+            )
             x["triangles"] = tris
             rows.append(x)
     return rows
@@ -47,8 +59,12 @@ def test_fit_recovers_the_exponents(scaling_csv):
     assert set(frame["family"]) == {"stanford-dragon", "stanford-bunny"}
     assert set(frame["structure"]) == {"BVH (median)", "BVH (binned SAH)", "kd-tree", "Embree"}
     slopes = fit_slopes(frame).set_index(["family", "structure", "time"])
-    for key, label in (("bvh-median", "BVH (median)"), ("bvh-sah", "BVH (binned SAH)"),
-                       ("kdtree", "kd-tree"), ("embree", "Embree")):
+    for key, label in (
+        ("bvh-median", "BVH (median)"),
+        ("bvh-sah", "BVH (binned SAH)"),
+        ("kdtree", "kd-tree"),
+        ("embree", "Embree"),
+    ):
         b, r = SLOPES[key]
         for fam in ("stanford-dragon", "stanford-bunny"):
             assert slopes.loc[(fam, label, "build"), "slope"] == pytest.approx(b, rel=1e-3)
@@ -96,15 +112,30 @@ def test_read_cost_csv_places_pixels(tmp_path):
         read_cost_csv(bad)
 
 
-@pytest.mark.parametrize("edit, message", [
-    (lambda t: t[:-4], r"line 13 \(the last row\) has no line break at its end"),
-    (lambda t: t.replace("\n2,1,", "\n2,1,nan,", 1), r"line 8 \(row 7\): 5 fields but the header has 4"),
-    (lambda t: t.replace("\n2,1,12,", "\n2,1,inf,", 1), r"column 'node_visits' has values that are not finite on line 8 \(row 7\)"),
-    (lambda t: t.replace("\n2,1,12,", "\n2,1,-12,", 1), r"column 'node_visits' has negative values on line 8 \(row 7\)"),
-    (lambda t: t.replace("\n2,1,12,", "\n2,1,twelve,", 1), r"column 'node_visits' has non-numeric values on line 8 \(row 7\)"),
-    (lambda t: t.replace("\n2,1,", "\n2.5,1,", 1), r"column 'x' has values that are not pixel coordinates on line 8 \(row 7\)"),
-    (lambda t: t.replace("\n2,1,", "\n1,1,", 1), r"pixel \(1, 1\) a second time on line 8 \(row 7\)"),
-])
+@pytest.mark.parametrize(
+    "edit, message",
+    [
+        (lambda t: t[:-4], r"line 13 \(the last row\) has no line break at its end"),
+        (lambda t: t.replace("\n2,1,", "\n2,1,nan,", 1), r"line 8 \(row 7\): 5 fields but the header has 4"),
+        (
+            lambda t: t.replace("\n2,1,12,", "\n2,1,inf,", 1),
+            r"column 'node_visits' has values that are not finite on line 8 \(row 7\)",
+        ),
+        (
+            lambda t: t.replace("\n2,1,12,", "\n2,1,-12,", 1),
+            r"column 'node_visits' has negative values on line 8 \(row 7\)",
+        ),
+        (
+            lambda t: t.replace("\n2,1,12,", "\n2,1,twelve,", 1),
+            r"column 'node_visits' has non-numeric values on line 8 \(row 7\)",
+        ),
+        (
+            lambda t: t.replace("\n2,1,", "\n2.5,1,", 1),
+            r"column 'x' has values that are not pixel coordinates on line 8 \(row 7\)",
+        ),
+        (lambda t: t.replace("\n2,1,", "\n1,1,", 1), r"pixel \(1, 1\) a second time on line 8 \(row 7\)"),
+    ],
+)
 def test_read_cost_csv_refuses_broken_files(tmp_path, edit, message):
     p = write_cost(tmp_path / "a-cost.csv", 4, 3, lambda x, y: 10 * y + x, lambda x, y: 7)
     p.write_text(edit(p.read_text()))
@@ -119,13 +150,28 @@ def test_cost_images_command(tmp_path):
     shaded = tmp_path / "shaded.png"
     Image.fromarray(np.full((h, w, 3), 128, dtype=np.uint8)).save(shaded)
     out = tmp_path / "out"
-    assert main(["cost-images", "--model", "stanford-bunny", "--shaded", str(shaded),
-                 "--cost", f"BVH={a}", "--cost", f"kd-tree={b}", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "cost-images",
+                "--model",
+                "stanford-bunny",
+                "--shaded",
+                str(shaded),
+                "--cost",
+                f"BVH={a}",
+                "--cost",
+                f"kd-tree={b}",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     with Image.open(out / "figures" / "cost-stanford-bunny.png") as im:
         assert im.size[0] > im.size[1]
     # Different image sizes cannot share panels.
     c = write_cost(tmp_path / "small-cost.csv", 4, 3, lambda x, y: 1, lambda x, y: 1)
     with pytest.raises(ValueError, match="differ in size"):
         cost_figure("m", None, {"a": a, "c": c}, out / "x.png")
-    assert main(["cost-images", "--model", "m", "--cost", "no-equals-sign", "--out",
-                 str(out)]) == 2
+    assert main(["cost-images", "--model", "m", "--cost", "no-equals-sign", "--out", str(out)]) == 2

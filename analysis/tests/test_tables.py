@@ -3,20 +3,30 @@
 import re
 
 import pytest
+from synthetic import BVH, EMBREE, KD, LBVH, SAH, row, write_csv
 
-from accelbench_analysis.formatting import (Cell, Section, TableDoc, fmt_measure, fmt_sig, tex_escape,
-                                        to_latex, to_markdown)
+from accelbench_analysis.formatting import (
+    Cell,
+    Section,
+    TableDoc,
+    fmt_measure,
+    fmt_sig,
+    tex_escape,
+    to_latex,
+    to_markdown,
+)
 from accelbench_analysis.schema import load_results
 from accelbench_analysis.selection import AUTO, kd_auto_depths, param_matches
 from accelbench_analysis.tables import model_table, table2
-from synthetic import BVH, EMBREE, KD, LBVH, SAH, row, write_csv
 
 
 def cells_of(doc: TableDoc, label: str) -> list[str]:
     for r in doc.rows:
         if not isinstance(r, Section) and r[0].text == label:
             return [c.text for c in r[1:]]
-    raise AssertionError(f"no row {label!r} in {doc.name}: {[r[0].text for r in doc.rows if not isinstance(r, Section)]}")
+    raise AssertionError(
+        f"no row {label!r} in {doc.name}: {[r[0].text for r in doc.rows if not isinstance(r, Section)]}"
+    )
 
 
 def section_rows(doc: TableDoc, section: str) -> list[list[str]]:
@@ -35,10 +45,25 @@ def small(tmp_path):
         row("stanford-bunny", "bvh", BVH, build=0.5, render=2.0, nodes=138901, prim_tests=1_000_000),
         row("stanford-bunny", "lbvh", LBVH, build=1.0, render=2.2, nodes=138901, prim_tests=1_100_000),
         # max_depth=29 is the automatic depth for 69,451 triangles: it is the default kd-tree.
-        row("stanford-bunny", "kdtree", dict(KD, max_depth="29"), build=4.0, render=1.5,
-            nodes=400000, prim_tests=300_000),
-        row("stanford-bunny", "kdtree", dict(KD, max_depth="28"), build=3.9, render=1.6,
-            nodes=390000, prim_tests=310_000, config="table2"),
+        row(
+            "stanford-bunny",
+            "kdtree",
+            dict(KD, max_depth="29"),
+            build=4.0,
+            render=1.5,
+            nodes=400000,
+            prim_tests=300_000,
+        ),
+        row(
+            "stanford-bunny",
+            "kdtree",
+            dict(KD, max_depth="28"),
+            build=3.9,
+            render=1.6,
+            nodes=390000,
+            prim_tests=310_000,
+            config="table2",
+        ),
         row("stanford-bunny", "bvh", SAH, build=1.2, render=1.0, nodes=40000, prim_tests=500_000),
         row("stanford-bunny", "embree", EMBREE, build=0.05, render=0.3),
         row("igea", "kdtree", KD, status="timeout", message="build exceeded 600 s"),
@@ -75,27 +100,70 @@ def test_table4_exact_cells(small, report_nums):
 
 
 def test_traversal_modes_become_labelled_rows(tmp_path, report_nums):
-    rows = [row("stanford-bunny", "bvh", dict(BVH, traversal=t), build=0.5, render=r, nodes=138901,
-                prim_tests=1000) for t, r in (("ordered", 1.0), ("report", 1.5))]
-    doc = model_table(load_results([write_csv(tmp_path / "t.csv", rows)]), report_nums, 4,
-                      ["stanford-bunny"])[0]
+    rows = [
+        row(
+            "stanford-bunny",
+            "bvh",
+            dict(BVH, traversal=t),
+            build=0.5,
+            render=r,
+            nodes=138901,
+            prim_tests=1000,
+        )
+        for t, r in (("ordered", 1.0), ("report", 1.5))
+    ]
+    doc = model_table(
+        load_results([write_csv(tmp_path / "t.csv", rows)]), report_nums, 4, ["stanford-bunny"]
+    )[0]
     render = section_rows(doc, "Render time (s)")
-    assert [r[0] for r in render][:2] == ["BVH (median) [traversal=ordered]",
-                                          "BVH (median) [traversal=report]"]
+    assert [r[0] for r in render][:2] == [
+        "BVH (median) [traversal=ordered]",
+        "BVH (median) [traversal=report]",
+    ]
     assert render[0][1].startswith("1.00 [") and render[1][1].startswith("1.50 [")
     assert any("[traversal=...] rows" in n for n in doc.notes)
 
 
 def test_table2_maps_settings_to_kdtree_parameters(tmp_path, report_nums):
-    rows = [row("stanford-bunny", "kdtree", dict(KD, max_prims=mp), build=1.0, render=2.0,
-                nodes=n, prim_tests=t, config="table2")
-            for mp, n, t in (("1", 400000, 100), ("10", 20000, 1000), ("100", 1500, 10000))]
-    rows += [row("stanford-bunny", "kdtree", dict(KD, max_prims="4", max_depth=d), build=0.5,
-                 render=float(d), nodes=int(d) * 10, prim_tests=5, config="table2")
-             for d in ("5", "10", "28", "100")]
+    rows = [
+        row(
+            "stanford-bunny",
+            "kdtree",
+            dict(KD, max_prims=mp),
+            build=1.0,
+            render=2.0,
+            nodes=n,
+            prim_tests=t,
+            config="table2",
+        )
+        for mp, n, t in (("1", 400000, 100), ("10", 20000, 1000), ("100", 1500, 10000))
+    ]
+    rows += [
+        row(
+            "stanford-bunny",
+            "kdtree",
+            dict(KD, max_prims="4", max_depth=d),
+            build=0.5,
+            render=float(d),
+            nodes=int(d) * 10,
+            prim_tests=5,
+            config="table2",
+        )
+        for d in ("5", "10", "28", "100")
+    ]
     # A stray row at another max_prims that covers only one depth must not be chosen.
-    rows.append(row("stanford-bunny", "kdtree", dict(KD, max_prims="2", max_depth="5"), build=9,
-                    render=9, nodes=1, prim_tests=1, config="table2"))
+    rows.append(
+        row(
+            "stanford-bunny",
+            "kdtree",
+            dict(KD, max_prims="2", max_depth="5"),
+            build=9,
+            render=9,
+            nodes=1,
+            prim_tests=1,
+            config="table2",
+        )
+    )
     doc = table2(load_results([write_csv(tmp_path / "t2.csv", rows)]), report_nums)[0]
     mp10 = cells_of(doc, "maxPrims=10")
     assert mp10[0] == "max_prims=10, max_depth=auto"
@@ -118,8 +186,9 @@ def test_kd_auto_depth():
 
 def test_mixed_provenance_tags_cells(tmp_path, report_nums):
     a = write_csv(tmp_path / "a.csv", [row("stanford-bunny", "bvh", BVH, build=0.5, render=2.0)])
-    b = write_csv(tmp_path / "b.csv", [row("stanford-bunny", "lbvh", LBVH, build=1.0, render=2.0,
-                                           git_sha="e" * 40)])
+    b = write_csv(
+        tmp_path / "b.csv", [row("stanford-bunny", "lbvh", LBVH, build=1.0, render=2.0, git_sha="e" * 40)]
+    )
     doc = model_table(load_results([a, b]), report_nums, 4, ["stanford-bunny"])[0]
     md = to_markdown(doc)
     assert md.count("> **Warning:** MIXED PROVENANCE") == 1
@@ -137,8 +206,15 @@ def test_number_formatting():
 
 
 def test_markdown_and_latex_shapes():
-    doc = TableDoc("t", "T", "cap", [("G_1 & co", 2)], ["", "a", "b"],
-                   [Section("sec #1"), [Cell("x_1"), Cell("1"), Cell("2")]], notes=["n 50%"])
+    doc = TableDoc(
+        "t",
+        "T",
+        "cap",
+        [("G_1 & co", 2)],
+        ["", "a", "b"],
+        [Section("sec #1"), [Cell("x_1"), Cell("1"), Cell("2")]],
+        notes=["n 50%"],
+    )
     md = to_markdown(doc)
     table_lines = [ln for ln in md.splitlines() if ln.startswith("|")]
     assert {ln.count("|") for ln in table_lines} == {4}

@@ -4,26 +4,45 @@
 from __future__ import annotations
 
 import pytest
+from synthetic import BVH, EMBREE, KD, row, write_csv
 
 from accelbench_analysis.cli import main
 from accelbench_analysis.schema import load_results
-from accelbench_analysis.workloads import (ranking, ray_set_rows, ray_set_table,
-                                           thread_scaling_rows, workload_mask)
-
-from synthetic import BVH, EMBREE, KD, row, write_csv
+from accelbench_analysis.workloads import (
+    ranking,
+    ray_set_rows,
+    ray_set_table,
+    thread_scaling_rows,
+    workload_mask,
+)
 
 # Render seconds per (structure, set) for 1e6 rays: Mrays/s = 1 / seconds. The kd-tree
 # beats the BVH on ao rays only, so the order changes there and nowhere else.
-SECONDS = {("bvh", "primary"): 0.5, ("kdtree", "primary"): 1.0, ("embree", "primary"): 0.25,
-           ("bvh", "ao"): 2.0, ("kdtree", "ao"): 1.0, ("embree", "ao"): 0.5}
+SECONDS = {
+    ("bvh", "primary"): 0.5,
+    ("kdtree", "primary"): 1.0,
+    ("embree", "primary"): 0.25,
+    ("bvh", "ao"): 2.0,
+    ("kdtree", "ao"): 1.0,
+    ("embree", "ao"): 0.5,
+}
 ACCELS = {"bvh": BVH, "kdtree": KD, "embree": EMBREE}
 
 
 def ray_set_csv(path):
     rows = []
     for (accel, rs), s in SECONDS.items():
-        r = row("stanford-bunny", accel, ACCELS[accel], build=0.1, render=s, config="ray-sets",
-                rays=1_000_000, shadow_rays=0, extra={"ray_set": rs, "ray_set_hash": f"{rs:0>16}"})
+        r = row(
+            "stanford-bunny",
+            accel,
+            ACCELS[accel],
+            build=0.1,
+            render=s,
+            config="ray-sets",
+            rays=1_000_000,
+            shadow_rays=0,
+            extra={"ray_set": rs, "ray_set_hash": f"{rs:0>16}"},
+        )
         rows.append(r)
     return write_csv(path, rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
 
@@ -36,9 +55,18 @@ def thread_csv(path):
     rows = []
     for (accel, t), s in WALL.items():
         params = dict(ACCELS[accel], threads=str(t)) if accel == "embree" else ACCELS[accel]
-        rows.append(row("stanford-bunny", accel, params, build=0.1, render=s,
-                        config="thread-scaling", threads=str(t),
-                        extra={"ray_set": "camera", "render_cpu_s_median": s * t}))
+        rows.append(
+            row(
+                "stanford-bunny",
+                accel,
+                params,
+                build=0.1,
+                render=s,
+                config="thread-scaling",
+                threads=str(t),
+                extra={"ray_set": "camera", "render_cpu_s_median": s * t},
+            )
+        )
     return write_csv(path, rows, with_errors=True, extra_columns=("ray_set", "render_cpu_s_median"))
 
 
@@ -85,19 +113,41 @@ def test_thread_scaling_speedup_and_efficiency(tmp_path):
 def test_all_writes_and_links_them_and_keeps_the_tables(realistic_csv, tmp_path):
     alone, mixed = tmp_path / "alone", tmp_path / "mixed"
     assert main(["all", str(realistic_csv), "--out", str(alone)]) == 0
-    assert main(["all", str(realistic_csv), str(ray_set_csv(tmp_path / "rs.csv")),
-                 str(thread_csv(tmp_path / "ts.csv")), "--out", str(mixed)]) == 0
-    for rel in ("tables/ray_sets.md", "tables/ray_sets.csv", "tables/ray_set_ranking.md",
-                "figures/ray_sets.png", "tables/thread_scaling.md", "tables/thread_scaling.csv",
-                "figures/thread_scaling.png"):
+    assert (
+        main(
+            [
+                "all",
+                str(realistic_csv),
+                str(ray_set_csv(tmp_path / "rs.csv")),
+                str(thread_csv(tmp_path / "ts.csv")),
+                "--out",
+                str(mixed),
+            ]
+        )
+        == 0
+    )
+    for rel in (
+        "tables/ray_sets.md",
+        "tables/ray_sets.csv",
+        "tables/ray_set_ranking.md",
+        "figures/ray_sets.png",
+        "tables/thread_scaling.md",
+        "tables/thread_scaling.csv",
+        "figures/thread_scaling.png",
+    ):
         assert (mixed / rel).stat().st_size > 0, rel
         assert not (alone / rel).exists(), rel
     for rel in ("tables/table2.md", "tables/table4.md", "tables/table5.md"):
         assert (mixed / rel).read_text() == (alone / rel).read_text(), rel
     report = (mixed / "REPORT.md").read_text()
-    beyond = report[report.index("## Beyond the report"):]
-    for rel in ("tables/ray_sets.md", "tables/ray_set_ranking.md", "figures/ray_sets.png",
-                "tables/thread_scaling.md", "figures/thread_scaling.png"):
+    beyond = report[report.index("## Beyond the report") :]
+    for rel in (
+        "tables/ray_sets.md",
+        "tables/ray_set_ranking.md",
+        "figures/ray_sets.png",
+        "tables/thread_scaling.md",
+        "figures/thread_scaling.png",
+    ):
         assert f"]({rel})" in beyond, rel
     ranking_md = (mixed / "tables" / "ray_set_ranking.md").read_text()
     assert "Order changes in: ao." in ranking_md and "2*" in ranking_md

@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/verify/error_metrics.h"
 #include "accelbench/accel/registry.h"
 #include "accelbench/render/ray_sets.h"
 #include "accelbench/scene/scene.h"
+#include "accelbench/verify/error_metrics.h"
 
 namespace accelbench::test {
 
@@ -88,10 +88,8 @@ inline Agreement compare_with_embree(const Scene& scene, const Accelerator& acce
             continue;
         }
         if (!got[i].found() || got[i].prim == want[i].prim) continue;
-        if (ulp_distance(got[i].t, want[i].t) <= ulps)
-            ++a.ties;
-        else
-            ++a.mismatched_prim;
+        if (ulp_distance(got[i].t, want[i].t) <= ulps) ++a.ties;
+        else ++a.mismatched_prim;
     }
     std::vector<Ray> shadows = shadow_rays(scene, rays, want);
     std::vector<uint8_t> occ_got(shadows.size()), occ_want(shadows.size());
@@ -109,8 +107,9 @@ inline void expect_agrees_with_embree(const Scene& scene, const Accelerator& acc
                                       const std::string& what, size_t max_hit_disagreements = 0,
                                       size_t max_shadow_disagreements = 0) {
     Agreement a = compare_with_embree(scene, accel, rays);
-    std::printf("[agreement] %s: %zu rays, %zu hit/miss mismatches, %zu prim mismatches, %zu ties, %zu shadow mismatches\n",
-                what.c_str(), a.rays, a.mismatched_hit, a.mismatched_prim, a.ties, a.mismatched_occlusion);
+    std::printf(
+        "[agreement] %s: %zu rays, %zu hit/miss mismatches, %zu prim mismatches, %zu ties, %zu shadow mismatches\n",
+        what.c_str(), a.rays, a.mismatched_hit, a.mismatched_prim, a.ties, a.mismatched_occlusion);
     EXPECT_LE(a.mismatched_hit, max_hit_disagreements) << what;
     EXPECT_EQ(a.mismatched_prim, 0u) << what;
     EXPECT_LE(a.mismatched_occlusion, max_shadow_disagreements) << what;
@@ -127,13 +126,15 @@ inline HitErrors expect_agrees_on_ray_set(const GeneratedRaySet& set, const Acce
     const TraceOutput out = trace_ray_set(accel, set.rays, set.query, request);
     const HitErrors e = set.query == RayQuery::Closest ? compare_hits(out.primary_hits, set.reference_hits)
                                                        : compare_occlusion(out.occluded, set.reference_occluded);
-    std::printf("[ray-set agreement] %s %s: %llu rays, %llu false misses, %llu false hits, %llu prim mismatches, "
-                "%llu ties\n",
-                what.c_str(), std::string(ray_set_name(set.kind)).c_str(), (unsigned long long)e.rays,
-                (unsigned long long)e.false_misses, (unsigned long long)e.false_hits,
-                (unsigned long long)e.prim_mismatches, (unsigned long long)e.ties);
+    std::printf(
+        "[ray-set agreement] %s %s: %llu rays, %llu false misses, %llu false hits, %llu prim mismatches, "
+        "%llu ties\n",
+        what.c_str(), std::string(ray_set_name(set.kind)).c_str(), (unsigned long long)e.rays,
+        (unsigned long long)e.false_misses, (unsigned long long)e.false_hits, (unsigned long long)e.prim_mismatches,
+        (unsigned long long)e.ties);
     EXPECT_EQ(e.nan_results, 0u) << what << " " << ray_set_name(set.kind);
-    EXPECT_LE(e.false_misses + e.false_hits + e.prim_mismatches, max_disagreements) << what << " " << ray_set_name(set.kind);
+    EXPECT_LE(e.false_misses + e.false_hits + e.prim_mismatches, max_disagreements)
+        << what << " " << ray_set_name(set.kind);
     return e;
 }
 

@@ -14,7 +14,7 @@ namespace accelbench::test {
 
 inline bool contains(const Bounds3& outer, const Bounds3& inner) {
     return outer.lower.x <= inner.lower.x && outer.lower.y <= inner.lower.y && outer.lower.z <= inner.lower.z &&
-           outer.upper.x >= inner.upper.x && outer.upper.y >= inner.upper.y && outer.upper.z >= inner.upper.z;
+        outer.upper.x >= inner.upper.x && outer.upper.y >= inner.upper.y && outer.upper.z >= inner.upper.z;
 }
 
 // Checks: each triangle in exactly one leaf slot; leaves cover the slots in order;
@@ -43,7 +43,9 @@ inline void expect_valid_bvh(const FlatBvh& bvh, const Scene& scene, bool tight,
 
     // Walk the tree depth-first: node indices must come in order 0, 1, 2, ... and leaf
     // slots in order 0, 1, 2, ...
-    struct Item { uint32_t node, depth; };
+    struct Item {
+        uint32_t node, depth;
+    };
     std::vector<Item> stack{{0, 0}};
     uint32_t expected_node = 0, next_slot = 0, depth = 0;
     while (!stack.empty()) {

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
-#include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 
 using namespace accelbench;
 

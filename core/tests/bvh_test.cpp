@@ -297,7 +297,8 @@ TEST(Bvh, SingleTriangle) {
     for (const std::string& split : kSplits) {
         auto bvh = built(scene, {{"split", split}});
         expect_shape(*bvh, {1, 1, 0}, split);
-        std::vector<Ray> rays = {{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity}, {{0.4f, 0.4f, 1}, 0, {0, 0, -1}, kInfinity}};
+        std::vector<Ray> rays = {{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity},
+                                 {{0.4f, 0.4f, 1}, 0, {0, 0, -1}, kInfinity}};
         std::vector<Hit> hits(2);
         bvh->closest_hits(rays, hits);
         EXPECT_EQ(hits[0].prim, 0u);
@@ -384,7 +385,7 @@ TEST(Bvh, StanfordBunnyAgreesWithEmbree) {
              {}, {{"split", "sah"}}, {{"split", "sah"}, {"max_prims", "8"}, {"traversal", "report"}}}) {
         auto bvh = built(scene, p);
         const BuildStats s = bvh->build_stats();
-        if (p.count("max_prims") == 0 && !p.count("split")) {  // the median's max_prims default: 1
+        if (p.count("max_prims") == 0 && !p.count("split")) {           // the median's max_prims default: 1
             EXPECT_EQ(s.nodes.value(), 2u * 69451 - 1) << describe(p);  // one triangle per leaf
             EXPECT_EQ(s.leaves.value(), 69451u) << describe(p);
         }

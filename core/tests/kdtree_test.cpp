@@ -8,9 +8,9 @@
 #include <cstring>
 #include <string>
 
+#include "accelbench/base/random.h"
 #include "accelbench/scene/mesh_io.h"
 #include "accelbench/scene/procedural.h"
-#include "accelbench/base/random.h"
 #include "agreement.h"
 #include "test_scenes.h"
 
@@ -28,9 +28,8 @@ void add_triangle(Scene& s, Vec3 a, Vec3 b, Vec3 c) {
 
 // The project's random soup: equilateral triangles of edge `size` in the unit box.
 Scene soup(int n, uint64_t seed, float size) {
-    return make_procedural("soup", {{"triangles", std::to_string(n)},
-                                    {"seed", std::to_string(seed)},
-                                    {"size", std::to_string(size)}});
+    return make_procedural(
+        "soup", {{"triangles", std::to_string(n)}, {"seed", std::to_string(seed)}, {"size", std::to_string(size)}});
 }
 
 Scene flattened(Scene s, int axis, float at) {
@@ -179,8 +178,7 @@ TEST(KdTree, PbrtAndNlognBuildIdenticalTrees) {
             const std::string what = scene.name + " " + describe(base);
             ASSERT_GT(ta.nodes().size(), 1u) << what;
             ASSERT_EQ(ta.nodes().size(), tb.nodes().size()) << what;
-            EXPECT_EQ(std::memcmp(ta.nodes().data(), tb.nodes().data(), ta.nodes().size() * sizeof(KdNode)), 0)
-                << what;
+            EXPECT_EQ(std::memcmp(ta.nodes().data(), tb.nodes().data(), ta.nodes().size() * sizeof(KdNode)), 0) << what;
             ASSERT_EQ(ta.prim_indices().size(), tb.prim_indices().size()) << what;
             EXPECT_TRUE(std::equal(ta.prim_indices().begin(), ta.prim_indices().end(), tb.prim_indices().begin()))
                 << what;
@@ -420,7 +418,8 @@ TEST(KdTree, CoplanarTrianglesOnSplitPlanesAreFound) {
             std::vector<uint32_t> want;
             SplitMix64 r(21);
             for (uint32_t p = 0; p < grid.triangle_count(); ++p) {
-                const Vec3 n = normalize(cross(grid.vertex(p, 1) - grid.vertex(p, 0), grid.vertex(p, 2) - grid.vertex(p, 0)));
+                const Vec3 n =
+                    normalize(cross(grid.vertex(p, 1) - grid.vertex(p, 0), grid.vertex(p, 2) - grid.vertex(p, 0)));
                 for (float side : {1.0f, -1.0f}) {
                     const Vec3 c = centroid(grid, p);
                     // an oblique and an exactly perpendicular ray (two zero components)
@@ -449,12 +448,9 @@ TEST(KdTree, StiffParametersTerminateOrAreRefused) {
     for (int i = 0; i < 20; ++i) add_triangle(cluster, {float(i), 5, 0}, {float(i) + 0.5f, 5, 0}, {float(i), 6, 1});
     cluster.finalize();
     const std::vector<std::map<std::string, std::string>> stiff = {
-        {{"max_depth", "100"}, {"max_prims", "1"}},
-        {{"isect_cost", "10000"}, {"traversal_cost", "1"}},
-        {{"isect_cost", "0.0001"}, {"traversal_cost", "1"}},
-        {{"isect_cost", "80"}, {"traversal_cost", "0.0001"}},
-        {{"isect_cost", "80"}, {"traversal_cost", "10000"}},
-        {{"empty_bonus", "0.99"}},
+        {{"max_depth", "100"}, {"max_prims", "1"}},          {{"isect_cost", "10000"}, {"traversal_cost", "1"}},
+        {{"isect_cost", "0.0001"}, {"traversal_cost", "1"}}, {{"isect_cost", "80"}, {"traversal_cost", "0.0001"}},
+        {{"isect_cost", "80"}, {"traversal_cost", "10000"}}, {{"empty_bonus", "0.99"}},
         {{"empty_bonus", "1"}, {"max_depth", "100"}},
     };
     for (const auto& params : stiff) {
@@ -557,14 +553,15 @@ TEST(KdTree, StanfordBunny) {
     const KdTree &a = as_kdtree(*kd), &b = as_kdtree(*pbrt);
     ASSERT_EQ(a.nodes().size(), b.nodes().size());
     EXPECT_EQ(std::memcmp(a.nodes().data(), b.nodes().data(), a.nodes().size() * sizeof(KdNode)), 0);
-    EXPECT_TRUE(std::equal(a.prim_indices().begin(), a.prim_indices().end(), b.prim_indices().begin(),
-                           b.prim_indices().end()));
+    EXPECT_TRUE(
+        std::equal(a.prim_indices().begin(), a.prim_indices().end(), b.prim_indices().begin(), b.prim_indices().end()));
     const BuildStats st = kd->build_stats();
-    std::printf("[bunny] nodes %llu, leaves %llu, max depth %llu (limit %.0f), refs %.0f, empty leaves %.0f, "
-                "bad refines %.0f, SAH %.1f, %.1f MB\n",
-                (unsigned long long)*st.nodes, (unsigned long long)*st.leaves, (unsigned long long)*st.max_depth,
-                st.extra.at("max_depth_limit"), st.extra.at("prim_refs"), st.extra.at("empty_leaves"),
-                st.extra.at("bad_refines"), *st.sah_cost, double(*st.memory_bytes) / 1e6);
+    std::printf(
+        "[bunny] nodes %llu, leaves %llu, max depth %llu (limit %.0f), refs %.0f, empty leaves %.0f, "
+        "bad refines %.0f, SAH %.1f, %.1f MB\n",
+        (unsigned long long)*st.nodes, (unsigned long long)*st.leaves, (unsigned long long)*st.max_depth,
+        st.extra.at("max_depth_limit"), st.extra.at("prim_refs"), st.extra.at("empty_leaves"),
+        st.extra.at("bad_refines"), *st.sah_cost, double(*st.memory_bytes) / 1e6);
     EXPECT_EQ(st.extra.at("max_depth_limit"), 29.0);
     test::expect_agrees_with_embree(bunny, *kd, test::probe_rays(bunny, 20000, 7), "bunny", 0, 2);
 }

@@ -18,8 +18,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::map<std::string, int> kLayer = {
-    {"base", 0}, {"scene", 1}, {"accel", 2}, {"render", 3}, {"verify", 4}};
+const std::map<std::string, int> kLayer = {{"base", 0}, {"scene", 1}, {"accel", 2}, {"render", 3}, {"verify", 4}};
 
 // "accel/bvh/bvh.h" -> {"accel", "accel/bvh"}; "base/geometry.h" -> {"base", "base"}.
 std::pair<std::string, std::string> layer_and_folder(const fs::path& rel) {
@@ -74,8 +73,7 @@ TEST(Layering, EveryIncludePointsToItsOwnLayerOrBelow) {
             // Structures know the interface and themselves; only the registry knows them all.
             const bool in_structure = layer == "accel" && folder != "accel";
             const bool to_structure = t_layer == "accel" && t_folder != "accel";
-            if (to_structure && folder != t_folder && rel.generic_string() != "accel/registry.cpp" &&
-                layer == "accel")
+            if (to_structure && folder != t_folder && rel.generic_string() != "accel/registry.cpp" && layer == "accel")
                 violations.push_back(where + "a structure folder includes another's: " + target.string());
             if (in_structure && t_folder == "accel" && target.filename() == "registry.h")
                 violations.push_back(where + "a structure includes the factory (registry.h)");

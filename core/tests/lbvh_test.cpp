@@ -10,8 +10,8 @@
 #include <utility>
 
 #include "accelbench/accel/bvh/morton_code.h"
-#include "accelbench/scene/procedural.h"
 #include "accelbench/base/random.h"
+#include "accelbench/scene/procedural.h"
 #include "agreement.h"
 #include "bvh_check.h"
 #include "test_scenes.h"
@@ -23,8 +23,8 @@ namespace {
 
 // The shared procedural soup: random triangles of edge `size` in the unit box.
 Scene random_soup(int n, uint64_t seed, float size = 0.2f) {
-    return make_procedural("soup", {{"triangles", std::to_string(n)}, {"seed", std::to_string(seed)},
-                                    {"size", std::to_string(size)}});
+    return make_procedural(
+        "soup", {{"triangles", std::to_string(n)}, {"seed", std::to_string(seed)}, {"size", std::to_string(size)}});
 }
 
 // A w x h grid of squares (two triangles each) in the plane z = 0, slightly warped in z
@@ -34,7 +34,8 @@ Scene grid_mesh(int w, int h, bool flat) {
     s.name = flat ? "flat-grid" : "grid";
     for (int j = 0; j <= h; ++j)
         for (int i = 0; i <= w; ++i)
-            s.vertices.push_back({float(i), float(j), flat ? 0.0f : 0.3f * std::sin(0.7f * float(i) + 0.4f * float(j))});
+            s.vertices.push_back(
+                {float(i), float(j), flat ? 0.0f : 0.3f * std::sin(0.7f * float(i) + 0.4f * float(j))});
     for (int j = 0; j < h; ++j)
         for (int i = 0; i < w; ++i) {
             const uint32_t v = uint32_t(j * (w + 1) + i);
@@ -221,7 +222,8 @@ TEST(Lbvh, BuildTasksDoNotDependOnScheduling) {
         EXPECT_LE(tasks, std::stod(threads) - 1) << threads;
         for (int repeat = 0; repeat < 200; ++repeat) {
             auto again = build_lbvh(scene, {{"threads", threads}, {"task_threshold", "10"}});
-            ASSERT_EQ(again->build_stats().extra.at("build_tasks"), tasks) << "threads=" << threads << " build " << repeat;
+            ASSERT_EQ(again->build_stats().extra.at("build_tasks"), tasks)
+                << "threads=" << threads << " build " << repeat;
         }
     }
     // threads=2: exactly one hand-off (at the root, whose second child is large), then
@@ -242,7 +244,8 @@ TEST(Lbvh, IdenticalTrianglesSplitInTheMiddle) {
         EXPECT_EQ(lbvh->tree().depth, 7u);
         EXPECT_EQ(lbvh->build_stats().extra.at("equal_code_splits"), 99.0);
         test::expect_valid_bvh(lbvh->tree(), scene, /*tight=*/true, "lbvh");
-        test::expect_agrees_with_embree(scene, *lbvh, test::probe_rays(scene, 500), std::string("identical bits=") + bits);
+        test::expect_agrees_with_embree(scene, *lbvh, test::probe_rays(scene, 500),
+                                        std::string("identical bits=") + bits);
     }
 }
 
@@ -325,7 +328,7 @@ TEST(Lbvh, DenseClusterWithFarOutlier) {
         EXPECT_EQ(lbvh->tree().nodes.size(), 2 * scene.triangle_count() - 1);
         const double equal_splits = lbvh->build_stats().extra.at("equal_code_splits");
         if (std::string(bits) == "10") {
-            EXPECT_EQ(equal_splits, 1999.0);   // the whole cluster: 2000 leaves, 1999 splits
+            EXPECT_EQ(equal_splits, 1999.0);     // the whole cluster: 2000 leaves, 1999 splits
             EXPECT_EQ(lbvh->tree().depth, 12u);  // balanced below the root: 1 + ceil(log2 2000)
         }
         test::expect_agrees_with_embree(scene, *lbvh, rays, std::string("cluster+outlier bits=") + bits);

@@ -28,7 +28,6 @@ using Tri = std::array<uint32_t, 3>;
 
 class MeshIoTest : public ::testing::Test {
 protected:
-
     std::string write(const std::string& name, const std::string& bytes) {
         const std::string path = (dir_ / name).string();
         std::ofstream(path, std::ios::binary) << bytes;
@@ -282,9 +281,11 @@ TEST_F(MeshIoTest, UnsupportedExtension) {
 // two lines is a shorter file, one cut inside a face's last index a different one.)
 TEST_F(MeshIoTest, EveryPrefixOfAFileIsRefused) {
     const std::string stl_text = ascii_stl();
-    const std::vector<std::pair<std::string, std::string>> files = {
-        {"cut.ply", kAsciiPly}, {"cut.off", kOff}, {"cut.stl", stl_text},
-        {"cutb.ply", binary_ply()}, {"cutb.stl", binary_stl()}};
+    const std::vector<std::pair<std::string, std::string>> files = {{"cut.ply", kAsciiPly},
+                                                                    {"cut.off", kOff},
+                                                                    {"cut.stl", stl_text},
+                                                                    {"cutb.ply", binary_ply()},
+                                                                    {"cutb.stl", binary_stl()}};
     for (const auto& [name, whole] : files) {
         const bool binary = name.find('b') != std::string::npos && name != "cut.ply";
         size_t must_refuse = binary ? whole.size() : whole.find_last_not_of(" \r\n");  // last word's last byte
@@ -312,14 +313,17 @@ TEST_F(MeshIoTest, TruncationIsNamedWithItsPlace) {
     // A vertex cut after its x: refused, not completed with zeros.
     std::string cut = whole.substr(0, whole.find("0.5 0.5 2.25") + 3);
     std::string error = load_error(write("cut.ply", cut));
-    EXPECT_NE(error.find("line 15: vertex 4, property y: the line ends before this property"), std::string::npos) << error;
+    EXPECT_NE(error.find("line 15: vertex 4, property y: the line ends before this property"), std::string::npos)
+        << error;
     error = load_error(write("cut.ply", whole.substr(0, whole.find("3 0 1 4"))));
     EXPECT_NE(error.find("the file ends before face 2 (of 2 faces the header declares): it is cut short"),
-              std::string::npos) << error;
+              std::string::npos)
+        << error;
     const std::string binary = binary_ply();
     error = load_error(write("cut.ply", binary.substr(0, binary.size() - 7)));
     EXPECT_NE(error.find("the file ends inside face 2 (of 2 faces the header declares): it is cut short"),
-              std::string::npos) << error;
+              std::string::npos)
+        << error;
     error = load_error(write("cut.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n"));
     EXPECT_NE(error.find("the file ends before face 2 (of 2): it is cut short"), std::string::npos) << error;
     error = load_error(write("cut.off", "OFF\n4 2 0\n0 0 0\n1 0 0\n1 1\n"));
@@ -327,7 +331,8 @@ TEST_F(MeshIoTest, TruncationIsNamedWithItsPlace) {
     const std::string stl = binary_stl();
     error = load_error(write("cut.stl", stl.substr(0, stl.size() - 10)));
     EXPECT_NE(error.find("as binary STL it would declare 2 triangles, 184 bytes, but the file has 174"),
-              std::string::npos) << error;
+              std::string::npos)
+        << error;
     error = load_error(write("cut.stl", ascii_stl().substr(0, ascii_stl().find("vertex 1 1 0") + 10)));
     EXPECT_NE(error.find("the file ends in triangle 1: it is cut short"), std::string::npos) << error;
     error = load_error(write("cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1\n"));
@@ -357,15 +362,21 @@ TEST_F(MeshIoTest, EveryLineEndingLoadsEveryFace) {
         const Scene lf = load_mesh(write(name, text));
         for (const std::string style : {"\r\n", "\r", "mixed"}) {
             const std::string converted = with_endings(text, style);
-            expect_same_mesh(lf, load_mesh(write(name, converted)), name + " " + (style == "mixed" ? "mixed" : style == "\r" ? "CR" : "CRLF"));
+            expect_same_mesh(lf, load_mesh(write(name, converted)),
+                             name + " " +
+                                 (style == "mixed"    ? "mixed"
+                                      : style == "\r" ? "CR"
+                                                      : "CRLF"));
             // and without a line ending at the very end
-            expect_same_mesh(lf, load_mesh(write(name, converted.substr(0, converted.find_last_not_of("\r\n") + 1))), name + " no final ending");
+            expect_same_mesh(lf, load_mesh(write(name, converted.substr(0, converted.find_last_not_of("\r\n") + 1))),
+                             name + " no final ending");
         }
     }
     // A binary PLY's data starts right after "end_header" and the header's line ending,
     // even when that is a lone CR followed by a data byte 0x0A.
-    std::string header = "ply\rformat binary_little_endian 1.0\relement vertex 3\rproperty float x\rproperty float y\r"
-                         "property float z\relement face 1\rproperty list uchar int vertex_indices\rend_header\r";
+    std::string header =
+        "ply\rformat binary_little_endian 1.0\relement vertex 3\rproperty float x\rproperty float y\r"
+        "property float z\relement face 1\rproperty list uchar int vertex_indices\rend_header\r";
     std::string cr = header;
     const float xyz[9] = {std::bit_cast<float>(0x0000000Au), 0, 0, 1, 0, 0, 0, 1, 0};  // first byte is '\n'
     for (float c : xyz) put(cr, c);
@@ -376,8 +387,9 @@ TEST_F(MeshIoTest, EveryLineEndingLoadsEveryFace) {
     EXPECT_EQ(std::bit_cast<uint32_t>(s.vertices[0].x), 0x0000000Au);
     EXPECT_EQ(s.vertices[1], Vec3(1, 0, 0));
     const std::string crlf = with_endings(binary_ply().substr(0, binary_ply().find("end_header") + 11), "\r\n") +
-                             binary_ply().substr(binary_ply().find("end_header") + 11);
-    expect_same_mesh(load_mesh(write("b.ply", binary_ply())), load_mesh(write("crlf.ply", crlf)), "binary PLY, CRLF header");
+        binary_ply().substr(binary_ply().find("end_header") + 11);
+    expect_same_mesh(load_mesh(write("b.ply", binary_ply())), load_mesh(write("crlf.ply", crlf)),
+                     "binary PLY, CRLF header");
     // A header in LF whose end_header line ends in CR LF: where the data starts is ambiguous.
     std::string mixed = binary_ply();
     mixed.insert(mixed.find("end_header") + 10, "\r");
@@ -389,19 +401,20 @@ TEST_F(MeshIoTest, EveryLineEndingLoadsEveryFace) {
 
 TEST_F(MeshIoTest, ObjCommentsAndLineContinuations) {
     const Scene plain = load_mesh(write("plain.obj", kObj));
-    const Scene annotated = load_mesh(write("annotated.obj",
-        "# a comment line\n"
-        "o tiny   # an object name, then a comment\n"
-        "v 0 0 0 # trailing comment\n"
-        "v 1 \\\n  0 0\n"               // a vertex continued on the next line
-        "v 1 1 0 1.0\n"                 // with w
-        "v 0 1 0 0.5 0.5 0.5\n"         // with a colour
-        "v 0.5 0.5 +2.25\n"
-        "vt 0 0\nvn 0 0 1\n"
-        "g group\nusemtl none\ns off\n"
-        "f 1/1/1 2//1 \\\n 3/1 \\\n 4\n"  // a face over three lines, every corner form
-        "\n   \t\n"
-        "f -5 -4 -1\n"));              // relative indices: 1 2 5
+    const Scene annotated =
+        load_mesh(write("annotated.obj",
+                        "# a comment line\n"
+                        "o tiny   # an object name, then a comment\n"
+                        "v 0 0 0 # trailing comment\n"
+                        "v 1 \\\n  0 0\n"        // a vertex continued on the next line
+                        "v 1 1 0 1.0\n"          // with w
+                        "v 0 1 0 0.5 0.5 0.5\n"  // with a colour
+                        "v 0.5 0.5 +2.25\n"
+                        "vt 0 0\nvn 0 0 1\n"
+                        "g group\nusemtl none\ns off\n"
+                        "f 1/1/1 2//1 \\\n 3/1 \\\n 4\n"  // a face over three lines, every corner form
+                        "\n   \t\n"
+                        "f -5 -4 -1\n"));  // relative indices: 1 2 5
     expect_same_mesh(plain, annotated, "commented OBJ");
     // A continuation on the last line is a file cut short.
     EXPECT_NE(load_error(write("c.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \\")).find("line 4: a line continuation"),
@@ -415,7 +428,8 @@ TEST_F(MeshIoTest, PlyCommentsAndObjInfo) {
     ply.replace(ply.find("end_header"), 0, "obj_info num_cols 1\n");
     expect_same_mesh(load_mesh(write("a.ply", kAsciiPly)), load_mesh(write("b.ply", ply)), "PLY with comments");
     // Extra elements and properties of every type are read and skipped, lists too.
-    const Scene extra = load_mesh(write("extra.ply",
+    const Scene extra = load_mesh(write(
+        "extra.ply",
         "ply\nformat ascii 1.0\nelement material 1\nproperty uchar red\nproperty list int float64 weights\n"
         "element vertex 3\nproperty int8 flag\nproperty double z\nproperty float64 y\nproperty int16 x\n"
         "property uint confidence\nelement face 1\nproperty uint8 flags\nproperty list uint16 uint32 vertex_index\n"
@@ -432,31 +446,45 @@ TEST_F(MeshIoTest, OffHeaderFormsCommentsAndColours) {
     std::string no_keyword = kOff;
     no_keyword.erase(0, 4);
     expect_same_mesh(plain, load_mesh(write("nokeyword.off", no_keyword)), "OFF without keyword");
-    expect_same_mesh(plain, load_mesh(write("oneline.off",
-        "# made by hand\nOFF 5 2 0 # counts on the keyword's line\n\n0 0 0\n1 0 0 # a vertex\n1 1 0\n0 1 0\n"
-        "# between\n0.5 0.5 2.25\n4 0 1 2 3\n3 0 1 4 # last face\n")), "OFF one-line header");
+    expect_same_mesh(
+        plain,
+        load_mesh(
+            write("oneline.off",
+                  "# made by hand\nOFF 5 2 0 # counts on the keyword's line\n\n0 0 0\n1 0 0 # a vertex\n1 1 0\n0 1 0\n"
+                  "# between\n0.5 0.5 2.25\n4 0 1 2 3\n3 0 1 4 # last face\n")),
+        "OFF one-line header");
     // Per-vertex normals (N), colours (C, 3 or 4 numbers), texture coordinates (ST); face
     // colours of 0 to 4 numbers (3 0 1 4 7: a triangle with colour-map index 7).
-    expect_same_mesh(plain, load_mesh(write("full.off",
-        "STCNOFF\n5 2 10\n0 0 0 0 0 1 255 0 0 255 0 0\n1 0 0 0 0 1 255 0 0 1 0\n1 1 0 0 0 1 0 1 0 1 1\n"
-        "0 1 0 0 0 1 0 0 1 1 0 1\n0.5 0.5 2.25 0 0 1 1 1 1 1 0.5 0.5\n4 0 1 2 3 1 0 0\n3 0 1 4 7\n")), "STCNOFF");
-    expect_same_mesh(plain, load_mesh(write("c.off",
-        "COFF\n5 2 0\n0 0 0 1 1 1\n1 0 0 1 1 1 1\n1 1 0 1 1 1\n0 1 0 1 1 1\n0.5 0.5 2.25 1 1 1\n"
-        "4 0 1 2 3 0.1 0.2 0.3 0.4\n3 0 1 4\n")), "COFF");
+    expect_same_mesh(
+        plain,
+        load_mesh(write("full.off",
+                        "STCNOFF\n5 2 10\n0 0 0 0 0 1 255 0 0 255 0 0\n1 0 0 0 0 1 255 0 0 1 0\n1 1 0 0 0 1 0 1 0 1 1\n"
+                        "0 1 0 0 0 1 0 0 1 1 0 1\n0.5 0.5 2.25 0 0 1 1 1 1 1 0.5 0.5\n4 0 1 2 3 1 0 0\n3 0 1 4 7\n")),
+        "STCNOFF");
+    expect_same_mesh(
+        plain,
+        load_mesh(write("c.off",
+                        "COFF\n5 2 0\n0 0 0 1 1 1\n1 0 0 1 1 1 1\n1 1 0 1 1 1\n0 1 0 1 1 1\n0.5 0.5 2.25 1 1 1\n"
+                        "4 0 1 2 3 0.1 0.2 0.3 0.4\n3 0 1 4\n")),
+        "COFF");
     EXPECT_NE(load_error(write("4.off", "4OFF\n3 1 0\n0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 2\n")).find("4OFF and nOFF"),
               std::string::npos);
     EXPECT_NE(load_error(write("b.off", "OFF BINARY\n")).find("binary OFF is not supported"), std::string::npos);
     EXPECT_NE(load_error(write("n.off", "NOFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"))
-                  .find("line 3: vertex 0: 3 numbers on the line, 'NOFF' vertices have 6"), std::string::npos);
+                  .find("line 3: vertex 0: 3 numbers on the line, 'NOFF' vertices have 6"),
+              std::string::npos);
 }
 
 TEST_F(MeshIoTest, StlSolidNamesCaseAndLayout) {
     const Scene plain = load_mesh(write("plain.stl", ascii_stl()));
-    expect_same_mesh(plain, load_mesh(write("named.stl",
-        "SOLID my part, version 2 (made by hand)\n"
-        "FACET NORMAL 0 0 1 OUTER LOOP VERTEX 0 0 0 VERTEX 1 0 0 VERTEX 1 1 0 ENDLOOP ENDFACET\n"
-        "  facet normal nan nan nan\n\touter\nloop\n vertex 0 0 0\n vertex 1 1 0\n vertex 0 1 +0.5\n"
-        "endloop\nendfacet\nendsolid\n")), "STL in capitals, one line per triangle, no endsolid name");
+    expect_same_mesh(
+        plain,
+        load_mesh(write("named.stl",
+                        "SOLID my part, version 2 (made by hand)\n"
+                        "FACET NORMAL 0 0 1 OUTER LOOP VERTEX 0 0 0 VERTEX 1 0 0 VERTEX 1 1 0 ENDLOOP ENDFACET\n"
+                        "  facet normal nan nan nan\n\touter\nloop\n vertex 0 0 0\n vertex 1 1 0\n vertex 0 1 +0.5\n"
+                        "endloop\nendfacet\nendsolid\n")),
+        "STL in capitals, one line per triangle, no endsolid name");
     // Two solids one after the other: one mesh of both.
     std::string two = ascii_stl() + ascii_stl();
     const Scene both = load_mesh(write("two.stl", two));
@@ -465,7 +493,8 @@ TEST_F(MeshIoTest, StlSolidNamesCaseAndLayout) {
     // A binary STL whose 80-byte header starts with "solid" is binary (its size says so).
     std::string solid_header = binary_stl();
     solid_header.replace(0, 12, "solid binary");
-    expect_same_mesh(load_mesh(write("b.stl", binary_stl())), load_mesh(write("sb.stl", solid_header)), "binary STL named solid");
+    expect_same_mesh(load_mesh(write("b.stl", binary_stl())), load_mesh(write("sb.stl", solid_header)),
+                     "binary STL named solid");
 }
 
 // ---- malformed input: refused, naming file, place and cause -----------------------------
@@ -481,29 +510,38 @@ TEST_F(MeshIoTest, MalformedInputIsRefusedWithPlaceAndCause) {
     };
     const std::vector<Case> cases = {
         // OBJ
-        {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "line 4: face 1 refers to vertex 4 but the file has 3 vertices (OBJ counts from 1)"},
-        {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n", "line 4: face 1: corner '0': vertex index 0 (OBJ counts from 1)"},
+        {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
+         "line 4: face 1 refers to vertex 4 but the file has 3 vertices (OBJ counts from 1)"},
+        {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0\n",
+         "line 4: face 1: corner '0': vertex index 0 (OBJ counts from 1)"},
         {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", "line 4: face 1: refers to vertex -4 but only 3 precede it"},
         {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n", "line 4: face 1 has 2 corners (a face needs at least 3)"},
-        {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/\n", "line 4: face 1: corner '3/' is not v, v/vt, v/vt/vn or v//vn"},
+        {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/\n",
+         "line 4: face 1: corner '3/' is not v, v/vt, v/vt/vn or v//vn"},
         {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: face 1: corner 'x': 'x' is not an index"},
         {"a.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nfoo 1 2\n", "line 5: unknown statement 'foo' (not OBJ)"},
         {"a.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", "line 2: vertex 2: a coordinate is not finite (1, nan, 0)"},
         {"a.obj", "v 0 0 0\nv 1 0 inf\nv 0 1 0\nf 1 2 3\n", "line 2: vertex 2: a coordinate is not finite"},
-        {"a.obj", "v 0 0 0\nv 1 0 1e39\nv 0 1 0\nf 1 2 3\n", "line 2: vertex 2: coordinate '1e39' is too large for a float"},
-        {"a.obj", "v 0 0 0\nv 1 0 1e19\nv 0 1 0\nf 1 2 3\n", "line 2: vertex 2: a coordinate of magnitude 1.844e18 or more"},
+        {"a.obj", "v 0 0 0\nv 1 0 1e39\nv 0 1 0\nf 1 2 3\n",
+         "line 2: vertex 2: coordinate '1e39' is too large for a float"},
+        {"a.obj", "v 0 0 0\nv 1 0 1e19\nv 0 1 0\nf 1 2 3\n",
+         "line 2: vertex 2: a coordinate of magnitude 1.844e18 or more"},
         {"a.obj", "v 0 0 0\nv 1 0 0,5\nv 0 1 0\nf 1 2 3\n", "line 2: vertex 2: coordinate '0,5' is not a number"},
         {"a.obj", "v 0 0 0\nv 1 0 0x1p3\nv 0 1 0\nf 1 2 3\n", "line 2: vertex 2: coordinate '0x1p3' is not a number"},
         // PLY
         {"a.ply", edit(ply, "1 1 0", "1 x 0"), "line 13: vertex 2, property y: 'x' is not a number"},
         {"a.ply", edit(ply, "1 1 0", "1 nan 0"), "line 13: vertex 2: a coordinate is not finite (1, nan, 0)"},
         {"a.ply", edit(ply, "1 1 0", "1 1 0 7"), "line 13: vertex 2 has 1 more values than its properties"},
-        {"a.ply", edit(ply, "4 0 1 2 3", "4 0 1 ? 3"), "line 16: face 1, property vertex_indices: '?' is not a value of its integer type"},
-        {"a.ply", edit(ply, "3 0 1 4", "three 0 1 4"), "line 17: face 2, property vertex_indices: 'three' is not a value of its integer type (0 to 255)"},
-        {"a.ply", edit(ply, "3 0 1 4", "3 0 1 7"), "line 17: face 2 refers to vertex 7 but the file has 5 vertices (PLY counts from 0)"},
+        {"a.ply", edit(ply, "4 0 1 2 3", "4 0 1 ? 3"),
+         "line 16: face 1, property vertex_indices: '?' is not a value of its integer type"},
+        {"a.ply", edit(ply, "3 0 1 4", "three 0 1 4"),
+         "line 17: face 2, property vertex_indices: 'three' is not a value of its integer type (0 to 255)"},
+        {"a.ply", edit(ply, "3 0 1 4", "3 0 1 7"),
+         "line 17: face 2 refers to vertex 7 but the file has 5 vertices (PLY counts from 0)"},
         {"a.ply", edit(ply, "3 0 1 4", "3 0 1 -1"), "line 17: face 2 refers to vertex -1"},
         {"a.ply", edit(ply, "3 0 1 4", "2 0 1"), "line 17: face 2 has 2 corners (a face needs at least 3)"},
-        {"a.ply", edit(ply, "3 0 1 4", "4 0 1 4"), "line 17: face 2, property vertex_indices: the list has 4 values but the line holds 3"},
+        {"a.ply", edit(ply, "3 0 1 4", "4 0 1 4"),
+         "line 17: face 2, property vertex_indices: the list has 4 values but the line holds 3"},
         {"a.ply", edit(ply, "3 0 1 4\n", "3 0 1 4\n3 0 1 2\n"), "line 18: more data after the last element"},
         {"a.ply", edit(ply, "format ascii 1.0", "format ascii 2.0"), "line 2: unsupported PLY version '2.0'"},
         {"a.ply", edit(ply, "format ascii", "format text"), "line 2: unknown format 'text'"},
@@ -517,24 +555,33 @@ TEST_F(MeshIoTest, MalformedInputIsRefusedWithPlaceAndCause) {
         {"a.ply", "ply\n", "no 'end_header' line"},
         {"a.ply", "PLY\nformat ascii 1.0\n", "not a PLY file (the first line is not 'ply')"},
         // OFF
-        {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "line 6: face 1: refers to vertex 3 but the file has 3 vertices (OFF counts from 0)"},
+        {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n",
+         "line 6: face 1: refers to vertex 3 but the file has 3 vertices (OFF counts from 0)"},
         {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n", "line 6: face 1 has 2 corners"},
-        {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", "line 6: face 1: it has 4 corners but the line holds 3 indices"},
-        {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 1 1 1 1 1\n", "line 6: face 1: 5 numbers after its corners"},
+        {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n",
+         "line 6: face 1: it has 4 corners but the line holds 3 indices"},
+        {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 1 1 1 1 1\n",
+         "line 6: face 1: 5 numbers after its corners"},
         {"a.off", "OFF\n3 1 0\n0 0 0\n1 -inf 0\n0 1 0\n3 0 1 2\n", "line 4: vertex 1: a coordinate is not finite"},
-        {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0 0\n0 1 0\n3 0 1 2\n", "line 4: vertex 1: 4 numbers on the line, 'OFF' vertices have 3"},
+        {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0 0\n0 1 0\n3 0 1 2\n",
+         "line 4: vertex 1: 4 numbers on the line, 'OFF' vertices have 3"},
         {"a.off", "OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "line 3: more after 'NVertices NFaces NEdges'"},
         {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n", "line 7: more data after the last face"},
         {"a.off", "XOFF\n3 1 0\n", "line 1: not an OFF header keyword 'XOFF'"},
         {"a.off", "hello\n", "line 1: not an OFF file: expected 'NVertices NFaces NEdges'"},
         // STL
-        {"a.stl", edit(ascii_stl(), "vertex 1 0 0", "vertex 1 0"), "line 6: triangle 1, corner 2: coordinate 'vertex' is not a number"},
+        {"a.stl", edit(ascii_stl(), "vertex 1 0 0", "vertex 1 0"),
+         "line 6: triangle 1, corner 2: coordinate 'vertex' is not a number"},
         {"a.stl", edit(ascii_stl(), "endloop", "endlop"), "line 7: triangle 1: expected 'endloop', found 'endlop'"},
-        {"a.stl", edit(ascii_stl(), "vertex 0 1 0.5", "vertex 0 1e40 0.5"), "line 13: triangle 2, corner 3: coordinate '1e40' is too large for a float"},
-        {"a.stl", edit(ascii_stl(), "vertex 0 1 0.5", "vertex 0 NaN 0.5"), "line 13: triangle 2, corner 3: a coordinate is not finite"},
+        {"a.stl", edit(ascii_stl(), "vertex 0 1 0.5", "vertex 0 1e40 0.5"),
+         "line 13: triangle 2, corner 3: coordinate '1e40' is too large for a float"},
+        {"a.stl", edit(ascii_stl(), "vertex 0 1 0.5", "vertex 0 NaN 0.5"),
+         "line 13: triangle 2, corner 3: a coordinate is not finite"},
         {"a.stl", edit(ascii_stl(), "endsolid square\n", ""), "the file ends without 'endsolid': it is cut short"},
-        {"a.stl", ascii_stl() + "garbage\n", "line 17: expected 'solid' or the end of the file after 'endsolid', found 'garbage'"},
-        {"a.stl", "hello world\n", "corrupt STL: it does not start with 'solid' as ASCII STL does and is too short for binary STL"},
+        {"a.stl", ascii_stl() + "garbage\n",
+         "line 17: expected 'solid' or the end of the file after 'endsolid', found 'garbage'"},
+        {"a.stl", "hello world\n",
+         "corrupt STL: it does not start with 'solid' as ASCII STL does and is too short for binary STL"},
     };
     for (const Case& c : cases) {
         const std::string path = write(c.name, c.bytes);
@@ -546,31 +593,37 @@ TEST_F(MeshIoTest, MalformedInputIsRefusedWithPlaceAndCause) {
     std::string b = binary_ply();
     const size_t data = b.find("end_header\n") + 11;
     put_at(b, data + 4, std::numeric_limits<float>::quiet_NaN());
-    EXPECT_NE(load_error(write("nan.ply", b)).find("byte " + std::to_string(data) + ": vertex 0: a coordinate is not finite"),
-              std::string::npos);
+    EXPECT_NE(
+        load_error(write("nan.ply", b)).find("byte " + std::to_string(data) + ": vertex 0: a coordinate is not finite"),
+        std::string::npos);
     b = binary_ply();
     put_at(b, data + 48 + 13 + 1, int32_t(4));  // face 2's second corner
-    EXPECT_NE(load_error(write("idx.ply", b)).find("byte " + std::to_string(data + 48 + 13) + ": face 2 refers to vertex 4 but the file has 4"),
+    EXPECT_NE(load_error(write("idx.ply", b))
+                  .find("byte " + std::to_string(data + 48 + 13) + ": face 2 refers to vertex 4 but the file has 4"),
               std::string::npos);
     b = binary_ply() + "x";
     EXPECT_NE(load_error(write("tail.ply", b)).find(": 1 bytes after the last element"), std::string::npos);
     b = binary_ply();
     b.replace(b.find("element face 2"), 14, "element face 9");
-    EXPECT_NE(load_error(write("count.ply", b)).find("the file ends inside face 3 (of 9 faces the header declares): it is cut short"),
+    EXPECT_NE(load_error(write("count.ply", b))
+                  .find("the file ends inside face 3 (of 9 faces the header declares): it is cut short"),
               std::string::npos);
     // A count no file of this size could hold is refused before anything is read.
     b = binary_ply();
     b.replace(b.find("element face 2"), 14, "element face 4000000000");
-    EXPECT_NE(load_error(write("count.ply", b)).find("the header declares 4000000000 faces, at least 1 bytes each, but only 26 bytes follow"),
+    EXPECT_NE(load_error(write("count.ply", b))
+                  .find("the header declares 4000000000 faces, at least 1 bytes each, but only 26 bytes follow"),
               std::string::npos);
     b = binary_stl();
     put_at(b, 84 + 50 + 12 + 12 + 8, std::numeric_limits<float>::infinity());
-    EXPECT_NE(load_error(write("inf.stl", b)).find("byte 134: triangle 2, corner 2: a coordinate is not finite"), std::string::npos);
+    EXPECT_NE(load_error(write("inf.stl", b)).find("byte 134: triangle 2, corner 2: a coordinate is not finite"),
+              std::string::npos);
 }
 
 TEST_F(MeshIoTest, BigEndianPly) {
-    std::string b = "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                    "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    std::string b =
+        "ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
     const auto big = [&](auto value) {
         char raw[sizeof value];
         std::memcpy(raw, &value, sizeof value);
@@ -590,7 +643,8 @@ TEST_F(MeshIoTest, BigEndianPly) {
 TEST_F(MeshIoTest, DirectoryAndFifoAreNotRegularFiles) {
     const fs::path dir = dir_ / "folder.ply";
     fs::create_directory(dir);
-    EXPECT_NE(load_error(dir.string()).find("'" + dir.string() + "': not a regular file (a directory)"), std::string::npos);
+    EXPECT_NE(load_error(dir.string()).find("'" + dir.string() + "': not a regular file (a directory)"),
+              std::string::npos);
     const fs::path fifo = dir_ / "pipe.obj";
     ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
     EXPECT_NE(load_error(fifo.string()).find("not a regular file (a FIFO)"), std::string::npos);
@@ -613,7 +667,8 @@ TEST_F(MeshIoTest, CorruptGzip) {
     // A valid gzip stream of a corrupt mesh names the .gz file and the place inside.
     std::string bad = kAsciiPly;
     bad.replace(bad.find("1 1 0"), 5, "1 1 z");
-    EXPECT_NE(load_error(write_gz("bad.ply.gz", bad)).find("bad.ply.gz': line 13: vertex 2, property z"), std::string::npos);
+    EXPECT_NE(load_error(write_gz("bad.ply.gz", bad)).find("bad.ply.gz': line 13: vertex 2, property z"),
+              std::string::npos);
 }
 
 TEST_F(MeshIoTest, EmptyMesh) {

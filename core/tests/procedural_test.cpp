@@ -47,9 +47,9 @@ TEST(Procedural, SameSeedSameSceneOtherSeedOtherScene) {
 
 TEST(Procedural, TriangleCountsMatchTheTarget) {
     // The generators hit the target exactly; the contract is "within a few percent".
-    const std::vector<std::pair<std::string, int64_t>> cases = {
-        {"forest", 252000}, {"forest", 1000}, {"forest", 54321}, {"city", 91000}, {"city", 5000},
-        {"city", 250000},   {"soup", 10000},  {"soup", 1}};
+    const std::vector<std::pair<std::string, int64_t>> cases = {{"forest", 252000}, {"forest", 1000}, {"forest", 54321},
+                                                                {"city", 91000},    {"city", 5000},   {"city", 250000},
+                                                                {"soup", 10000},    {"soup", 1}};
     for (const auto& [kind, n] : cases) {
         const ProceduralScene ps = gen(kind, n, 1);
         EXPECT_EQ(int64_t(ps.scene.triangle_count()), n) << kind << " triangles=" << n;
@@ -73,7 +73,8 @@ TEST(Procedural, EverythingIsFiniteAndColoured) {
         ASSERT_EQ(ps.scene.prim_bounds.size(), ps.scene.triangle_count());
         EXPECT_FALSE(ps.scene.bounds.empty());
         for (size_t i = 0; i < ps.scene.triangle_count(); ++i) {
-            const Vec3 a = ps.scene.vertex(uint32_t(i), 0), b = ps.scene.vertex(uint32_t(i), 1), c = ps.scene.vertex(uint32_t(i), 2);
+            const Vec3 a = ps.scene.vertex(uint32_t(i), 0), b = ps.scene.vertex(uint32_t(i), 1),
+                       c = ps.scene.vertex(uint32_t(i), 2);
             ASSERT_GT(length(cross(b - a, c - a)), 0.0f) << kind << " triangle " << i;
         }
     }

@@ -29,8 +29,8 @@ RadixSortStats expect_matches_stable_sort(std::vector<KeyValue<Key>> items, int 
     for (size_t i = 0; i < items.size(); ++i) {
         if (items[i].key != expected[i].key || items[i].value != expected[i].value) {
             ADD_FAILURE() << "first difference at " << i << " (key_bits " << key_bits << ", digit_bits " << digit_bits
-                          << "): got (" << items[i].key << ", " << items[i].value << "), want ("
-                          << expected[i].key << ", " << expected[i].value << ")";
+                          << "): got (" << items[i].key << ", " << items[i].value << "), want (" << expected[i].key
+                          << ", " << expected[i].value << ")";
             break;
         }
     }

@@ -129,9 +129,11 @@ TEST(RaySets, IdenticalAcrossRunsAndTheSeedChangesThem) {
         EXPECT_EQ(a[i].hash, hash_ray_set(a[i].rays, a[i].query)) << name;
         EXPECT_EQ(a[i].hash, b[i].hash) << name;
         EXPECT_TRUE(same_rays(a[i].rays, b[i].rays)) << name;
-        const size_t answers = a[i].query == RayQuery::Closest ? a[i].reference_hits.size() : a[i].reference_occluded.size();
+        const size_t answers =
+            a[i].query == RayQuery::Closest ? a[i].reference_hits.size() : a[i].reference_occluded.size();
         EXPECT_EQ(answers, a[i].rays.size()) << name;
-        const bool seeded = a[i].kind == RaySetKind::Ao || a[i].kind == RaySetKind::Diffuse || a[i].kind == RaySetKind::Random;
+        const bool seeded =
+            a[i].kind == RaySetKind::Ao || a[i].kind == RaySetKind::Diffuse || a[i].kind == RaySetKind::Random;
         if (seeded) EXPECT_NE(a[i].hash, c[i].hash) << name << " must change with the seed";
         else EXPECT_EQ(a[i].hash, c[i].hash) << name << " does not depend on the seed";
     }
@@ -147,16 +149,16 @@ TEST(RaySets, SizesFollowFromThePrimaryHits) {
                                                  [](const Hit& h) { return h.found(); }));
     ASSERT_GT(hits, 100u);
     EXPECT_EQ(primary.rays.size(), size_t(64 * 48));
-    EXPECT_EQ(sets[1].rays.size(), hits);                        // one shadow ray per hit
+    EXPECT_EQ(sets[1].rays.size(), hits);                           // one shadow ray per hit
     EXPECT_EQ(sets[2].rays.size(), hits * uint64_t(p.ao_samples));  // every bunny triangle hit has a normal
     const GeneratedRaySet& diffuse = sets[3];
     ASSERT_EQ(diffuse.bounce_begin.size(), size_t(p.diffuse_bounces));
     EXPECT_EQ(diffuse.bounce_begin[0], 0u);
     EXPECT_EQ(diffuse.bounce_begin[1], hits);  // bounce 1 leaves every primary hit
     // Bounce 2 starts where bounce 1's reference answers hit, and nowhere else.
-    const uint64_t bounce1_hits = uint64_t(std::count_if(diffuse.reference_hits.begin(),
-                                                         diffuse.reference_hits.begin() + ptrdiff_t(hits),
-                                                         [](const Hit& h) { return h.found(); }));
+    const uint64_t bounce1_hits =
+        uint64_t(std::count_if(diffuse.reference_hits.begin(), diffuse.reference_hits.begin() + ptrdiff_t(hits),
+                               [](const Hit& h) { return h.found(); }));
     EXPECT_EQ(diffuse.rays.size() - diffuse.bounce_begin[1], bounce1_hits);
     EXPECT_EQ(sets[4].rays.size(), p.random_rays);
     const float tmax = p.ao_distance * length(bunny().scene.bounds.diagonal());
@@ -182,7 +184,8 @@ TEST(RaySets, OutOfRangeParametersAreRefused) {
 // integral of cos^2 / pi over the hemisphere = 2/3 (a uniform hemisphere would give 1/2).
 TEST(RaySets, CosineHemisphereHasTheCosineDensity) {
     SplitMix64 rng(7);
-    for (Vec3 n : {Vec3{0, 0, 1}, Vec3{0, 0, -1}, normalize(Vec3{1, -2, 0.5f}), Vec3{1, 0, 0}, normalize(Vec3{0, -1, -1e-7f})}) {
+    for (Vec3 n :
+         {Vec3{0, 0, 1}, Vec3{0, 0, -1}, normalize(Vec3{1, -2, 0.5f}), Vec3{1, 0, 0}, normalize(Vec3{0, -1, -1e-7f})}) {
         double sum = 0;
         const int count = 40000;
         for (int i = 0; i < count; ++i) {
@@ -310,11 +313,14 @@ bool convex(const Scene& s, const std::vector<uint32_t>& comp, uint32_t c) {
         double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
         const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         if (len == 0) continue;
-        auto side = [&](const double* q) { return ((q[0] - p[0][0]) * n[0] + (q[1] - p[0][1]) * n[1] + (q[2] - p[0][2]) * n[2]) / len; };
+        auto side = [&](const double* q) {
+            return ((q[0] - p[0][0]) * n[0] + (q[1] - p[0][1]) * n[1] + (q[2] - p[0][2]) * n[2]) / len;
+        };
         const double flip = side(centre) > 0 ? -1.0 : 1.0;
         for (uint32_t v : verts) {
             const double q[3] = {double(s.vertices[v].x), double(s.vertices[v].y), double(s.vertices[v].z)};
-            if (flip * side(q) > 1e-9 * (1.0 + std::fabs(p[0][0]) + std::fabs(p[0][1]) + std::fabs(p[0][2]))) return false;
+            if (flip * side(q) > 1e-9 * (1.0 + std::fabs(p[0][0]) + std::fabs(p[0][1]) + std::fabs(p[0][2])))
+                return false;
         }
     }
     return true;
@@ -382,15 +388,16 @@ TEST(RaySets, SecondaryRaysNeverFindTheSurfaceTheyLeave) {
             uint64_t self_hits = 0, same_mesh = 0, outward_occluded = 0;
             for (size_t j = 0; j < rays.size(); ++j) {
                 if (hits[j].found() && hits[j].prim == from[j].prim) ++self_hits;
-                if (from[j].outward_from_convex && hits[j].found() && comp[hits[j].prim] == comp[from[j].prim]) ++same_mesh;
+                if (from[j].outward_from_convex && hits[j].found() && comp[hits[j].prim] == comp[from[j].prim])
+                    ++same_mesh;
                 // Outward from a convex mesh the other mesh may lie ahead, so occlusion
                 // alone proves nothing; closest hits say which mesh was found.
                 if (from[j].outward_from_convex && occluded[j] && !hits[j].found()) ++outward_occluded;
             }
-            std::printf("[self-intersection] case %-3s %-14s %zu rays: %llu self hits, %llu outward rays finding their "
-                        "own mesh\n",
-                        id.c_str(), s.label.c_str(), rays.size(), (unsigned long long)self_hits,
-                        (unsigned long long)same_mesh);
+            std::printf(
+                "[self-intersection] case %-3s %-14s %zu rays: %llu self hits, %llu outward rays finding their "
+                "own mesh\n",
+                id.c_str(), s.label.c_str(), rays.size(), (unsigned long long)self_hits, (unsigned long long)same_mesh);
             EXPECT_EQ(self_hits, 0u) << "case " << id << " " << s.label;
             EXPECT_EQ(same_mesh, 0u) << "case " << id << " " << s.label;
             EXPECT_EQ(outward_occluded, 0u) << "case " << id << " " << s.label << ": any-hit and closest-hit disagree";

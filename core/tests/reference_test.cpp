@@ -3,8 +3,8 @@
 // Embree (robust) for whole scenes.
 #include "accelbench/accel/baseline/reference.h"
 
-#include "accelbench/scene/procedural.h"
 #include "accelbench/base/random.h"
+#include "accelbench/scene/procedural.h"
 
 #include <gmpxx.h>
 #include <gtest/gtest.h>
@@ -81,7 +81,8 @@ void check_pair(const Ray& r, Vec3 a, Vec3 b, Vec3 c, Tally& tally) {
     tally.hits += exact.hit;
     tally.through_edges += exact.zero_edges > 0;
     ASSERT_EQ(got, exact.hit) << "ray org (" << r.org.x << "," << r.org.y << "," << r.org.z << ") dir (" << r.dir.x
-                              << "," << r.dir.y << "," << r.dir.z << "), " << exact.zero_edges << " zero edge functions";
+                              << "," << r.dir.y << "," << r.dir.z << "), " << exact.zero_edges
+                              << " zero edge functions";
     if (!got) return;
     const double t_exact = exact.t.get_d();
     EXPECT_LE(std::fabs(h.t - t_exact), 1e-12 * std::fabs(t_exact)) << "t " << h.t << " exact " << t_exact;
@@ -103,7 +104,7 @@ TEST(ReferenceExact, RaysThroughEdgesAndVerticesOfLatticeTriangles) {
         const int k = draw.integer(0, 2);
         const Vec3 from = corners[k], to = corners[(k + 1) % 3];
         const float f = float(draw.integer(0, 8)) / 8.0f;  // 0 and 1: the vertices
-        const Vec3 target = from + (to - from) * f;       // exact: small dyadic numbers
+        const Vec3 target = from + (to - from) * f;        // exact: small dyadic numbers
         if (target == o) continue;
         check_pair({o, 0.0f, target - o, kInfinity}, a, b, c, tally);
     }
@@ -177,7 +178,7 @@ TEST(ReferenceExact, SharedEdgesNeverLeak) {
                     w[k] = mpq_class(double(p[k])) - double(o[k]);
                 }
                 mpq_class det = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-                                u[2] * (v[0] * w[1] - v[1] * w[0]);
+                    u[2] * (v[0] * w[1] - v[1] * w[0]);
                 return sgn(det);
             };
             return side(c) * side(d) < 0;
@@ -221,7 +222,7 @@ TEST(Reference, TiesGoToTheSmallestIdWhateverTheTree) {
     s.vertices.insert(s.vertices.end(), {{0, 0, 0.5f}, {1, 0, 0.5f}, {0, 1, 0.5f}});
     s.triangles.push_back({120, 121, 122});
     s.finalize();
-    const std::vector<Ray> rays = {{{0.2f, 0.2f, 2}, 0, {0, 0, -1}, kInfinity},    // nearest: copy at z = 1
+    const std::vector<Ray> rays = {{{0.2f, 0.2f, 2}, 0, {0, 0, -1}, kInfinity},   // nearest: copy at z = 1
                                    {{0.2f, 0.2f, -1}, 0, {0, 0, 1}, kInfinity}};  // nearest: the one at 0.5
     for (const char* leaf : {"1", "3", "64"}) {
         auto ref = make_accelerator("reference", {{"leaf_size", leaf}});
@@ -240,8 +241,7 @@ TEST(Reference, TiesGoToTheSmallestIdWhateverTheTree) {
 
 TEST(Reference, AgreesWithEmbreeRobustOnSoups) {
     for (auto [n, seed] : {std::pair{1000, 42}, std::pair{20000, 7}}) {
-        const Scene scene =
-            make_procedural("soup", {{"triangles", std::to_string(n)}, {"seed", std::to_string(seed)}});
+        const Scene scene = make_procedural("soup", {{"triangles", std::to_string(n)}, {"seed", std::to_string(seed)}});
         auto ref = make_accelerator("reference", {});
         ref->build(scene);
         test::expect_agrees_with_embree(scene, *ref, test::probe_rays(scene, 4000, uint64_t(seed)),

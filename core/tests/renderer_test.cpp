@@ -10,8 +10,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "accelbench/scene/procedural.h"
 #include "accelbench/accel/registry.h"
+#include "accelbench/scene/procedural.h"
 #include "agreement.h"
 
 using namespace accelbench;
@@ -60,7 +60,8 @@ void expect_same_counts(const TraceOutput& a, const TraceOutput& b) {
     ASSERT_EQ(a.per_pixel.size(), b.per_pixel.size());
     for (size_t i = 0; i < a.per_pixel.size(); ++i) ASSERT_TRUE(same(a.per_pixel[i], b.per_pixel[i])) << "pixel " << i;
     ASSERT_EQ(a.primary_hits.size(), b.primary_hits.size());
-    for (size_t i = 0; i < a.primary_hits.size(); ++i) ASSERT_TRUE(same(a.primary_hits[i], b.primary_hits[i])) << "ray " << i;
+    for (size_t i = 0; i < a.primary_hits.size(); ++i)
+        ASSERT_TRUE(same(a.primary_hits[i], b.primary_hits[i])) << "ray " << i;
 }
 
 }  // namespace
@@ -267,7 +268,8 @@ TEST(Renderer, KeptHitsAreInRowMajorPixelOrder) {
                 const Hit& h = four.primary_hits[first + size_t(k)];
                 if (!h.found()) continue;
                 const Scene& sc = f.ps.scene;
-                const Vec3 p = sc.vertex(h.prim, 0) * (1 - h.u - h.v) + sc.vertex(h.prim, 1) * h.u + sc.vertex(h.prim, 2) * h.v;
+                const Vec3 p =
+                    sc.vertex(h.prim, 0) * (1 - h.u - h.v) + sc.vertex(h.prim, 1) * h.u + sc.vertex(h.prim, 2) * h.v;
                 const Vec3 d = p - f.camera.eye;
                 const float px = (dot(d, right) / dot(d, fwd) / half_w + 1.0f) * 0.5f * kW;
                 const float py = (1.0f - dot(d, up) / dot(d, fwd) / half_h) * 0.5f * kH;
@@ -335,14 +337,12 @@ TEST(Renderer, BruteForceAndEmbreeAgreeOnEveryPrimaryRay) {
             if (!x.found()) continue;
             ++hits;
             if (x.prim == y.prim) continue;
-            if (ulp_distance(x.t, y.t) <= kTieUlps)
-                ++ties;
-            else
-                ++mismatches;
+            if (ulp_distance(x.t, y.t) <= kTieUlps) ++ties;
+            else ++mismatches;
         }
         std::printf("[agreement] %s: %zu primary rays, %zu hits, %zu ties, %zu mismatches; shadow hits %llu vs %llu\n",
-                    kind.c_str(), a.primary_hits.size(), hits, ties, mismatches,
-                    (unsigned long long)a.shadow_hits, (unsigned long long)b.shadow_hits);
+                    kind.c_str(), a.primary_hits.size(), hits, ties, mismatches, (unsigned long long)a.shadow_hits,
+                    (unsigned long long)b.shadow_hits);
         EXPECT_GT(hits, a.primary_hits.size() / 8) << kind;
         EXPECT_EQ(mismatches, 0u) << kind;
         EXPECT_EQ(a.hits, b.hits) << kind;

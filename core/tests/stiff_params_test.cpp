@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "accelbench/verify/error_metrics.h"
+#include "accelbench/accel/registry.h"
 #include "accelbench/base/memory.h"
 #include "accelbench/base/random.h"
-#include "accelbench/accel/registry.h"
+#include "accelbench/verify/error_metrics.h"
 #include "accelbench/verify/robustness_cases.h"
 #include "agreement.h"
 
@@ -80,8 +80,7 @@ bool names_a_parameter(const std::string& message, const Stiff& s) {
 
 TEST_P(StiffParams, TerminatesWithBoundedMemoryOrRefusesClearly) {
     const Stiff& stiff = GetParam();
-    if (!find_accelerator(stiff.accelerator))
-        GTEST_SKIP() << stiff.accelerator << " is not registered in this build";
+    if (!find_accelerator(stiff.accelerator)) GTEST_SKIP() << stiff.accelerator << " is not registered in this build";
     static const Scene scene = dense_cluster();
 
     std::unique_ptr<Accelerator> accel;

@@ -33,9 +33,9 @@ TEST(Triangle, HitsInteriorWithCorrectTAndBarycentrics) {
 
 TEST(Triangle, MissesOutsideAndBehindAndBeyondTmax) {
     Vec3 a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
-    EXPECT_FALSE(hits({{0.8f, 0.8f, -1}, 0, {0, 0, 1}, kInfinity}, a, b, c));  // outside the hypotenuse
-    EXPECT_FALSE(hits({{0.2f, 0.2f, 1}, 0, {0, 0, 1}, kInfinity}, a, b, c));   // triangle behind origin
-    EXPECT_FALSE(hits({{0.2f, 0.2f, -1}, 0, {0, 0, 1}, 0.5f}, a, b, c));       // beyond tmax
+    EXPECT_FALSE(hits({{0.8f, 0.8f, -1}, 0, {0, 0, 1}, kInfinity}, a, b, c));     // outside the hypotenuse
+    EXPECT_FALSE(hits({{0.2f, 0.2f, 1}, 0, {0, 0, 1}, kInfinity}, a, b, c));      // triangle behind origin
+    EXPECT_FALSE(hits({{0.2f, 0.2f, -1}, 0, {0, 0, 1}, 0.5f}, a, b, c));          // beyond tmax
     EXPECT_FALSE(hits({{0.2f, 0.2f, -1}, 1.5f, {0, 0, 1}, kInfinity}, a, b, c));  // before tmin
 }
 
@@ -78,9 +78,9 @@ TEST(Triangle, AxisAlignedRayOnSharedEdgeHitsOne) {
 
 TEST(Triangle, DegenerateTrianglesNeverHitNeverNaN) {
     Ray r{{0.5f, 0.0f, -1}, 0, {0, 0, 1}, kInfinity};
-    EXPECT_FALSE(hits(r, {0, 0, 0}, {1, 0, 0}, {2, 0, 0}));  // collinear, ray through the line
+    EXPECT_FALSE(hits(r, {0, 0, 0}, {1, 0, 0}, {2, 0, 0}));           // collinear, ray through the line
     EXPECT_FALSE(hits(r, {0.5f, 0, 0}, {0.5f, 0, 0}, {0.5f, 0, 0}));  // a point
-    EXPECT_FALSE(hits(r, {0, 0, 0}, {1, 0, 0}, {1, 0, 0}));  // two coincident vertices
+    EXPECT_FALSE(hits(r, {0, 0, 0}, {1, 0, 0}, {1, 0, 0}));           // two coincident vertices
     Ray zero{{0, 0, 0}, 0, {0, 0, 0}, kInfinity};
     EXPECT_FALSE(hits(zero, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}));  // zero direction: invalid ray
     Ray nan_ray{{0, 0, 0}, 0, {NAN, 0, 1}, kInfinity};
@@ -136,14 +136,17 @@ TEST(Triangle, RaysWithoutAnIntervalOrBeyondTheCoordinateLimitMiss) {
 TEST(SlabTest, ConservativeAtCornersAndEdges) {
     uint64_t s = 12345;
     auto next = [&s] {
-        s ^= s << 13; s ^= s >> 7; s ^= s << 17;
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
         return float(s >> 40) / float(1 << 24);
     };
     int clear_hits = 0, culled = 0;
     for (int i = 0; i < 20000; ++i) {
         Vec3 lo{next(), next(), next()}, hi = lo + Vec3{next(), next(), next()};
         const Bounds3 box{lo, hi};
-        Vec3 target{next() < 0.5f ? lo.x : hi.x, next() < 0.5f ? lo.y : hi.y, i % 2 ? lo.z + (hi.z - lo.z) * next() : hi.z};
+        Vec3 target{next() < 0.5f ? lo.x : hi.x, next() < 0.5f ? lo.y : hi.y,
+                    i % 2 ? lo.z + (hi.z - lo.z) * next() : hi.z};
         Vec3 org = Vec3{next(), next(), next()} * 8.0f - Vec3{4, 4, 4};
         Ray r{org, 0, target - org, kInfinity};
         double tn = 0, tf = INFINITY;

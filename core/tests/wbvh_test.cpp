@@ -82,7 +82,8 @@ void expect_valid_tree(const WbvhTree<W>& tree, const Scene& scene, const std::s
                             box.upper.x >= pb.upper.x && box.upper.y >= pb.upper.y && box.upper.z >= pb.upper.z)
                     << what << ": leaf box misses triangle " << prim;
                 for (int v = 0; v < 3; ++v)
-                    EXPECT_EQ((Vec3{p.v[v][0][i % 4], p.v[v][1][i % 4], p.v[v][2][i % 4]}), scene.vertex(prim, v)) << what;
+                    EXPECT_EQ((Vec3{p.v[v][0][i % 4], p.v[v][1][i % 4], p.v[v][2][i % 4]}), scene.vertex(prim, v))
+                        << what;
             }
             if (node.count[k] % 4) {
                 EXPECT_EQ(tree.packets.at(node.child[k] + node.count[k] / 4).prim[3], kInvalidId) << what;
@@ -96,10 +97,8 @@ void expect_valid_tree(const WbvhTree<W>& tree, const Scene& scene, const std::s
 
 void expect_valid(const Wbvh& w, const Scene& scene, const std::string& what) {
     if (scene.triangle_count() == 0) return;
-    if (w.config().width == 8)
-        expect_valid_tree(w.tree8(), scene, what);
-    else
-        expect_valid_tree(w.tree4(), scene, what);
+    if (w.config().width == 8) expect_valid_tree(w.tree8(), scene, what);
+    else expect_valid_tree(w.tree4(), scene, what);
 }
 
 // The vector kernels against the scalar ones on the same tree: every hit record equal bit
@@ -117,11 +116,12 @@ void expect_kernels_identical(const Scene& scene, const Params& params, const st
     sca->closest_hits(rays, hs, ss);
     size_t differ = 0;
     for (size_t i = 0; i < rays.size(); ++i) {
-        const bool same = hv[i].prim == hs[i].prim && std::bit_cast<uint32_t>(hv[i].t) == std::bit_cast<uint32_t>(hs[i].t) &&
-                          std::bit_cast<uint32_t>(hv[i].u) == std::bit_cast<uint32_t>(hs[i].u) &&
-                          std::bit_cast<uint32_t>(hv[i].v) == std::bit_cast<uint32_t>(hs[i].v) &&
-                          sv[i].node_visits == ss[i].node_visits && sv[i].box_tests == ss[i].box_tests &&
-                          sv[i].prim_tests == ss[i].prim_tests;
+        const bool same = hv[i].prim == hs[i].prim &&
+            std::bit_cast<uint32_t>(hv[i].t) == std::bit_cast<uint32_t>(hs[i].t) &&
+            std::bit_cast<uint32_t>(hv[i].u) == std::bit_cast<uint32_t>(hs[i].u) &&
+            std::bit_cast<uint32_t>(hv[i].v) == std::bit_cast<uint32_t>(hs[i].v) &&
+            sv[i].node_visits == ss[i].node_visits && sv[i].box_tests == ss[i].box_tests &&
+            sv[i].prim_tests == ss[i].prim_tests;
         differ += !same;
     }
     EXPECT_EQ(differ, 0u) << what << ": closest hits or counts differ between the simd and scalar kernels";
@@ -133,7 +133,7 @@ void expect_kernels_identical(const Scene& scene, const Params& params, const st
     size_t occ_differ = 0;
     for (size_t i = 0; i < shadows.size(); ++i)
         occ_differ += ov[i] != os[i] || tv[i].node_visits != ts[i].node_visits || tv[i].box_tests != ts[i].box_tests ||
-                      tv[i].prim_tests != ts[i].prim_tests;
+            tv[i].prim_tests != ts[i].prim_tests;
     EXPECT_EQ(occ_differ, 0u) << what << ": any-hit answers or counts differ between the kernels";
     std::printf("[kernels] %s: %zu rays + %zu shadow rays, simd (%s) == scalar\n", what.c_str(), rays.size(),
                 shadows.size(), kWbvhHasVector ? kWbvhWide8Isa : "not compiled in");
@@ -354,7 +354,8 @@ TEST(Wbvh, SingleTriangleAndEmptyScene) {
         auto w = built(one, p);
         EXPECT_EQ(w->build_stats().nodes.value(), 1u);  // a root with one leaf child
         EXPECT_EQ(w->build_stats().leaves.value(), 1u);
-        std::vector<Ray> rays = {{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity}, {{0.4f, 0.4f, 1}, 0, {0, 0, -1}, kInfinity}};
+        std::vector<Ray> rays = {{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity},
+                                 {{0.4f, 0.4f, 1}, 0, {0, 0, -1}, kInfinity}};
         std::vector<Hit> hits(2);
         w->closest_hits(rays, hits);
         EXPECT_EQ(hits[0].prim, 0u);

@@ -97,14 +97,20 @@ struct Goal {
 const std::vector<Goal>& goals() {
     static const std::vector<Goal> list = {
         // Trace: bvh sah ahead of bvh v2's binned binary BVH (1.5-2.0x Embree here).
-        {Phase::render, "bvh_sah", 1.5, ""},       {Phase::render, "kdtree_nlogn", 2.0, ""},
-        {Phase::render, "bvh_median", 2.0, ""},    {Phase::render, "lbvh", 2.0, ""},
-        {Phase::build, "lbvh", 0.25, ""},          {Phase::build, "bvh_median", 0.5, ""},
-        {Phase::build, "bvh_sah", 1.0, ""},        {Phase::build, "kdtree_nlogn", 3.0, ""},
+        {Phase::render, "bvh_sah", 1.5, ""},
+        {Phase::render, "kdtree_nlogn", 2.0, ""},
+        {Phase::render, "bvh_median", 2.0, ""},
+        {Phase::render, "lbvh", 2.0, ""},
+        {Phase::build, "lbvh", 0.25, ""},
+        {Phase::build, "bvh_median", 0.5, ""},
+        {Phase::build, "bvh_sah", 1.0, ""},
+        {Phase::build, "kdtree_nlogn", 3.0, ""},
         // The wide BVH: at or ahead of Embree with 8 children, within 15% with 4 (tinybvh's
         // 4-wide: 1.21-1.37); its build within 20% (tinybvh's 8-wide: 1.23-1.49).
-        {Phase::trace, "wbvh8", 1.0, ""},          {Phase::trace, "wbvh4", 1.15, ""},
-        {Phase::build, "wbvh8", 1.2, ""},          {Phase::build, "wbvh4", 1.2, ""},
+        {Phase::trace, "wbvh8", 1.0, ""},
+        {Phase::trace, "wbvh4", 1.15, ""},
+        {Phase::build, "wbvh8", 1.2, ""},
+        {Phase::build, "wbvh4", 1.2, ""},
     };
     return list;
 }
@@ -167,7 +173,8 @@ void bench_build(benchmark::State& state, const Model& m, const Structure& s) {
     const Scene& scene = m.resolved.scene;
     auto embree = make_accelerator("embree", kEmbreeParams);
     auto subject = make_accelerator(s.accel, s.params);
-    const PairedTimes t = interleaved(state, [&] { embree->build(scene); }, [&] { subject->build(scene); });
+    const PairedTimes t = interleaved(
+        state, [&] { embree->build(scene); }, [&] { subject->build(scene); });
     const double mtris = 1e-6 * double(scene.triangle_count());
     state.counters["Mtris/s"] = mtris / t.subject;
     state.counters["embree_Mtris/s"] = mtris / t.embree;
@@ -177,7 +184,8 @@ void bench_build(benchmark::State& state, const Model& m, const Structure& s) {
 // per shadow batch, into buffers allocated once.
 class RayReplay {
 public:
-    explicit RayReplay(const RenderRays& rays) : rays_(rays), hits_(rays.primary.size()), occluded_(rays.shadow.size()) {}
+    explicit RayReplay(const RenderRays& rays)
+        : rays_(rays), hits_(rays.primary.size()), occluded_(rays.shadow.size()) {}
 
     void trace(const Accelerator& accel) {
         size_t begin = 0;
@@ -214,8 +222,8 @@ void bench_trace(benchmark::State& state, const Model& m, const Structure& s) {
     request.light = model.light;
     const RenderRays rays = render_rays(*embree, model.scene, model.camera, request);
     RayReplay embree_side(rays), subject_side(rays);
-    const PairedTimes t =
-        interleaved(state, [&] { embree_side.trace(*embree); }, [&] { subject_side.trace(*subject); });
+    const PairedTimes t = interleaved(
+        state, [&] { embree_side.trace(*embree); }, [&] { subject_side.trace(*subject); });
     state.counters["Mrays/s"] = 1e-6 * double(embree_side.rays()) / t.subject;
     state.counters["embree_Mrays/s"] = 1e-6 * double(embree_side.rays()) / t.embree;
 }
@@ -240,7 +248,8 @@ public:
             // Repetitions, when shown; otherwise (--benchmark_display_aggregates_only)
             // Google Benchmark's median of each counter, which is the same median.
             const bool repetition = r.run_type == Run::RT_Iteration;
-            const bool median_only = r.run_type == Run::RT_Aggregate && r.aggregate_name == "median" && s.subject_ms.empty();
+            const bool median_only =
+                r.run_type == Run::RT_Aggregate && r.aggregate_name == "median" && s.subject_ms.empty();
             if (!repetition && !median_only) continue;
             s.subject_ms.push_back(r.counters.at("cpu_ms"));
             s.embree_ms.push_back(r.counters.at("embree_ms"));
@@ -249,10 +258,11 @@ public:
 
     void Finalize() override {
         ConsoleReporter::Finalize();
-        std::printf("\nratio to Embree threads=1 (process CPU time, median over repetitions, each side's "
-                    "median measured interleaved within the same benchmark):\n");
-        std::printf("%-18s %-6s %-13s %4s %11s %11s %7s  %-9s %s\n", "model", "phase", "structure", "reps",
-                    "median ms", "embree ms", "ratio", "goal", "");
+        std::printf(
+            "\nratio to Embree threads=1 (process CPU time, median over repetitions, each side's "
+            "median measured interleaved within the same benchmark):\n");
+        std::printf("%-18s %-6s %-13s %4s %11s %11s %7s  %-9s %s\n", "model", "phase", "structure", "reps", "median ms",
+                    "embree ms", "ratio", "goal", "");
         for (const auto& [name, e] : entries_) {
             const auto it = samples_.find(name);
             if (it == samples_.end()) continue;  // filtered out or failed
@@ -267,9 +277,9 @@ public:
                 goal_text = buf;
                 verdict = (absolute ? ms * 1e-3 < g->limit : ratio <= g->limit) ? "met" : "NOT MET";
             }
-            std::printf("%-18s %-6s %-13s %4zu %11.2f %11.2f %6.2fx  %-9s %s\n", e.model.c_str(),
-                        phase_name(e.phase), e.label.c_str(), it->second.subject_ms.size(), ms, embree_ms, ratio,
-                        goal_text.c_str(), verdict.c_str());
+            std::printf("%-18s %-6s %-13s %4zu %11.2f %11.2f %6.2fx  %-9s %s\n", e.model.c_str(), phase_name(e.phase),
+                        e.label.c_str(), it->second.subject_ms.size(), ms, embree_ms, ratio, goal_text.c_str(),
+                        verdict.c_str());
         }
     }
 
@@ -344,10 +354,8 @@ int main(int argc, char** argv) {
                 const Structure* structure = &s;
                 benchmark::RegisterBenchmark(name.c_str(),
                                              [=](benchmark::State& st) {
-                                                 if (phase == Phase::build)
-                                                     bench_build(st, *model, *structure);
-                                                 else
-                                                     bench_trace(st, *model, *structure);
+                                                 if (phase == Phase::build) bench_build(st, *model, *structure);
+                                                 else bench_trace(st, *model, *structure);
                                              })
                     ->UseManualTime()
                     ->Unit(benchmark::kMillisecond);

@@ -24,8 +24,8 @@ void Progress::context(const RunContext& c) {
     out_path_ = c.out;
     to_do_ = c.to_do;
     const std::string in_shard = c.shard && c.shard->count > 1
-                                     ? " in shard " + std::to_string(c.shard->index) + "/" + std::to_string(c.shard->count)
-                                     : "";
+        ? " in shard " + std::to_string(c.shard->index) + "/" + std::to_string(c.shard->count)
+        : "";
     std::fprintf(out_, "accelbench run: %s: %zu combinations%s, %zu already in %s, %zu to go\n", config_name_.c_str(),
                  c.selected, in_shard.c_str(), c.already_done, out_path_.c_str(), c.to_do);
     start_ = Clock::now();
@@ -33,10 +33,11 @@ void Progress::context(const RunContext& c) {
 
 void Progress::starting(const Combination& c) {
     ++begun_;
-    const std::string eta =
-        measured_ ? ", about " + clock_text(measured_s_ / double(measured_) * double(to_do_ - begun_ + 1)) + " left" : "";
-    std::fprintf(out_, "[%zu/%zu] %s  (elapsed %s%s)\n", begun_, to_do_, c.name.c_str(), clock_text(elapsed_s()).c_str(),
-                 eta.c_str());
+    const std::string eta = measured_
+        ? ", about " + clock_text(measured_s_ / double(measured_) * double(to_do_ - begun_ + 1)) + " left"
+        : "";
+    std::fprintf(out_, "[%zu/%zu] %s  (elapsed %s%s)\n", begun_, to_do_, c.name.c_str(),
+                 clock_text(elapsed_s()).c_str(), eta.c_str());
 }
 
 void Progress::report(const CombinationResult& r) {

@@ -53,8 +53,8 @@ void add_measurement(Row& r, const Measurement& m) {
         return;
     }
     r["repetitions"] = std::to_string(m.render_s.size());
-    for (auto [prefix, samples] : {std::pair<std::string, const std::vector<double>*>{"build_s", &m.build_s},
-                                   {"render_s", &m.render_s}}) {
+    for (auto [prefix, samples] :
+         {std::pair<std::string, const std::vector<double>*>{"build_s", &m.build_s}, {"render_s", &m.render_s}}) {
         const Summary s = summarize(*samples);
         r[prefix + "_median"] = number_text(s.median);
         r[prefix + "_mean"] = number_text(s.mean);

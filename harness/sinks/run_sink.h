@@ -18,11 +18,11 @@ namespace accelbench {
 // What the run is, given to every sink once before the first combination.
 struct RunContext {
     const Config& config;
-    const std::string& out;          // the results CSV
+    const std::string& out;  // the results CSV
     std::optional<Shard> shard;
-    size_t selected = 0;             // combinations in this shard
-    size_t already_done = 0;         // of them, already in `out` (--resume)
-    size_t to_do = 0;                // measured (or skipped by a rule) now
+    size_t selected = 0;      // combinations in this shard
+    size_t already_done = 0;  // of them, already in `out` (--resume)
+    size_t to_do = 0;         // measured (or skipped by a rule) now
 };
 
 // One combination's outcome.
@@ -34,8 +34,8 @@ struct CombinationResult {
     // The model did not load: no row at all (nothing that could be taken for a result;
     // --resume runs the combination once the model is fixed). Empty when it did.
     std::string load_error;
-    Measurement measurement;             // status ok, skipped, error or timeout
-    std::optional<double> measuring_s;   // wall time of the measurement, when one was made
+    Measurement measurement;            // status ok, skipped, error or timeout
+    std::optional<double> measuring_s;  // wall time of the measurement, when one was made
 
     bool written() const { return load_error.empty(); }
 };

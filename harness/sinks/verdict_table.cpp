@@ -37,7 +37,8 @@ void VerdictTable::add(const std::string& case_label, const Combination& c, cons
     auto verdict = m.columns.find("verdict");
     if (m.status == "ok" && verdict != m.columns.end()) {
         cell.text = verdict->second == "pass" ? "pass" : "FAIL";
-        if (cell.text == "FAIL") cell.details = concat(m.columns.at("verdict_counts"), m.message.empty() ? "" : ": ", m.message);
+        if (cell.text == "FAIL")
+            cell.details = concat(m.columns.at("verdict_counts"), m.message.empty() ? "" : ": ", m.message);
     } else {
         cell.text = m.status == "timeout" ? "t/o" : m.status == "skipped" ? "skip" : "err";
         if (m.status != "skipped") cell.details = concat(m.status, ": ", m.message);
@@ -53,7 +54,8 @@ void VerdictTable::print(std::FILE* out) const {
     std::vector<std::vector<std::string>> grid(rows_.size(), std::vector<std::string>(columns_.size()));
     for (const auto& c : cells_) grid[c.row][c.column] = c.text;
     std::fprintf(out, "%-*s", int(label_width), "case");
-    for (size_t j = 0; j < columns_.size(); ++j) std::fprintf(out, " %5s", concat("[", std::to_string(j + 1), "]").c_str());
+    for (size_t j = 0; j < columns_.size(); ++j)
+        std::fprintf(out, " %5s", concat("[", std::to_string(j + 1), "]").c_str());
     std::fprintf(out, "\n");
     std::map<std::string, size_t> totals;
     for (size_t i = 0; i < rows_.size(); ++i) {

@@ -115,7 +115,8 @@ accelerators:
     EXPECT_TRUE(has_issue(e, 3, 38, "accelerators[0].embree.threads", "`from` (8) is above `to` (1)"));
     EXPECT_TRUE(has_issue(e, 4, 38, "accelerators[1].embree.threads", "exactly one of `step` or `scale`"));
     EXPECT_TRUE(has_issue(e, 5, 45, "accelerators[2].embree.threads.from", "a log2 range starts above 0"));
-    EXPECT_TRUE(has_issue(e, 6, 38, "accelerators[3].embree.threads", "the range's value 1501: value 1501 is out of range"));
+    EXPECT_TRUE(
+        has_issue(e, 6, 38, "accelerators[3].embree.threads", "the range's value 1501: value 1501 is out of range"));
     EXPECT_TRUE(has_issue(e, 7, 38, "accelerators[4].embree.threads.to", "missing key 'to'"));
 }
 
@@ -189,15 +190,15 @@ TEST_F(CombinationsTest, SkipRules) {
     const Config c = load("a.yaml", kConfig);
     const auto all = expand(c);
     const uint64_t bunny = 69451, soup = 2000;
-    EXPECT_FALSE(skip_reason(c, all[0], bunny));                      // embree low on the bunny
-    EXPECT_FALSE(skip_reason(c, all[4], bunny));                      // embree high: rule 2 is for the soup
-    EXPECT_EQ(skip_reason(c, all[6], bunny), "O(N*P) is too slow");   // brute_force, 69k > 5000
+    EXPECT_FALSE(skip_reason(c, all[0], bunny));                     // embree low on the bunny
+    EXPECT_FALSE(skip_reason(c, all[4], bunny));                     // embree high: rule 2 is for the soup
+    EXPECT_EQ(skip_reason(c, all[6], bunny), "O(N*P) is too slow");  // brute_force, 69k > 5000
     EXPECT_EQ(skip_reason(c, all[8], bunny), "O(N*P) is too slow");
-    EXPECT_FALSE(skip_reason(c, all[15], soup));                      // brute_force, 2000 <= 5000
-    EXPECT_FALSE(skip_reason(c, all[12], soup));                       // soup, embree medium/true
-    EXPECT_EQ(skip_reason(c, all[13], soup), "not needed");           // soup, embree high/false
-    EXPECT_EQ(skip_reason(c, all[14], soup), "not needed");           // soup, embree high/true
-    EXPECT_FALSE(skip_reason(c, all[6], 5000));                       // "above" is strict
+    EXPECT_FALSE(skip_reason(c, all[15], soup));             // brute_force, 2000 <= 5000
+    EXPECT_FALSE(skip_reason(c, all[12], soup));             // soup, embree medium/true
+    EXPECT_EQ(skip_reason(c, all[13], soup), "not needed");  // soup, embree high/false
+    EXPECT_EQ(skip_reason(c, all[14], soup), "not needed");  // soup, embree high/true
+    EXPECT_FALSE(skip_reason(c, all[6], 5000));              // "above" is strict
 }
 
 TEST_F(CombinationsTest, ShardsCoverEveryCombinationExactlyOnce) {

@@ -91,26 +91,28 @@ TEST_F(ConfigTest, DefaultsAndTheFileStemAsName) {
     EXPECT_EQ(c.render.height, 480);
     EXPECT_EQ(c.render.threads, 1);
     EXPECT_FALSE(c.render.shading);  // configs time tracing, not shading
-    EXPECT_TRUE(c.errors);            // every row says how wrong it is unless told not to
+    EXPECT_TRUE(c.errors);           // every row says how wrong it is unless told not to
 }
 
 TEST_F(ConfigTest, RobustnessCasesAreModels) {
     const Config c = load_config(write("c.yaml", R"(errors: false
 models: [{case: all}]
 accelerators: [{name: bvh}]
-)"), registry());
+)"),
+                                 registry());
     EXPECT_FALSE(c.errors);
     ASSERT_EQ(c.models.size(), robustness_case_list().size());
     EXPECT_EQ(c.models[0].kind, ModelSpec::Kind::Case);
     EXPECT_EQ(c.models[0].label, "case-1:closed-meshes");
     EXPECT_EQ(c.models[0].key, "case:1");
-    const Config one = load_config(write("d.yaml", "models: [{case: 3b, label: tiny}]\naccelerators: [{name: bvh}]\n"),
-                                   registry());
+    const Config one =
+        load_config(write("d.yaml", "models: [{case: 3b, label: tiny}]\naccelerators: [{name: bvh}]\n"), registry());
     ASSERT_EQ(one.models.size(), 1u);
     EXPECT_EQ(one.models[0].label, "tiny");
     EXPECT_EQ(one.models[0].name, "3b");
     // The same case twice is the same model twice.
-    const ConfigError e = load_error(write("e.yaml", "models: [{case: all}, {case: 3b}]\naccelerators: [{name: bvh}]\n"));
+    const ConfigError e =
+        load_error(write("e.yaml", "models: [{case: all}, {case: 3b}]\naccelerators: [{name: bvh}]\n"));
     EXPECT_TRUE(has_issue(e, 1, 23, "models[1]", "the same model as models[0] ('case-3b:closed-meshes-scaled-2^-64')"));
 }
 
@@ -132,7 +134,8 @@ accelerators: [{name: embree}]
 }
 
 TEST_F(ConfigTest, UnknownKeyWithSuggestion) {
-    const std::string p = write("a.yaml", "name: t\nrepetition: 3\nmodels: [stanford-bunny]\naccelerators: [{name: embree}]\n");
+    const std::string p =
+        write("a.yaml", "name: t\nrepetition: 3\nmodels: [stanford-bunny]\naccelerators: [{name: embree}]\n");
     const ConfigError e = load_error(p);
     EXPECT_TRUE(has_issue(e, 2, 1, "repetition", "did you mean 'repetitions'"));
     EXPECT_EQ(e.issues()[0].mark.file, p);
@@ -167,7 +170,8 @@ models: [igea]
 
 TEST_F(ConfigTest, MissingKeysAreReportedAtTheirMapping) {
     // yaml-cpp has no mark for a key that is not there: the mapping's mark stands in.
-    const ConfigError e = load_error(write("a.yaml", "models: [stanford-bunny]\naccelerators:\n  - params: {threads: 1}\n"));
+    const ConfigError e =
+        load_error(write("a.yaml", "models: [stanford-bunny]\naccelerators:\n  - params: {threads: 1}\n"));
     EXPECT_TRUE(has_issue(e, 3, 5, "accelerators[0].name", "missing key 'name'"));
     const ConfigError top = load_error(write("b.yaml", "name: x\nmodels: [igea]\n"));
     EXPECT_TRUE(has_issue(top, 1, 1, "accelerators", "missing key 'accelerators'"));
@@ -194,7 +198,8 @@ accelerators: [{name: embree}]
 TEST_F(ConfigTest, AMeshPathThatIsNotARegularFile) {
     std::filesystem::create_directory(dir.path() / "folder.obj");
     ASSERT_EQ(mkfifo((dir.path() / "pipe.ply").c_str(), 0600), 0);
-    const ConfigError e = load_error(write("a.yaml", "models: [{path: folder.obj}, {path: pipe.ply}]\naccelerators: [{name: embree}]\n"));
+    const ConfigError e =
+        load_error(write("a.yaml", "models: [{path: folder.obj}, {path: pipe.ply}]\naccelerators: [{name: embree}]\n"));
     EXPECT_EQ(e.issues().size(), 2u) << all_issues(e);
     EXPECT_TRUE(has_issue(e, 1, 17, "models[0].path", "not a regular file (a mesh file is needed)")) << all_issues(e);
     EXPECT_TRUE(has_issue(e, 1, 37, "models[1].path", "not a regular file (a mesh file is needed)")) << all_issues(e);
@@ -251,7 +256,8 @@ accelerators:
       "[max_triangles, force]": [[100, true], [200]]
       max_triangles: 5
 )"));
-    EXPECT_TRUE(has_issue(e, 5, 47, "accelerators[0].brute_force.[max_triangles, force][1]", "expected a tuple of 2 values"));
+    EXPECT_TRUE(
+        has_issue(e, 5, 47, "accelerators[0].brute_force.[max_triangles, force][1]", "expected a tuple of 2 values"));
     EXPECT_TRUE(has_issue(e, 6, 7, "accelerators[0].brute_force.max_triangles", "given twice"));
 }
 
@@ -317,9 +323,11 @@ TEST_F(ConfigTest, YamlSyntaxErrorHasItsPosition) {
 
 TEST_F(ConfigTest, BadRayFileLinesNameTheRayFile) {
     write_triangle_case(dir.path());
-    const std::string rays = write("bad.rays.csv", "ox,oy,oz,dx,dy,dz,tmax\n0,0,1,0,0,-1,5\n0,0,1,0,0\n0,0,1,0,x,-1,5\n");
-    const ConfigError e = load_error(write("a.yaml", "models: [{path: tri.obj, rays: {file: bad.rays.csv}}]\n"
-                                                     "accelerators: [{name: embree}]\n"));
+    const std::string rays =
+        write("bad.rays.csv", "ox,oy,oz,dx,dy,dz,tmax\n0,0,1,0,0,-1,5\n0,0,1,0,0\n0,0,1,0,x,-1,5\n");
+    const ConfigError e = load_error(write("a.yaml",
+                                           "models: [{path: tri.obj, rays: {file: bad.rays.csv}}]\n"
+                                           "accelerators: [{name: embree}]\n"));
     ASSERT_EQ(e.issues().size(), 2u) << all_issues(e);
     EXPECT_EQ(e.issues()[0].mark.file, rays);
     EXPECT_TRUE(has_issue(e, 3, 1, "models[0].rays.file", "expected 7 comma-separated numbers, got 5"));
@@ -329,8 +337,9 @@ TEST_F(ConfigTest, BadRayFileLinesNameTheRayFile) {
 TEST_F(ConfigTest, RayFileNeedsItsHeader) {
     write_triangle_case(dir.path());
     write("nohead.rays.csv", "0,0,1,0,0,-1\n");
-    const ConfigError e = load_error(write("a.yaml", "models: [{path: tri.obj, rays: {file: nohead.rays.csv}}]\n"
-                                                     "accelerators: [{name: embree}]\n"));
+    const ConfigError e = load_error(write("a.yaml",
+                                           "models: [{path: tri.obj, rays: {file: nohead.rays.csv}}]\n"
+                                           "accelerators: [{name: embree}]\n"));
     EXPECT_TRUE(has_issue(e, 1, 1, "models[0].rays.file", "expected the header 'ox,oy,oz,dx,dy,dz'"));
 }
 

@@ -54,8 +54,9 @@ TEST(CostImage, WritesHeatmapsAndPerPixelValues) {
 TEST(CostImage, RenderCommandWritesThem) {
     TempDir dir("accelbench-cost-render-");
     const std::string prefix = (dir.path() / "soup-lbvh").string();
-    std::vector<std::string> args = {"--model", "procedural:soup,triangles=300", "--accel", "lbvh",
-                                     "--width", "16", "--height", "12", "--cost-out", prefix};
+    std::vector<std::string> args = {
+        "--model", "procedural:soup,triangles=300", "--accel", "lbvh", "--width", "16", "--height", "12", "--cost-out",
+        prefix};
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     ASSERT_EQ(render_command(int(argv.size()), argv.data()), 0);

@@ -20,7 +20,7 @@ namespace fs = std::filesystem;
 std::string octahedron_obj(int s) {
     const std::string p = std::to_string(s), m = std::to_string(-s);
     return "v " + p + " 0 0\nv " + m + " 0 0\nv 0 " + p + " 0\nv 0 " + m + " 0\nv 0 0 " + p + "\nv 0 0 " + m +
-           "\nf 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
+        "\nf 1 3 5\nf 3 2 5\nf 2 4 5\nf 4 1 5\nf 3 1 6\nf 2 3 6\nf 4 2 6\nf 1 4 6\n";
 }
 
 class DerivedModelTest : public ::testing::Test {

@@ -132,8 +132,9 @@ TEST_F(HostileInputTest, RepetitionsWithoutTheirResultsAreNeverMixedWithANewRun)
 // Minimal result files in the shape merge reads (combo_id, status, a measured column and
 // provenance), each with one hostile row.
 TEST_F(HostileInputTest, MergeRefusesRowsThatAreNotResults) {
-    const std::string header = "combo_id,params,status,rays,render_s_median,git_sha,git_dirty,compiler,build_type,cpu,"
-                               "embree_version,isa\n";
+    const std::string header =
+        "combo_id,params,status,rays,render_s_median,git_sha,git_dirty,compiler,build_type,cpu,"
+        "embree_version,isa\n";
     const std::string prov = ",abc,false,gcc,Release,cpu,3,sse2\n";
     const std::string good = "a1,,ok,10,0.5" + prov;
     const std::vector<std::pair<std::string, std::string>> cases = {
@@ -197,8 +198,8 @@ accelerators:
 
 TEST_F(HostileInputTest, ASecondYamlDocumentIsRefused) {
     const std::string base = read_file(config);
-    for (const std::string& rest : {std::string("---\nname: other\n"), std::string("---\n"),
-                                    std::string("...\n---\nmodels: []\n")}) {
+    for (const std::string& rest :
+         {std::string("---\nname: other\n"), std::string("---\n"), std::string("...\n---\nmodels: []\n")}) {
         const std::string two = write_file(dir.path(), "two.yaml", base + rest);
         const ConfigError e = load_error(two);
         ASSERT_EQ(e.issues().size(), 1u) << rest;
@@ -230,7 +231,8 @@ accelerators: [{name: bvh}]
 )");
     EXPECT_TRUE(has_issue(load_error(large), 2, 10, "models[0]", "width x height x spp = 67108864 primary rays"));
     // Without error columns nothing keeps a hit per ray: accepted.
-    EXPECT_NO_THROW(load_config(write_file(dir.path(), "noerr.yaml", read_file(large) + "errors: false\n"), registry()));
+    EXPECT_NO_THROW(
+        load_config(write_file(dir.path(), "noerr.yaml", read_file(large) + "errors: false\n"), registry()));
 }
 
 TEST_F(HostileInputTest, TimeoutBoundsTheReferencePassToo) {

@@ -97,8 +97,14 @@ public:
                     break;
                 case 7:  // overwrite 4 bytes with a hostile binary value (counts, floats)
                     if (n >= 4) {
-                        const uint32_t values[] = {0xffffffffu, 0x7fc00000u /* NaN */, 0x7f800000u /* inf */,
-                                                   0x80000000u, 0x0000000au, 0x5f800000u /* 1.8e19 */, 3, 0};
+                        const uint32_t values[] = {0xffffffffu,
+                                                   0x7fc00000u /* NaN */,
+                                                   0x7f800000u /* inf */,
+                                                   0x80000000u,
+                                                   0x0000000au,
+                                                   0x5f800000u /* 1.8e19 */,
+                                                   3,
+                                                   0};
                         const uint32_t v = values[pick(std::size(values))];
                         std::memcpy(s.data() + pick(n - 3), &v, 4);
                     }
@@ -118,10 +124,13 @@ private:
         return bytes[pick(sizeof bytes - 1)];
     }
     std::string hostile_word() {
-        static const char* const words[] = {"nan", "-inf", "inf", "1e39", "-1e400", "1e-50", "1e19", "0", "-1",
-                                            "-0", "4294967295", "4294967296", "-2147483648", "2147483647",
-                                            "99999999999999999999", "+", "0x10", "1.5.5", "", "#", "\\",
-                                            "3", "4", "255", "256", "1000000000"};
+        static const char* const words[] = {
+            "nan",        "-inf",       "inf",         "1e39",       "-1e400",
+            "1e-50",      "1e19",       "0",           "-1",         "-0",
+            "4294967295", "4294967296", "-2147483648", "2147483647", "99999999999999999999",
+            "+",          "0x10",       "1.5.5",       "",           "#",
+            "\\",         "3",          "4",           "255",        "256",
+            "1000000000"};
         return words[pick(std::size(words))];
     }
     void replace_word(std::string& s, const std::string& word) {
@@ -146,21 +155,24 @@ struct Seed {
 
 std::vector<Seed> mesh_seeds() {
     std::vector<Seed> seeds = {
-        {"obj", "# tiny\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0 1\nv 0.5 0.5 2.25\nvt 0 0\nvn 0 0 1\n"
-                "f 1/1/1 2/1/1 3/1/1 4/1/1\nf -5 -4 \\\n -1\ng g\nusemtl m\n"},
-        {"ply", "ply\nformat ascii 1.0\ncomment c\nelement vertex 5\nproperty float x\nproperty float y\n"
-                "property float z\nproperty uchar red\nelement face 2\nproperty list uchar int vertex_indices\n"
-                "end_header\n0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n0.5 0.5 2.25 5\n4 0 1 2 3\n3 0 1 4\n"},
+        {"obj",
+         "# tiny\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0 1\nv 0.5 0.5 2.25\nvt 0 0\nvn 0 0 1\n"
+         "f 1/1/1 2/1/1 3/1/1 4/1/1\nf -5 -4 \\\n -1\ng g\nusemtl m\n"},
+        {"ply",
+         "ply\nformat ascii 1.0\ncomment c\nelement vertex 5\nproperty float x\nproperty float y\n"
+         "property float z\nproperty uchar red\nelement face 2\nproperty list uchar int vertex_indices\n"
+         "end_header\n0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n0.5 0.5 2.25 5\n4 0 1 2 3\n3 0 1 4\n"},
         {"off", "OFF\n# c\n5 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0.5 0.5 2.25\n4 0 1 2 3\n3 0 1 4 1 0 0\n"},
         {"off", "COFF 4 2 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1\n1 1 0 1 1 1\n0 1 0 1 1 1 1\n3 0 1 2\n3 0 2 3\n"},
-        {"stl", "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nendloop\n"
-                "endfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 1 0\nvertex 0 1 0.5\n"
-                "endloop\nendfacet\nendsolid s\n"},
+        {"stl",
+         "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nendloop\n"
+         "endfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 1 0\nvertex 0 1 0.5\n"
+         "endloop\nendfacet\nendsolid s\n"},
     };
     for (const char* format : {"binary_little_endian", "binary_big_endian"}) {
         std::string b = std::string("ply\nformat ") + format +
-                        " 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty double z\n"
-                        "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
+            " 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty double z\n"
+            "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
         const bool big = std::string(format) == "binary_big_endian";
         const auto value = [&](auto v) {
             char raw[sizeof v];
@@ -205,13 +217,12 @@ void expect_consistent(const Scene& s, const MeshLoadInfo& info, const std::stri
         for (uint32_t i : t)
             if (i < used.size()) used[i] = true;
     for (const Vec3& v : s.vertices) {
-        ASSERT_TRUE(within_coordinate_limit(v)) << "vertex " << v.x << " " << v.y << " " << v.z << " from "
-                                                << escaped(input);
+        ASSERT_TRUE(within_coordinate_limit(v))
+            << "vertex " << v.x << " " << v.y << " " << v.z << " from " << escaped(input);
         const Bounds3& b = s.bounds;
         const bool inside = b.lower.x <= v.x && v.x <= b.upper.x && b.lower.y <= v.y && v.y <= b.upper.y &&
-                            b.lower.z <= v.z && v.z <= b.upper.z;
-        ASSERT_TRUE(inside || !used[size_t(&v - s.vertices.data())])
-            << escaped(input);
+            b.lower.z <= v.z && v.z <= b.upper.z;
+        ASSERT_TRUE(inside || !used[size_t(&v - s.vertices.data())]) << escaped(input);
     }
     for (const auto& t : s.triangles)
         for (uint32_t i : t) ASSERT_LT(i, s.vertex_count()) << escaped(input);

@@ -15,8 +15,11 @@ using namespace testing_util;
 std::string dump(const std::string& trigger, const std::string& totals_line) {
     return "# callgrind format\nversion: 1\ncreator: callgrind-3.19.0\npid: 23145\ncmd:  ./t\npart: 1\n\n\n"
            "desc: I1 cache: \ndesc: D1 cache: \ndesc: LL cache: \n\ndesc: Timerange: Basic block 0 - 100002\n"
-           "desc: Trigger: " + trigger + "\n\npositions: line\nevents: Ir\nsummary: 0\n\n\nfl=(1) t.c\nfn=(1) main\n"
-           "16 600004\n\n" + totals_line + "\n";
+           "desc: Trigger: " +
+        trigger +
+        "\n\npositions: line\nevents: Ir\nsummary: 0\n\n\nfl=(1) t.c\nfn=(1) main\n"
+        "16 600004\n\n" +
+        totals_line + "\n";
 }
 
 TEST(InstructionsTest, ReadsTheTotalsOfTheDumpWithTheDescription) {

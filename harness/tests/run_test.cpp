@@ -88,7 +88,7 @@ TEST_F(RunTest, WritesOneRowPerCombination) {
     const auto& em = by_name.at("soup(triangles=1000,seed=3)/embree/low");
     EXPECT_EQ(em.at("status"), "ok");
     EXPECT_EQ(em.at(param_column("threads")), "1");  // the render threads
-    EXPECT_EQ(em.at("prim_tests"), "");      // Embree does not count: missing, not zero
+    EXPECT_EQ(em.at("prim_tests"), "");              // Embree does not count: missing, not zero
     EXPECT_EQ(em.at("nodes"), "");
 
     const auto& rays = by_name.at("tri-rays/brute_force/");
@@ -152,7 +152,8 @@ accelerators: [{name: bvh}, {name: kdtree}]
     for (size_t i = 0; i < d.rows.size(); ++i) {
         auto r = as_map(d, i);
         EXPECT_EQ(r["status"], "ok");
-        for (const char* col : {"false_misses", "t_err_ulp_p50", "image_rmse", "hole_pixels"}) EXPECT_EQ(r[col], "") << col;
+        for (const char* col : {"false_misses", "t_err_ulp_p50", "image_rmse", "hole_pixels"})
+            EXPECT_EQ(r[col], "") << col;
         EXPECT_FALSE(r["peak_rss_bytes"].empty());
     }
 }
@@ -184,8 +185,9 @@ accelerators: [{name: brute_force}, {name: bvh}, {name: kdtree, params: {max_pri
     const auto& closed = by.at("case-1:closed-meshes/bvh");
     EXPECT_EQ(closed.at("false_misses"), "0");  // watertight: no leaks, as the reference
     EXPECT_NE(closed.at("verdict_counts").find("leaks=0 "), std::string::npos);
-    EXPECT_EQ(closed.at("max_depth"), closed.at("verdict_counts").substr(closed.at("verdict_counts").find("depth=") + 6,
-                                                                         closed.at("max_depth").size()));
+    EXPECT_EQ(closed.at("max_depth"),
+              closed.at("verdict_counts")
+                  .substr(closed.at("verdict_counts").find("depth=") + 6, closed.at("max_depth").size()));
     const auto& nan = by.at("case-14a:nan-vertex/kdtree");
     EXPECT_NE(nan.at("message").find("rejected at load"), std::string::npos) << nan.at("message");
     EXPECT_EQ(nan.at("false_misses"), "");  // nothing was traced
@@ -194,7 +196,8 @@ accelerators: [{name: brute_force}, {name: bvh}, {name: kdtree, params: {max_pri
     const auto& far = by.at("case-17:distant-camera/brute_force");
     for (const char* accel : {"bvh", "kdtree"})
         for (const char* col : {"false_misses", "false_hits", "prim_mismatches", "t_err_ulp_max"})
-            EXPECT_EQ(by.at(std::string("case-17:distant-camera/") + accel).at(col), far.at(col)) << accel << " " << col;
+            EXPECT_EQ(by.at(std::string("case-17:distant-camera/") + accel).at(col), far.at(col))
+                << accel << " " << col;
 
     EXPECT_NE(table.find("Robustness verdicts"), std::string::npos) << table;
     EXPECT_NE(table.find("[3] kdtree:max_depth=100,max_prims=1"), std::string::npos) << table;
@@ -222,7 +225,9 @@ accelerators: [{name: bvh}, {name: embree}]
     for (size_t i = 0; i < 2; ++i) EXPECT_EQ(as_map(d, i)["model"], "soup(triangles=1000)");
     EXPECT_NE(err.find("cannot load empty.obj"), std::string::npos) << err;
     // The place and the cause as the file has them: OBJ's line, face and vertex numbers.
-    EXPECT_NE(err.find("corrupt.obj': line 4: face 1 refers to vertex 9 but the file has 3 vertices"), std::string::npos) << err;
+    EXPECT_NE(err.find("corrupt.obj': line 4: face 1 refers to vertex 9 but the file has 3 vertices"),
+              std::string::npos)
+        << err;
     EXPECT_NE(err.find("nan.obj': line 3: vertex 3: a coordinate is not finite"), std::string::npos) << err;
     EXPECT_NE(err.find("6 combinations not run and not written: 3 models did not load"), std::string::npos) << err;
 }
@@ -337,7 +342,8 @@ accelerators:
     for (size_t i = 0; i < 2; ++i) {
         auto r = as_map(d, i);
         EXPECT_EQ(r["status"], "timeout");
-        EXPECT_NE(r["message"].find("exceeded the time limit (timeout_s = 0.001 s)"), std::string::npos) << r["message"];
+        EXPECT_NE(r["message"].find("exceeded the time limit (timeout_s = 0.001 s)"), std::string::npos)
+            << r["message"];
         EXPECT_EQ(r["render_s_median"], "");
         EXPECT_EQ(r["rays"], "");
     }
@@ -392,7 +398,8 @@ TEST(ShippedConfigsTest, SmokeRunsCleanInSeconds) {
     size_t skipped = 0;
     for (size_t i = 0; i < d.rows.size(); ++i) {
         auto r = as_map(d, i);
-        EXPECT_TRUE(r["status"] == "ok" || r["status"] == "skipped") << r["model"] << " " << r["accel"] << ": " << r["message"];
+        EXPECT_TRUE(r["status"] == "ok" || r["status"] == "skipped")
+            << r["model"] << " " << r["accel"] << ": " << r["message"];
         skipped += r["status"] == "skipped";
     }
     EXPECT_EQ(skipped, 2u);  // brute force on the bunny and the forest

@@ -27,7 +27,7 @@ TEST(StatsTest, OneSampleHasNoSpreadOrInterval) {
 }
 
 TEST(StatsTest, CoverageIsTheBinomialSum) {
-    EXPECT_DOUBLE_EQ(median_interval_coverage(3, 1), 0.75);     // 6/8
+    EXPECT_DOUBLE_EQ(median_interval_coverage(3, 1), 0.75);  // 6/8
     EXPECT_DOUBLE_EQ(median_interval_coverage(5, 1), 30.0 / 32);
     EXPECT_NEAR(median_interval_coverage(10, 2), (1024.0 - 2 * (1 + 10)) / 1024, 1e-12);
     EXPECT_NEAR(median_interval_coverage(10, 3), (1024.0 - 2 * (1 + 10 + 45)) / 1024, 1e-12);

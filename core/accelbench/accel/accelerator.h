@@ -53,8 +53,7 @@ public:
     // Closest hit of each ray within [ray.tmin, ray.tmax). hits[i] is overwritten.
     // When stats is non-empty it has one entry per ray and receives that ray's counts
     // (added to what is there).
-    virtual void closest_hits(std::span<const Ray> rays, std::span<Hit> hits,
-                              std::span<RayStats> stats = {}) const = 0;
+    virtual void closest_hits(std::span<const Ray> rays, std::span<Hit> hits, std::span<RayStats> stats = {}) const = 0;
 
     // Whether anything lies within [ray.tmin, ray.tmax) (shadow rays): occluded[i] is 1
     // or 0. May stop at the first hit found.
@@ -71,8 +70,7 @@ public:
 template <class Derived>
 class AcceleratorBase : public Accelerator {
 public:
-    void closest_hits(std::span<const Ray> rays, std::span<Hit> hits,
-                      std::span<RayStats> stats = {}) const override {
+    void closest_hits(std::span<const Ray> rays, std::span<Hit> hits, std::span<RayStats> stats = {}) const override {
         const Derived& self = static_cast<const Derived&>(*this);
         if (stats.empty()) {
             NoCounters none;
@@ -127,8 +125,8 @@ struct AcceleratorInfo {
 
 // The per-ray members are templates defined in the structure's .cpp; this instantiates
 // them there for both counter types, the timed (NoCounters) and the counting (RayStats).
-#define ACCELBENCH_INSTANTIATE_RAY_QUERIES(Structure)                                   \
-    template void Structure::intersect(const Ray&, Hit&, NoCounters&) const;            \
-    template void Structure::intersect(const Ray&, Hit&, RayStats&) const;              \
-    template bool Structure::occluded(const Ray&, NoCounters&) const;                   \
+#define ACCELBENCH_INSTANTIATE_RAY_QUERIES(Structure)                        \
+    template void Structure::intersect(const Ray&, Hit&, NoCounters&) const; \
+    template void Structure::intersect(const Ray&, Hit&, RayStats&) const;   \
+    template bool Structure::occluded(const Ray&, NoCounters&) const;        \
     template bool Structure::occluded(const Ray&, RayStats&) const

@@ -24,8 +24,7 @@ const AcceleratorInfo* find_accelerator(std::string_view name);
 
 // Looks the name up, validates the parameters and creates the (unbuilt) accelerator.
 // Throws ParamError naming what is wrong (unknown accelerator: lists the known ones).
-std::unique_ptr<Accelerator> make_accelerator(const std::string& name,
-                                              const std::map<std::string, std::string>& params,
+std::unique_ptr<Accelerator> make_accelerator(const std::string& name, const std::map<std::string, std::string>& params,
                                               ParamSet* resolved = nullptr);
 
 }  // namespace accelbench

@@ -6,8 +6,8 @@
 #pragma once
 
 #include <algorithm>
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 
@@ -30,15 +30,18 @@ struct Vec3 {
     constexpr Vec3 operator*(float s) const { return {x * s, y * s, z * s}; }
     constexpr Vec3 operator/(float s) const { return {x / s, y / s, z / s}; }
     constexpr Vec3 operator-() const { return {-x, -y, -z}; }
-    constexpr Vec3& operator+=(Vec3 o) { x += o.x; y += o.y; z += o.z; return *this; }
+    constexpr Vec3& operator+=(Vec3 o) {
+        x += o.x;
+        y += o.y;
+        z += o.z;
+        return *this;
+    }
     constexpr bool operator==(const Vec3&) const = default;
 };
 
 constexpr Vec3 operator*(float s, Vec3 v) { return v * s; }
 constexpr float dot(Vec3 a, Vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-constexpr Vec3 cross(Vec3 a, Vec3 b) {
-    return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
+constexpr Vec3 cross(Vec3 a, Vec3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline float length(Vec3 v) { return std::sqrt(dot(v, v)); }
 inline Vec3 normalize(Vec3 v) { return v / length(v); }
 constexpr Vec3 min(Vec3 a, Vec3 b) { return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)}; }
@@ -48,9 +51,7 @@ inline bool is_finite(Vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) 
 
 // Reciprocal that never produces NaN: a zero component (of either sign) becomes an
 // infinity of the same sign, so the slab test below sees +-inf and never 0 * inf.
-inline float safe_inverse(float x) {
-    return x != 0.0f ? 1.0f / x : std::copysign(kInfinity, x);
-}
+inline float safe_inverse(float x) { return x != 0.0f ? 1.0f / x : std::copysign(kInfinity, x); }
 inline Vec3 safe_inverse(Vec3 v) { return {safe_inverse(v.x), safe_inverse(v.y), safe_inverse(v.z)}; }
 
 // Axis-aligned bounding box. The default box is empty (min = +inf, max = -inf), so that
@@ -63,8 +64,14 @@ struct Bounds3 {
     constexpr Bounds3(Vec3 lo, Vec3 hi) : lower(lo), upper(hi) {}
     constexpr explicit Bounds3(Vec3 p) : lower(p), upper(p) {}
 
-    constexpr void extend(Vec3 p) { lower = min(lower, p); upper = max(upper, p); }
-    constexpr void extend(const Bounds3& b) { lower = min(lower, b.lower); upper = max(upper, b.upper); }
+    constexpr void extend(Vec3 p) {
+        lower = min(lower, p);
+        upper = max(upper, p);
+    }
+    constexpr void extend(const Bounds3& b) {
+        lower = min(lower, b.lower);
+        upper = max(upper, b.upper);
+    }
     constexpr bool empty() const { return lower.x > upper.x || lower.y > upper.y || lower.z > upper.z; }
     constexpr Vec3 diagonal() const { return upper - lower; }
     constexpr Vec3 center() const { return (lower + upper) * 0.5f; }
@@ -78,7 +85,10 @@ struct Bounds3 {
     constexpr bool operator==(const Bounds3&) const = default;
 };
 
-constexpr Bounds3 merge(Bounds3 a, const Bounds3& b) { a.extend(b); return a; }
+constexpr Bounds3 merge(Bounds3 a, const Bounds3& b) {
+    a.extend(b);
+    return a;
+}
 
 // The largest coordinate magnitude a scene or a ray may hold (exclusive): Embree's
 // FLT_LARGE, 1.844e18 ~ sqrt(FLT_MAX) / 10. Products of two coordinate differences (the
@@ -108,7 +118,7 @@ struct Ray {
 // (infinite bounds are fine). Every accelerator answers "miss" for any other ray.
 inline bool is_valid_ray(const Ray& r) {
     return within_coordinate_limit(r.org) && within_coordinate_limit(r.dir) &&
-           (r.dir.x != 0.0f || r.dir.y != 0.0f || r.dir.z != 0.0f) && !std::isnan(r.tmin) && !std::isnan(r.tmax);
+        (r.dir.x != 0.0f || r.dir.y != 0.0f || r.dir.z != 0.0f) && !std::isnan(r.tmin) && !std::isnan(r.tmax);
 }
 
 constexpr uint32_t kInvalidId = 0xffffffffu;

@@ -89,8 +89,7 @@ ParamSet resolve_params(const std::string& owner, const std::vector<ParamSpec>& 
             std::vector<std::string> names;
             for (const auto& s : specs) names.push_back(s.name);
             throw ParamError(std::string(owner_kind) + " '" + owner + "' has no parameter '" + name + "'" +
-                             (names.empty() ? std::string(" (it takes none)")
-                                            : " (it has: " + join(names) + ")"));
+                             (names.empty() ? std::string(" (it takes none)") : " (it has: " + join(names) + ")"));
         }
     }
     ParamSet set;
@@ -111,7 +110,8 @@ ParamSet resolve_params(const std::string& owner, const std::vector<ParamSpec>& 
 
 const ParamValue& ParamSet::at(const std::string& name) const {
     auto it = values_.find(name);
-    if (it == values_.end()) throw ParamError("parameter '" + name + "' has no value (not declared, or its default depends on the scene)");
+    if (it == values_.end())
+        throw ParamError("parameter '" + name + "' has no value (not declared, or its default depends on the scene)");
     return it->second;
 }
 int64_t ParamSet::get_int(const std::string& name) const { return std::get<int64_t>(at(name)); }

@@ -21,9 +21,9 @@ const char* to_string(ParamType t);
 struct ParamSpec {
     std::string name;
     ParamType type = ParamType::Int;
-    std::string default_value;          // as text, parsed like user input
-    std::vector<std::string> choices;   // Enum only
-    double min = -1e300, max = 1e300;   // Int/Float only, inclusive
+    std::string default_value;         // as text, parsed like user input
+    std::vector<std::string> choices;  // Enum only
+    double min = -1e300, max = 1e300;  // Int/Float only, inclusive
     std::string help;
     // A default that depends on the scene (e.g. the kd-tree's 8 + 1.3 log2 N): then
     // default_value is shown as text (e.g. "auto") and the structure computes it.

@@ -8,8 +8,7 @@ namespace accelbench {
 
 TempDir::TempDir(const std::string& prefix, const std::filesystem::path& parent) {
     std::string pattern = (parent / (prefix + "XXXXXX")).string();
-    if (!mkdtemp(pattern.data()))
-        throw std::runtime_error("cannot create a temporary directory in " + parent.string());
+    if (!mkdtemp(pattern.data())) throw std::runtime_error("cannot create a temporary directory in " + parent.string());
     path_ = pattern;
 }
 

@@ -21,7 +21,7 @@ struct WatertightRay {
     Vec3 org;
     int kx = 0, ky = 1, kz = 2;  // permutation: kz is the dominant direction axis
     float sx = 0, sy = 0, sz = 0;
-    bool valid = false;          // is_valid_ray(): invalid rays hit nothing
+    bool valid = false;  // is_valid_ray(): invalid rays hit nothing
 
     explicit WatertightRay(const Ray& r) : org(r.org) {
         Vec3 ad{std::fabs(r.dir.x), std::fabs(r.dir.y), std::fabs(r.dir.z)};
@@ -71,8 +71,8 @@ inline bool finish_in_double(float ax, float ay, float bx, float by, float cx, f
 // v for p2) and returns true. Degenerate triangles (zero determinant) never hit, and no
 // path divides by zero or produces NaN from valid inputs (finite vertices below
 // kMaxCoordinate, is_valid_ray rays).
-inline bool intersect_triangle(const WatertightRay& r, Vec3 p0, Vec3 p1, Vec3 p2, float tmin,
-                               float tmax, float& t_out, float& u_out, float& v_out) {
+inline bool intersect_triangle(const WatertightRay& r, Vec3 p0, Vec3 p1, Vec3 p2, float tmin, float tmax, float& t_out,
+                               float& u_out, float& v_out) {
     if (!r.valid) return false;
     // The vertices relative to the origin, permuted to (kx, ky, kz). Components are read
     // by index from memory: Vec3's operator[] with a run-time axis is a chain of selects,

@@ -90,7 +90,8 @@ uint64_t hash_ray_set(std::span<const Ray> rays, RayQuery query) {
     };
     add(uint32_t(query));
     for (const Ray& r : rays)
-        for (float f : {r.org.x, r.org.y, r.org.z, r.tmin, r.dir.x, r.dir.y, r.dir.z, r.tmax}) add(std::bit_cast<uint32_t>(f));
+        for (float f : {r.org.x, r.org.y, r.org.z, r.tmin, r.dir.x, r.dir.y, r.dir.z, r.tmax})
+            add(std::bit_cast<uint32_t>(f));
     return h;
 }
 
@@ -137,8 +138,9 @@ Vec3 cosine_hemisphere(Vec3 n, float u1, float u2) {
     return normalize(b1 * (r * std::cos(phi)) + b2 * (r * std::sin(phi)) + n * z);
 }
 
-std::vector<GeneratedRaySet> make_ray_sets(const Accelerator& reference, const Scene& scene, std::span<const Ray> primary_rays,
-                                  Vec3 light, std::span<const RaySetKind> kinds, const RaySetParams& params) {
+std::vector<GeneratedRaySet> make_ray_sets(const Accelerator& reference, const Scene& scene,
+                                           std::span<const Ray> primary_rays, Vec3 light,
+                                           std::span<const RaySetKind> kinds, const RaySetParams& params) {
     if (params.ao_samples < 1) throw std::invalid_argument("ray sets: ao samples must be at least 1");
     if (!(params.ao_distance > 0.0f)) throw std::invalid_argument("ray sets: ao distance must be positive");
     if (params.diffuse_bounces < 1) throw std::invalid_argument("ray sets: diffuse bounces must be at least 1");
@@ -163,7 +165,8 @@ std::vector<GeneratedRaySet> make_ray_sets(const Accelerator& reference, const S
             case RaySetKind::Shadow: {
                 const float eps = shadow_epsilon(scene);
                 for (size_t i = 0; i < primary_rays.size(); ++i)
-                    if (primary_hits[i].found()) set.rays.push_back(shadow_ray(primary_rays[i], primary_hits[i], light, eps));
+                    if (primary_hits[i].found())
+                        set.rays.push_back(shadow_ray(primary_rays[i], primary_hits[i], light, eps));
                 break;
             }
             case RaySetKind::Ao: {
@@ -189,7 +192,8 @@ std::vector<GeneratedRaySet> make_ray_sets(const Accelerator& reference, const S
                     std::vector<Path> next;
                     for (const Path& p : paths) {
                         SplitMix64 rng = ray_stream(params.seed, kDiffuseStream + uint64_t(bounce), p.id);
-                        if (auto r = bounce_ray(scene, p.ray, p.hit, rng, kInfinity, size)) next.push_back({*r, Hit{}, p.id});
+                        if (auto r = bounce_ray(scene, p.ray, p.hit, rng, kInfinity, size))
+                            next.push_back({*r, Hit{}, p.id});
                     }
                     std::vector<Ray> rays(next.size());
                     for (size_t j = 0; j < next.size(); ++j) rays[j] = next[j].ray;

@@ -77,8 +77,9 @@ struct GeneratedRaySet {
 // `reference` accelerator on `scene`, through which every set's answers are traced (and
 // the primary hits and diffuse bounces the sets start from). Throws
 // std::invalid_argument for parameters out of range (samples, bounces < 1, distance <= 0).
-std::vector<GeneratedRaySet> make_ray_sets(const Accelerator& reference, const Scene& scene, std::span<const Ray> primary_rays,
-                                  Vec3 light, std::span<const RaySetKind> kinds, const RaySetParams& params);
+std::vector<GeneratedRaySet> make_ray_sets(const Accelerator& reference, const Scene& scene,
+                                           std::span<const Ray> primary_rays, Vec3 light,
+                                           std::span<const RaySetKind> kinds, const RaySetParams& params);
 
 // FNV-1a (64 bit) over the query and every ray's bit pattern (origin, tmin, direction,
 // tmax): equal hashes mean, for all practical purposes, identical sets.

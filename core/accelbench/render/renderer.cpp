@@ -71,15 +71,15 @@ struct BatchTotals {
 
 // One thread's buffers, reused batch after batch.
 struct Scratch {
-    std::vector<Ray> rays;               // render(): the tile's camera rays
+    std::vector<Ray> rays;  // render(): the tile's camera rays
     std::vector<Hit> hits;
     std::vector<RayStats> primary_stats;
     std::vector<Ray> shadow_rays;
-    std::vector<uint32_t> shadow_of;     // shadow ray j belongs to primary ray shadow_of[j]
+    std::vector<uint32_t> shadow_of;  // shadow ray j belongs to primary ray shadow_of[j]
     std::vector<uint8_t> occluded;
     std::vector<RayStats> shadow_stats;
-    std::vector<uint8_t> lit;            // per primary ray: its shadow ray reached the light
-    std::vector<RayStats> cost;          // per primary ray: primary + shadow stats (PerPixel)
+    std::vector<uint8_t> lit;    // per primary ray: its shadow ray reached the light
+    std::vector<RayStats> cost;  // per primary ray: primary + shadow stats (PerPixel)
 };
 
 // Traces one batch: one closest_hits call for the rays, then one any_hits call for the
@@ -189,8 +189,7 @@ Vec3 sky(Vec3 dir, Vec3 up) {
 // Phong at a hit: ambient + diffuse + specular, with the geometric normal turned toward
 // the viewer (meshes are not consistently oriented, and the report shades both sides).
 // `lit` is false when the shadow ray found an occluder: then only ambient remains.
-Vec3 shade(const Scene& scene, std::span<const Vec3> albedo, const Ray& ray, const Hit& hit, Vec3 light,
-           bool lit) {
+Vec3 shade(const Scene& scene, std::span<const Vec3> albedo, const Ray& ray, const Hit& hit, Vec3 light, bool lit) {
     const Vec3 p0 = scene.vertex(hit.prim, 0), p1 = scene.vertex(hit.prim, 1), p2 = scene.vertex(hit.prim, 2);
     const Vec3 view = normalize(-ray.dir);
     Vec3 n = cross(p1 - p0, p2 - p0);
@@ -301,8 +300,7 @@ std::vector<Ray> camera_rays(const Camera& camera, const RenderSettings& setting
     return rays;
 }
 
-TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera,
-                   const TraceRequest& request) {
+TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera, const TraceRequest& request) {
     const RenderSettings& rs = request.settings;
     check_settings(rs, true);
     if (!request.albedo.empty() && request.albedo.size() != scene.triangle_count())
@@ -341,9 +339,9 @@ TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& c
                     if (request.keep_hits) out.primary_hits[pixel * size_t(spp) + size_t(k)] = s.hits[i];
                     if (request.counts == CountMode::PerPixel) out.per_pixel[pixel] += s.cost[i];
                     if (rs.shading)
-                        colour += s.hits[i].found() ? shade(scene, request.albedo, s.rays[i], s.hits[i],
-                                                            shading_light, s.lit[i] != 0)
-                                                    : sky(s.rays[i].dir, sky_up);
+                        colour += s.hits[i].found()
+                            ? shade(scene, request.albedo, s.rays[i], s.hits[i], shading_light, s.lit[i] != 0)
+                            : sky(s.rays[i].dir, sky_up);
                 }
                 if (rs.shading) out.image->set(x, y, colour / float(spp));
             }
@@ -408,7 +406,8 @@ TraceOutput trace_ray_set(const Accelerator& accel, std::span<const Ray> rays, R
             s.occluded.resize(n);
             accel.any_hits(batch, s.occluded, stats);
             for (size_t i = 0; i < n; ++i) t.hits += s.occluded[i];
-            if (request.keep_hits) std::copy(s.occluded.begin(), s.occluded.end(), out.occluded.begin() + ptrdiff_t(first));
+            if (request.keep_hits)
+                std::copy(s.occluded.begin(), s.occluded.end(), out.occluded.begin() + ptrdiff_t(first));
         }
         if (!counting) return;
         for (size_t i = 0; i < n; ++i) t.primary += s.primary_stats[i];

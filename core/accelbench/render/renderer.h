@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
+#include "accelbench/base/image.h"
 #include "accelbench/scene/camera.h"
 #include "accelbench/scene/light.h"
-#include "accelbench/base/image.h"
 
 namespace accelbench {
 
@@ -36,11 +36,11 @@ enum class CountMode {
 };
 
 struct TraceOutput {
-    uint64_t rays = 0;          // primary (or ray-file, or ray-set) rays
-    uint64_t hits = 0;          // of those, how many hit something (any-hit sets: were occluded)
+    uint64_t rays = 0;  // primary (or ray-file, or ray-set) rays
+    uint64_t hits = 0;  // of those, how many hit something (any-hit sets: were occluded)
     uint64_t shadow_rays = 0;
-    uint64_t shadow_hits = 0;   // shadow rays that found an occluder
-    RayStats primary_stats;     // CountMode != Off
+    uint64_t shadow_hits = 0;  // shadow rays that found an occluder
+    RayStats primary_stats;    // CountMode != Off
     RayStats shadow_stats;
     std::vector<RayStats> per_pixel;  // CountMode::PerPixel, width*height, row-major
     // Only when keep_hits: one per primary ray, in ray order. For render() that is
@@ -49,14 +49,14 @@ struct TraceOutput {
     std::vector<Hit> primary_hits;
     // Only when keep_hits and trace_ray_set() traced an any-hit set: one 0/1 per ray.
     std::vector<uint8_t> occluded;
-    std::optional<Image> image;       // only when shading
+    std::optional<Image> image;  // only when shading
 };
 
 struct TraceRequest {
     RenderSettings settings;
     std::optional<Light> light;  // used only when settings.light
     CountMode counts = CountMode::Off;
-    bool keep_hits = false;      // keep every primary hit (error measurement)
+    bool keep_hits = false;  // keep every primary hit (error measurement)
     // Base colour per triangle (linear RGB) for shading, e.g. a procedural scene's
     // materials; empty: one light grey for everything. Must outlive the call.
     std::span<const Vec3> albedo;
@@ -66,8 +66,7 @@ struct TraceRequest {
 // request.light, or default_light(scene.bounds, camera) when absent. With settings.light
 // off and shading on, the image is lit by a headlight at the eye (which casts no visible
 // shadows, so none are traced). Results do not depend on settings.threads.
-TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera,
-                   const TraceRequest& request);
+TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& camera, const TraceRequest& request);
 
 // The rays render() traces, made ahead of time so that their tracing can be timed alone
 // (harness/bench): the primary rays in render()'s order and batches (one batch per tile),
@@ -78,8 +77,7 @@ struct RenderRays {
     std::vector<Ray> primary, shadow;
     std::vector<size_t> primary_batch_end, shadow_batch_end;  // one past each batch's last ray
 };
-RenderRays render_rays(const Accelerator& accel, const Scene& scene, const Camera& camera,
-                       const TraceRequest& request);
+RenderRays render_rays(const Accelerator& accel, const Scene& scene, const Camera& camera, const TraceRequest& request);
 
 // Traces a given ray set (a ray file) instead of camera rays: the same primary / shadow /
 // counting logic; no image (settings.shading is ignored, per_pixel is per ray). Without

@@ -58,9 +58,7 @@ std::string shown(std::string_view word) {
 
 std::string number(uint64_t n) { return std::to_string(n); }
 
-uint32_t byte_swapped(uint32_t x) {
-    return (x >> 24) | ((x >> 8) & 0xff00u) | ((x << 8) & 0xff0000u) | (x << 24);
-}
+uint32_t byte_swapped(uint32_t x) { return (x >> 24) | ((x >> 8) & 0xff00u) | ((x << 8) & 0xff0000u) | (x << 24); }
 std::string line_at(uint64_t line) { return "line " + number(line) + ": "; }
 std::string byte_at(uint64_t offset) { return "byte " + number(offset) + ": "; }
 
@@ -93,7 +91,7 @@ public:
         return true;
     }
     uint64_t number() const { return number_; }  // of the line next() returned last, from 1
-    size_t offset() const { return pos_; }        // of the byte after it and its ending
+    size_t offset() const { return pos_; }       // of the byte after it and its ending
 
 private:
     std::string_view text_;
@@ -170,7 +168,8 @@ Real parse_float(std::string_view s, float& value) {
 std::string vertex_problem(Vec3 p) {
     if (!is_finite(p)) return "a coordinate is not finite " + point(p);
     if (!within_coordinate_limit(p))
-        return "a coordinate of magnitude 1.844e18 or more " + point(p) + " (the limit kMaxCoordinate, Embree's FLT_LARGE)";
+        return "a coordinate of magnitude 1.844e18 or more " + point(p) +
+            " (the limit kMaxCoordinate, Embree's FLT_LARGE)";
     return "";
 }
 
@@ -182,7 +181,8 @@ Vec3 coordinates(const std::string_view* words, const Place& place) {
     for (int k = 0; k < 3; ++k) {
         const Real r = parse_float(words[k], xyz[k]);
         if (r == Real::not_a_number) throw MeshError(place() + "coordinate " + shown(words[k]) + " is not a number");
-        if (r == Real::too_large) throw MeshError(place() + "coordinate " + shown(words[k]) + " is too large for a float");
+        if (r == Real::too_large)
+            throw MeshError(place() + "coordinate " + shown(words[k]) + " is too large for a float");
     }
     return {xyz[0], xyz[1], xyz[2]};
 }
@@ -216,7 +216,7 @@ struct FlatMesh {
 
 std::string too_few_corners(uint64_t face, uint64_t corners) {
     return "face " + number(face) + " has " + number(corners) + " corner" + (corners == 1 ? "" : "s") +
-           " (a face needs at least 3)";
+        " (a face needs at least 3)";
 }
 
 // ---- OBJ (Wavefront, "Object Files (.obj)", Appendix B1 of the Advanced Visualizer
@@ -230,9 +230,10 @@ std::string too_few_corners(uint64_t face, uint64_t corners) {
 // over: they carry no triangles. An unknown statement is refused.
 bool obj_statement_without_triangles(std::string_view keyword) {
     static const std::vector<std::string_view> known = {
-        "vp", "cstype", "deg", "bmat", "step", "p", "l", "curv", "curv2", "surf", "parm", "trim", "hole",
-        "scrv", "sp", "end", "con", "g", "s", "mg", "o", "bevel", "c_interp", "d_interp", "lod", "usemtl",
-        "mtllib", "shadow_obj", "trace_obj", "ctech", "stech", "maplib", "usemap", "call", "csh"};
+        "vp",         "cstype",    "deg",   "bmat",  "step",     "p",        "l",    "curv",   "curv2",
+        "surf",       "parm",      "trim",  "hole",  "scrv",     "sp",       "end",  "con",    "g",
+        "s",          "mg",        "o",     "bevel", "c_interp", "d_interp", "lod",  "usemtl", "mtllib",
+        "shadow_obj", "trace_obj", "ctech", "stech", "maplib",   "usemap",   "call", "csh"};
     return std::find(known.begin(), known.end(), keyword) != known.end();
 }
 
@@ -312,8 +313,8 @@ void read_obj(std::string_view text, FlatMesh& mesh) {
                     start = slash + 1;
                 }
                 // v, v/vt, v/vt/vn, v//vn
-                const bool form_ok = parts.size() <= 3 && !parts[0].empty() && (parts.size() != 2 || !parts[1].empty()) &&
-                                     (parts.size() != 3 || !parts[2].empty());
+                const bool form_ok = parts.size() <= 3 && !parts[0].empty() &&
+                    (parts.size() != 2 || !parts[1].empty()) && (parts.size() != 3 || !parts[2].empty());
                 if (!form_ok)
                     throw MeshError(place() + "corner " + shown(corner) + " is not v, v/vt, v/vt/vn or v//vn");
                 const auto resolve = [&](std::string_view word, uint64_t defined, Reference& max,
@@ -322,7 +323,8 @@ void read_obj(std::string_view text, FlatMesh& mesh) {
                     if (!parse_int(word, i))
                         throw MeshError(place() + "corner " + shown(corner) + ": " + shown(word) + " is not an index");
                     if (i == 0)
-                        throw MeshError(place() + "corner " + shown(corner) + ": " + what + " index 0 (OBJ counts from 1)");
+                        throw MeshError(place() + "corner " + shown(corner) + ": " + what +
+                                        " index 0 (OBJ counts from 1)");
                     if (i < 0) {
                         if (uint64_t(-(i + 1)) >= defined)
                             throw MeshError(place() + "refers to " + what + " " + std::to_string(i) + " but only " +
@@ -334,7 +336,8 @@ void read_obj(std::string_view text, FlatMesh& mesh) {
                 };
                 const uint64_t v = resolve(parts[0], mesh.vertices.size(), max_vertex, "vertex");
                 if (v >= kMaxIndex) throw MeshError(place() + "vertex index " + shown(parts[0]) + " is beyond 32 bits");
-                if (parts.size() >= 2 && !parts[1].empty()) resolve(parts[1], texcoords, unchecked, "texture coordinate");
+                if (parts.size() >= 2 && !parts[1].empty())
+                    resolve(parts[1], texcoords, unchecked, "texture coordinate");
                 if (parts.size() == 3) resolve(parts[2], normals, unchecked, "normal");
                 corners.push_back(uint32_t(v));
             }
@@ -364,9 +367,9 @@ enum class PlyType { i8, u8, i16, u16, i32, u32, f32, f64 };
 
 bool ply_type(std::string_view name, PlyType& type) {
     static const std::pair<std::string_view, PlyType> names[] = {
-        {"char", PlyType::i8},   {"int8", PlyType::i8},     {"uchar", PlyType::u8},  {"uint8", PlyType::u8},
+        {"char", PlyType::i8},   {"int8", PlyType::i8},     {"uchar", PlyType::u8},   {"uint8", PlyType::u8},
         {"short", PlyType::i16}, {"int16", PlyType::i16},   {"ushort", PlyType::u16}, {"uint16", PlyType::u16},
-        {"int", PlyType::i32},   {"int32", PlyType::i32},   {"uint", PlyType::u32},  {"uint32", PlyType::u32},
+        {"int", PlyType::i32},   {"int32", PlyType::i32},   {"uint", PlyType::u32},   {"uint32", PlyType::u32},
         {"float", PlyType::f32}, {"float32", PlyType::f32}, {"double", PlyType::f64}, {"float64", PlyType::f64}};
     for (const auto& [n, t] : names)
         if (n == name) {
@@ -377,9 +380,13 @@ bool ply_type(std::string_view name, PlyType& type) {
 }
 size_t ply_size(PlyType t) {
     switch (t) {
-        case PlyType::i8: case PlyType::u8: return 1;
-        case PlyType::i16: case PlyType::u16: return 2;
-        case PlyType::i32: case PlyType::u32: case PlyType::f32: return 4;
+        case PlyType::i8:
+        case PlyType::u8: return 1;
+        case PlyType::i16:
+        case PlyType::u16: return 2;
+        case PlyType::i32:
+        case PlyType::u32:
+        case PlyType::f32: return 4;
         case PlyType::f64: return 8;
     }
     return 0;
@@ -447,7 +454,8 @@ private:
                 format_ = std::string(words[1]);
                 if (format_ != "ascii" && format_ != "binary_little_endian" && format_ != "binary_big_endian")
                     throw MeshError(place + "unknown format " + shown(words[1]));
-                if (words[2] != "1.0") throw MeshError(place + "unsupported PLY version " + shown(words[2]) + " (1.0 is)");
+                if (words[2] != "1.0")
+                    throw MeshError(place + "unsupported PLY version " + shown(words[2]) + " (1.0 is)");
                 have_format = true;
             } else if (keyword == "comment" || keyword == "obj_info") {
                 continue;
@@ -462,13 +470,14 @@ private:
                 if (elements_.empty()) throw MeshError(place + "a property before any element");
                 PlyProperty p;
                 const bool ok = words.size() >= 2 && words[1] == "list"
-                                    ? words.size() == 5 && ply_type(words[2], p.count_type) && ply_integer(p.count_type) &&
-                                          ply_type(words[3], p.type)
-                                    : words.size() == 3 && ply_type(words[1], p.type);
+                    ? words.size() == 5 && ply_type(words[2], p.count_type) && ply_integer(p.count_type) &&
+                        ply_type(words[3], p.type)
+                    : words.size() == 3 && ply_type(words[1], p.type);
                 if (!ok)
-                    throw MeshError(place + "expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' "
-                                            "(an integer COUNT_TYPE; types: char uchar short ushort int uint float double, "
-                                            "or int8 ... float64)");
+                    throw MeshError(place +
+                                    "expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME' "
+                                    "(an integer COUNT_TYPE; types: char uchar short ushort int uint float double, "
+                                    "or int8 ... float64)");
                 p.list = words.size() == 5;
                 p.name = std::string(words.back());
                 for (const PlyProperty& q : elements_.back().properties)
@@ -479,8 +488,9 @@ private:
                 if (format_ != "ascii") {
                     const size_t at = size_t(line.data() - bytes_.data()) + line.size();
                     if (bytes_.substr(at, ending_.size()) != ending_)
-                        throw MeshError(place + "'end_header' does not end like the 'ply' line, so where the binary "
-                                                "data begins is ambiguous");
+                        throw MeshError(place +
+                                        "'end_header' does not end like the 'ply' line, so where the binary "
+                                        "data begins is ambiguous");
                     data_ = at + ending_.size();
                 }
                 return;
@@ -594,8 +604,8 @@ private:
             for (uint64_t i = 0; i < el.count; ++i) {
                 do {
                     if (!lines.next(line))
-                        throw MeshError("the file ends before " + instance(el, i) + " (of " + number(el.count) +
-                                        " " + plural(el) + " the header declares): it is cut short");
+                        throw MeshError("the file ends before " + instance(el, i) + " (of " + number(el.count) + " " +
+                                        plural(el) + " the header declares): it is cut short");
                     split_words(line, words);
                 } while (words.empty());
                 const uint64_t line_no = lines.number();
@@ -606,8 +616,7 @@ private:
                 for (size_t p = 0; p < el.properties.size(); ++p) {
                     const PlyProperty& prop = el.properties[p];
                     const auto where = [&] { return place() + instance(el, i) + ", property " + prop.name + ": "; };
-                    if (w >= words.size())
-                        throw MeshError(where() + "the line ends before this property (cut short?)");
+                    if (w >= words.size()) throw MeshError(where() + "the line ends before this property (cut short?)");
                     if (!prop.list) {
                         scalars[p] = value(words[w++], prop.type, where);
                         continue;
@@ -615,8 +624,8 @@ private:
                     const int64_t count = value(words[w++], prop.count_type, where).integer;
                     if (count < 0) throw MeshError(where() + "a negative list length");
                     if (uint64_t(count) > words.size() - w)
-                        throw MeshError(where() + "the list has " + std::to_string(count) + " values but the line holds " +
-                                        number(words.size() - w));
+                        throw MeshError(where() + "the list has " + std::to_string(count) +
+                                        " values but the line holds " + number(words.size() - w));
                     for (int64_t k = 0; k < count; ++k) {
                         const PlyValue item = value(words[w++], prop.type, where);
                         if (int(p) == indices_ && int(e) == face_element_) list.push_back(item.integer);
@@ -656,11 +665,34 @@ private:
             switch (t) {
                 case PlyType::i8: v.integer = int8_t(raw[0]); break;
                 case PlyType::u8: v.integer = raw[0]; break;
-                case PlyType::i16: { int16_t x; std::memcpy(&x, raw, 2); v.integer = x; break; }
-                case PlyType::u16: { uint16_t x; std::memcpy(&x, raw, 2); v.integer = x; break; }
-                case PlyType::i32: { int32_t x; std::memcpy(&x, raw, 4); v.integer = x; break; }
-                case PlyType::u32: { uint32_t x; std::memcpy(&x, raw, 4); v.integer = x; break; }
-                case PlyType::f32: std::memcpy(&v.single, raw, 4); v.real = v.single; break;
+                case PlyType::i16: {
+                    int16_t x;
+                    std::memcpy(&x, raw, 2);
+                    v.integer = x;
+                    break;
+                }
+                case PlyType::u16: {
+                    uint16_t x;
+                    std::memcpy(&x, raw, 2);
+                    v.integer = x;
+                    break;
+                }
+                case PlyType::i32: {
+                    int32_t x;
+                    std::memcpy(&x, raw, 4);
+                    v.integer = x;
+                    break;
+                }
+                case PlyType::u32: {
+                    uint32_t x;
+                    std::memcpy(&x, raw, 4);
+                    v.integer = x;
+                    break;
+                }
+                case PlyType::f32:
+                    std::memcpy(&v.single, raw, 4);
+                    v.real = v.single;
+                    break;
                 case PlyType::f64: std::memcpy(&v.real, raw, 8); break;
             }
             return v;
@@ -699,7 +731,8 @@ private:
             }
         }
         if (pos != bytes_.size())
-            throw MeshError(byte_at(pos) + number(bytes_.size() - pos) + " bytes after the last element the header declares");
+            throw MeshError(byte_at(pos) + number(bytes_.size() - pos) +
+                            " bytes after the last element the header declares");
     }
 
     std::string_view bytes_;
@@ -762,7 +795,8 @@ void read_off(std::string_view text, FlatMesh& mesh) {
             w = 0;
         }
         if (!parse_int(words[w], counts[k]) || counts[k] < 0)
-            throw MeshError(line_at(lines.number()) + (w == 0 && k == 0 && lines.number() == 1 ? "not an OFF file: " : "") +
+            throw MeshError(line_at(lines.number()) +
+                            (w == 0 && k == 0 && lines.number() == 1 ? "not an OFF file: " : "") +
                             "expected 'NVertices NFaces NEdges' (three integers), found " + shown(words[w]));
         ++w;
     }
@@ -776,12 +810,14 @@ void read_off(std::string_view text, FlatMesh& mesh) {
     const size_t most = least + (colours ? 1 : 0);
     for (uint64_t i = 0; i < vertices; ++i) {
         if (!next_words())
-            throw MeshError("the file ends before vertex " + number(i) + " (of " + number(vertices) + "): it is cut short");
+            throw MeshError("the file ends before vertex " + number(i) + " (of " + number(vertices) +
+                            "): it is cut short");
         const uint64_t line_no = lines.number();
         const auto place = [&] { return line_at(line_no) + "vertex " + number(i) + ": "; };
         if (words.size() < least || words.size() > most)
-            throw MeshError(place() + number(words.size()) + " numbers on the line, " + shown(keyword) + " vertices have " +
-                            number(least) + (most > least ? " or " + number(most) : "") + " (one vertex per line)");
+            throw MeshError(place() + number(words.size()) + " numbers on the line, " + shown(keyword) +
+                            " vertices have " + number(least) + (most > least ? " or " + number(most) : "") +
+                            " (one vertex per line)");
         for (size_t k = 3; k < words.size(); ++k) {
             float ignored;
             if (parse_float(words[k], ignored) == Real::not_a_number)
@@ -807,10 +843,11 @@ void read_off(std::string_view text, FlatMesh& mesh) {
         corners.clear();
         for (int64_t k = 1; k <= n; ++k) {
             int64_t v = 0;
-            if (!parse_int(words[size_t(k)], v)) throw MeshError(place() + shown(words[size_t(k)]) + " is not a vertex index");
+            if (!parse_int(words[size_t(k)], v))
+                throw MeshError(place() + shown(words[size_t(k)]) + " is not a vertex index");
             if (v < 0 || uint64_t(v) >= vertices)
-                throw MeshError(place() + "refers to vertex " + std::to_string(v) + " but the file has " + number(vertices) +
-                                " vertices (OFF counts from 0)");
+                throw MeshError(place() + "refers to vertex " + std::to_string(v) + " but the file has " +
+                                number(vertices) + " vertices (OFF counts from 0)");
             corners.push_back(uint32_t(v));
         }
         for (size_t k = size_t(n) + 1; k < words.size(); ++k) {
@@ -899,7 +936,8 @@ void read_ascii_stl(std::string_view text, FlatMesh& mesh, const std::string& bi
         const std::string_view got = word();
         if (lowercase(got) == keyword) return;
         const std::string in = triangle ? "triangle " + number(triangle) + ": " : "";
-        if (!more) throw MeshError("the file ends in " + in + "expected '" + keyword + "': it is cut short" + binary_hint);
+        if (!more)
+            throw MeshError("the file ends in " + in + "expected '" + keyword + "': it is cut short" + binary_hint);
         throw MeshError(line_at(lines.number()) + in + "expected '" + keyword + "', found " + shown(got) + binary_hint);
     };
     StlVertices vertices(mesh);
@@ -916,13 +954,14 @@ void read_ascii_stl(std::string_view text, FlatMesh& mesh, const std::string& bi
             const std::string_view next = word();
             if (!more) return;
             if (lowercase(next) != "solid")
-                throw MeshError(line_at(lines.number()) + "expected 'solid' or the end of the file after 'endsolid', found " +
-                                shown(next));
+                throw MeshError(line_at(lines.number()) +
+                                "expected 'solid' or the end of the file after 'endsolid', found " + shown(next));
             rest_of_line();
             continue;
         }
         if (keyword != "facet")
-            throw MeshError(line_at(lines.number()) + "expected 'facet' or 'endsolid', found " + shown(got) + binary_hint);
+            throw MeshError(line_at(lines.number()) + "expected 'facet' or 'endsolid', found " + shown(got) +
+                            binary_hint);
         ++triangle;
         expect("normal", triangle);
         for (int k = 0; k < 3; ++k) {
@@ -958,8 +997,8 @@ void read_stl(std::string_view bytes, FlatMesh& mesh) {
         std::memcpy(&declared, bytes.data() + 80, 4);
         if constexpr (std::endian::native == std::endian::big) declared = byte_swapped(declared);
         if (84 + 50 * uint64_t(declared) == bytes.size()) return read_binary_stl(bytes, declared, mesh);
-        hint = " (as binary STL it would declare " + number(declared) + " triangles, " + number(84 + 50 * uint64_t(declared)) +
-               " bytes, but the file has " + number(bytes.size()) + ")";
+        hint = " (as binary STL it would declare " + number(declared) + " triangles, " +
+            number(84 + 50 * uint64_t(declared)) + " bytes, but the file has " + number(bytes.size()) + ")";
     }
     const size_t first = bytes.find_first_not_of(" \t\r\n\v\f");
     if (first == std::string_view::npos || lowercase(bytes.substr(first, 5)) != "solid" ||
@@ -1026,7 +1065,8 @@ std::string file_kind(fs::file_type type) {
 
 }  // namespace
 
-Scene parse_mesh(std::string_view bytes, const std::string& format, const std::string& shown_as, MeshLoadInfo* info_out) {
+Scene parse_mesh(std::string_view bytes, const std::string& format, const std::string& shown_as,
+                 MeshLoadInfo* info_out) {
     FlatMesh mesh;
     try {
         if (format == "obj") read_obj(bytes, mesh);

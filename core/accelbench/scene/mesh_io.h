@@ -25,12 +25,12 @@ namespace accelbench {
 
 // What a load found, for logs and for checking counts against a registry.
 struct MeshLoadInfo {
-    std::string format;           // "obj", "ply", "off" or "stl" (the inner format of a .gz)
-    bool compressed = false;      // the file was gzip-compressed
-    uint64_t file_faces = 0;      // faces (polygons) the file holds
-    uint64_t polygons = 0;        // of those, faces with more than three corners
-    uint64_t triangles = 0;       // after fan triangulation; equals the scene's count
-    uint64_t vertices = 0;        // equals the file's vertex count (STL: distinct positions)
+    std::string format;       // "obj", "ply", "off" or "stl" (the inner format of a .gz)
+    bool compressed = false;  // the file was gzip-compressed
+    uint64_t file_faces = 0;  // faces (polygons) the file holds
+    uint64_t polygons = 0;    // of those, faces with more than three corners
+    uint64_t triangles = 0;   // after fan triangulation; equals the scene's count
+    uint64_t vertices = 0;    // equals the file's vertex count (STL: distinct positions)
 };
 
 // The largest (decompressed) file load_mesh reads: files are read into memory whole.

@@ -81,8 +81,8 @@ Scene flatten(const HalfEdgeMesh& mesh, const std::string& name, MeshTransformIn
 Scene decimate(const Scene& scene, size_t target_triangles, MeshTransformInfo* info) {
     if (target_triangles == 0 || target_triangles >= scene.triangle_count())
         throw std::invalid_argument("decimate: target " + std::to_string(target_triangles) +
-                                    " triangles must be in [1, " + std::to_string(scene.triangle_count()) +
-                                    ") for '" + scene.name + "'");
+                                    " triangles must be in [1, " + std::to_string(scene.triangle_count()) + ") for '" +
+                                    scene.name + "'");
     MeshTransformInfo local;
     MeshTransformInfo& i = info ? *info : local;
     i = {};
@@ -116,7 +116,8 @@ Scene loop_subdivide(const Scene& scene, int levels, MeshTransformInfo* info) {
     HalfEdgeMesh mesh = to_half_edge(scene, i);
     OpenMesh::Subdivider::Uniform::LoopT<HalfEdgeMesh> loop;
     loop.attach(mesh);
-    if (!loop(size_t(levels))) throw std::runtime_error("loop_subdivide: OpenMesh's Loop subdivider failed on '" + scene.name + "'");
+    if (!loop(size_t(levels)))
+        throw std::runtime_error("loop_subdivide: OpenMesh's Loop subdivider failed on '" + scene.name + "'");
     loop.detach();
     return flatten(mesh, scene.name, i);
 }

@@ -174,7 +174,7 @@ ProceduralScene make_forest(const ParamSet& p) {
     // About one tree per 10k triangles, so leaves stay small and dense at any size.
     const int trees = std::clamp(int(std::lround(double(target) / 10000.0)), 2, 60);
     const float forest_radius = 6.0f * std::sqrt(float(trees)) + 10.0f;  // metres
-    const float ground_half = 6.0f * forest_radius;  // reaches far toward the horizon
+    const float ground_half = 6.0f * forest_radius;                      // reaches far toward the horizon
 
     // Gently rolling ground, a grid of about 0.8% of the triangles.
     const float ph0 = rng.uniform(0, 2 * kPi), ph1 = rng.uniform(0, 2 * kPi), ph2 = rng.uniform(0, 2 * kPi);
@@ -187,8 +187,8 @@ ProceduralScene make_forest(const ParamSet& p) {
         for (int j = 0; j < grid; ++j) {
             const float x0 = -ground_half + cell * float(i), z0 = -ground_half + cell * float(j);
             const float x1 = x0 + cell, z1 = z0 + cell;
-            mesh.quad({x0, ground_height(x0, z0), z0}, {x0, ground_height(x0, z1), z1},
-                      {x1, ground_height(x1, z1), z1}, {x1, ground_height(x1, z0), z0}, vary(rng, kGround, 0.08f));
+            mesh.quad({x0, ground_height(x0, z0), z0}, {x0, ground_height(x0, z1), z1}, {x1, ground_height(x1, z1), z1},
+                      {x1, ground_height(x1, z0), z0}, vary(rng, kGround, 0.08f));
         }
 
     // Groves: trees gather around a few centres, keeping a minimum gap between trunks.
@@ -205,8 +205,9 @@ ProceduralScene make_forest(const ParamSet& p) {
             const Vec3 c = grove_centres[rng.below(uint32_t(groves))];
             // Sum of two uniforms: a soft, centre-heavy spread around the grove centre.
             const float spread = 0.3f * forest_radius;
-            Vec3 q = c + Vec3{rng.uniform(-1, 1) + rng.uniform(-1, 1), 0, rng.uniform(-1, 1) + rng.uniform(-1, 1)} *
-                             (0.5f * spread);
+            Vec3 q = c +
+                Vec3{rng.uniform(-1, 1) + rng.uniform(-1, 1), 0, rng.uniform(-1, 1) + rng.uniform(-1, 1)} *
+                    (0.5f * spread);
             const float r = length(q);
             if (r > forest_radius) q = q * (forest_radius / r);
             best = q;
@@ -268,12 +269,14 @@ ProceduralScene make_forest(const ParamSet& p) {
     }
 
     const size_t fixed = mesh.triangles();
-    if (size_t(target) < fixed + 10 * clusters.size()) too_few_triangles("forest", target, fixed + 10 * clusters.size());
+    if (size_t(target) < fixed + 10 * clusters.size())
+        too_few_triangles("forest", target, fixed + 10 * clusters.size());
     // Leaves per cluster in proportion to its surface (Thomsen's ellipsoid-area formula is
     // overkill; the mean of the pairwise radius products is close enough for a share).
     std::vector<double> surface;
     for (const auto& c : clusters)
-        surface.push_back(4.0 * double(kPi) * (c.radii.x * c.radii.y + c.radii.x * c.radii.z + c.radii.y * c.radii.z) / 3.0);
+        surface.push_back(4.0 * double(kPi) * (c.radii.x * c.radii.y + c.radii.x * c.radii.z + c.radii.y * c.radii.z) /
+                          3.0);
     const std::vector<size_t> leaves = proportional_shares(size_t(target) - fixed, surface);
     for (size_t k = 0; k < clusters.size(); ++k) {
         const LeafCluster& c = clusters[k];
@@ -288,10 +291,8 @@ ProceduralScene make_forest(const ParamSet& p) {
             const float shell = std::cbrt(rng.uniform(0.3f, 1.0f));
             const Vec3 at = c.centre + Vec3{d.x * c.radii.x, d.y * c.radii.y, d.z * c.radii.z} * shell;
             const Vec3 colour = vary(rng, c.colour, 0.15f);
-            if (c.needles)
-                mesh.random_triangle(rng, at, 1.6f * r, 0.3f * r, colour);
-            else
-                mesh.random_triangle(rng, at, r, 0.866f * r, colour);
+            if (c.needles) mesh.random_triangle(rng, at, 1.6f * r, 0.3f * r, colour);
+            else mesh.random_triangle(rng, at, r, 0.866f * r, colour);
         }
     }
 
@@ -325,7 +326,7 @@ constexpr Vec3 kFacadeColours[] = {{0.92f, 0.90f, 0.84f}, {0.95f, 0.80f, 0.62f},
                                    {0.55f, 0.80f, 0.78f}, {0.95f, 0.88f, 0.55f}, {0.75f, 0.82f, 0.90f}};
 
 constexpr float kFloorHeight = 3.5f, kBayWidth = 3.0f;  // the window grid at scale 1
-constexpr size_t kWindowTriangles = 18;                   // 8 frame + 10 recess
+constexpr size_t kWindowTriangles = 18;                 // 8 frame + 10 recess
 
 struct Tier {
     Bounds3 box;  // walls from box.lower.y to box.upper.y
@@ -457,12 +458,14 @@ ProceduralScene make_city(const ParamSet& p) {
                         const float top = t + 1 == levels ? kerb + height : y + share * (kerb + height - y);
                         tiers.push_back({{{fp.lower.x, y, fp.lower.z}, {fp.upper.x, top, fp.upper.z}}, colour});
                         // A cornice slab crowns each tier; its top is the roof.
-                        mesh.box({{fp.lower.x - 0.4f, top - 0.5f, fp.lower.z - 0.4f}, {fp.upper.x + 0.4f, top + 0.3f, fp.upper.z + 0.4f}},
+                        mesh.box({{fp.lower.x - 0.4f, top - 0.5f, fp.lower.z - 0.4f},
+                                  {fp.upper.x + 0.4f, top + 0.3f, fp.upper.z + 0.4f}},
                                  colour * 0.9f);
                         roof_tiers.push_back(tiers.size() - 1);
                         // The next tier sets back 1.5-3 m a side (keeping at least 5 m).
-                        const float inset = std::min(rng.uniform(1.5f, 3.0f),
-                                                     0.5f * (std::min(fp.upper.x - fp.lower.x, fp.upper.z - fp.lower.z) - 5.0f));
+                        const float inset =
+                            std::min(rng.uniform(1.5f, 3.0f),
+                                     0.5f * (std::min(fp.upper.x - fp.lower.x, fp.upper.z - fp.lower.z) - 5.0f));
                         fp = {{fp.lower.x + std::max(0.0f, inset), top, fp.lower.z + std::max(0.0f, inset)},
                               {fp.upper.x - std::max(0.0f, inset), top, fp.upper.z - std::max(0.0f, inset)}};
                         y = top;
@@ -477,7 +480,8 @@ ProceduralScene make_city(const ParamSet& p) {
                     const int units = 1 + int(rng.below(3));
                     for (int u = 0; u < units; ++u) {
                         const Vec3 c = roof_point(2.0f);
-                        const float sx = rng.uniform(0.8f, 1.8f), sz = rng.uniform(0.8f, 1.8f), sy = rng.uniform(0.6f, 1.4f);
+                        const float sx = rng.uniform(0.8f, 1.8f), sz = rng.uniform(0.8f, 1.8f),
+                                    sy = rng.uniform(0.6f, 1.4f);
                         mesh.box({{c.x - sx, ry, c.z - sz}, {c.x + sx, ry + sy, c.z + sz}}, kMetal, false);
                     }
                     const Vec3 tank = roof_point(2.0f);
@@ -486,7 +490,8 @@ ProceduralScene make_city(const ParamSet& p) {
                     mesh.disc(tank + Vec3{0, tank_h, 0}, tank_r, 8, kRoofGrey);
                     const Vec3 mast = roof_point(1.0f);
                     const float mast_h = rng.uniform(3.0f, 9.0f);
-                    mesh.box({{mast.x - 0.1f, ry, mast.z - 0.1f}, {mast.x + 0.1f, ry + mast_h, mast.z + 0.1f}}, kMetal, false);
+                    mesh.box({{mast.x - 0.1f, ry, mast.z - 0.1f}, {mast.x + 0.1f, ry + mast_h, mast.z + 0.1f}}, kMetal,
+                             false);
                 }
             // Palms on the pavement, near the block's corners.
             for (int k = 0; k < palms_per_block; ++k) {
@@ -583,13 +588,15 @@ const std::vector<ProceduralInfo>& procedural_registry() {
                      "under an empty sky",
                      size_and_seed("252000", "total triangle count (exact; the report's Trees scene has 252,178)"),
                      make_forest});
-        r.push_back({"city",
-                     "procedural analog of the report's Sci-Fi Tropical City (5.3.2), not that model: a street grid "
-                     "of set-back buildings with inset windows, cornices, rooftop machinery and palms, filling the view",
-                     size_and_seed("91000", "total triangle count (exact; the report's city has 90,811)"), make_city});
+        r.push_back(
+            {"city",
+             "procedural analog of the report's Sci-Fi Tropical City (5.3.2), not that model: a street grid "
+             "of set-back buildings with inset windows, cornices, rooftop machinery and palms, filling the view",
+             size_and_seed("91000", "total triangle count (exact; the report's city has 90,811)"), make_city});
         std::vector<ParamSpec> soup = size_and_seed("10000", "number of triangles");
         soup[0].min = 1;
-        soup.push_back({"size", ParamType::Float, "0.05", {}, 1e-6, 1.0, "triangle edge length, relative to the unit box"});
+        soup.push_back(
+            {"size", ParamType::Float, "0.05", {}, 1e-6, 1.0, "triangle edge length, relative to the unit box"});
         r.push_back({"soup", "random equilateral triangles in random orientations in the unit box", soup, make_soup});
         return r;
     }();
@@ -606,7 +613,8 @@ ProceduralScene generate_procedural(const std::string& kind, const std::map<std:
                                     ParamSet* resolved) {
     const ProceduralInfo* info = find_procedural(kind);
     if (!info)
-        throw ParamError(unknown_name("procedural scene", kind, names_of(procedural_registry(), &ProceduralInfo::name)));
+        throw ParamError(
+            unknown_name("procedural scene", kind, names_of(procedural_registry(), &ProceduralInfo::name)));
     ParamSet set = resolve_params(kind, info->params, params, "procedural scene");
     ProceduralScene scene = info->generate(set);
     if (resolved) *resolved = std::move(set);

@@ -20,8 +20,8 @@
 #include <string_view>
 #include <vector>
 
-#include "accelbench/scene/camera.h"
 #include "accelbench/base/params.h"
+#include "accelbench/scene/camera.h"
 #include "accelbench/scene/light.h"
 #include "accelbench/scene/scene.h"
 

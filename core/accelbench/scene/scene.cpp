@@ -15,16 +15,17 @@ void Scene::finalize() {
         for (int k = 0; k < 3; ++k) {
             const uint32_t vi = triangles[i][k];
             if (vi >= vertices.size())
-                throw std::runtime_error("scene '" + name + "': face " + std::to_string(i) +
-                                         " uses vertex index " + std::to_string(vi) + " but there are only " +
-                                         std::to_string(vertices.size()) + " vertices");
+                throw std::runtime_error("scene '" + name + "': face " + std::to_string(i) + " uses vertex index " +
+                                         std::to_string(vi) + " but there are only " + std::to_string(vertices.size()) +
+                                         " vertices");
             if (!is_finite(vertices[vi]))
-                throw std::runtime_error("scene '" + name + "': face " + std::to_string(i) +
-                                         " uses vertex " + std::to_string(vi) + " whose coordinates are not finite");
+                throw std::runtime_error("scene '" + name + "': face " + std::to_string(i) + " uses vertex " +
+                                         std::to_string(vi) + " whose coordinates are not finite");
             const Vec3 p = vertices[vi];
             if (!within_coordinate_limit(p))
                 throw std::runtime_error("scene '" + name + "': face " + std::to_string(i) + " uses vertex " +
-                                         std::to_string(vi) + " with a coordinate of magnitude 1.844e18 or more "
+                                         std::to_string(vi) +
+                                         " with a coordinate of magnitude 1.844e18 or more "
                                          "(the limit kMaxCoordinate, Embree's FLT_LARGE)");
             b.extend(p);
         }

@@ -75,11 +75,10 @@ HitErrors compare_occlusion(std::span<const uint8_t> occluded, std::span<const u
 
 ImageErrors compare_images(const Image& image, const Image& reference, std::span<const Hit> hits,
                            std::span<const Hit> reference_hits, int samples_per_pixel) {
-    if (image.width != reference.width || image.height != reference.height ||
-        image.rgb.size() != reference.rgb.size())
+    if (image.width != reference.width || image.height != reference.height || image.rgb.size() != reference.rgb.size())
         throw std::invalid_argument("compare_images: image sizes differ (" + std::to_string(image.width) + "x" +
-                                    std::to_string(image.height) + " against " + std::to_string(reference.width) +
-                                    "x" + std::to_string(reference.height) + ")");
+                                    std::to_string(image.height) + " against " + std::to_string(reference.width) + "x" +
+                                    std::to_string(reference.height) + ")");
     const size_t pixels = size_t(image.width) * size_t(image.height);
     if (samples_per_pixel < 1 || hits.size() != pixels * size_t(samples_per_pixel) ||
         reference_hits.size() != hits.size())

@@ -13,9 +13,9 @@
 #include <tuple>
 #include <utility>
 
-#include "accelbench/base/random.h"
 #include "accelbench/accel/baseline/reference.h"
 #include "accelbench/accel/registry.h"
+#include "accelbench/base/random.h"
 
 namespace accelbench {
 
@@ -87,13 +87,15 @@ uint32_t grid_prim_at(uint32_t first, int n, float u, float v, float cell = 1.0f
     return first + 2 * uint32_t(j * n + i) + (fu > fv ? 0 : 1);
 }
 
-Vec3 centroid(const Scene& s, uint32_t prim) { return (s.vertex(prim, 0) + s.vertex(prim, 1) + s.vertex(prim, 2)) / 3.0f; }
+Vec3 centroid(const Scene& s, uint32_t prim) {
+    return (s.vertex(prim, 0) + s.vertex(prim, 1) + s.vertex(prim, 2)) / 3.0f;
+}
 
 // Icosahedron subdivided `levels` times, vertices on the unit sphere, faces outward.
 Scene icosphere(int levels) {
     const float g = (1.0f + std::sqrt(5.0f)) / 2.0f;
-    std::vector<Vec3> v = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
-                           {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+    std::vector<Vec3> v = {{-1, g, 0},  {1, g, 0},  {-1, -g, 0}, {1, -g, 0}, {0, -1, g},  {0, 1, g},
+                           {0, -1, -g}, {0, 1, -g}, {g, 0, -1},  {g, 0, 1},  {-g, 0, -1}, {-g, 0, 1}};
     for (auto& p : v) p = normalize(p);
     std::vector<std::array<uint32_t, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                                               {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
@@ -164,8 +166,7 @@ bool strictly_inside(const Scene& mesh, Vec3 p) {
         }
         auto dot3 = [&](int i, int j) { return q[i][0] * q[j][0] + q[i][1] * q[j][1] + q[i][2] * q[j][2]; };
         const double det = q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) -
-                           q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
-                           q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
+            q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) + q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
         const double den = len[0] * len[1] * len[2] + dot3(0, 1) * len[2] + dot3(0, 2) * len[1] + dot3(1, 2) * len[0];
         total += 2.0 * std::atan2(det, den);
     }
@@ -212,7 +213,8 @@ RobustnessCase closed_meshes(std::string id, std::string name, float scale, floa
     for (const Part& part : parts) {
         auto place = [&](Vec3 p) { return transform(p + part.shift, scale, offset); };
         for (const auto& t : part.mesh.triangles)
-            m.triangle(place(part.mesh.vertices[t[0]]), place(part.mesh.vertices[t[1]]), place(part.mesh.vertices[t[2]]));
+            m.triangle(place(part.mesh.vertices[t[0]]), place(part.mesh.vertices[t[1]]),
+                       place(part.mesh.vertices[t[2]]));
     }
     c.scene = std::move(m.scene());
     // At large offsets rounding merges origins and targets (the sphere at 1e7 falls onto a
@@ -554,8 +556,8 @@ RobustnessCase bad_input(std::string id, std::string name, std::string requireme
         case 2: s.vertices.push_back({0, 0, 2e19f}); break;
         default: s.vertices.push_back({1, 1, 1}); break;
     }
-    if (variant <= 2) s.triangles[bad][1] = v;                  // a face uses the bad vertex
-    if (variant == 3) s.triangles[bad][2] = v + 7;              // an index past the end
+    if (variant <= 2) s.triangles[bad][1] = v;                 // a face uses the bad vertex
+    if (variant == 3) s.triangles[bad][2] = v + 7;             // an index past the end
     if (variant == 4) s.vertices.back() = {kNaN, kNaN, kNaN};  // unused by any face
     c.scene = std::move(s);
     if (variant <= 3) {
@@ -620,7 +622,8 @@ RobustnessCase nested_shells() {
     }
     c.scene = std::move(m.scene());
     SplitMix64 draw(16);
-    for (int i = 0; i < 400; ++i) add_ray(c, {{0, 0, 0}, 0.0f, draw.unit_vector(), kInfinity}, prim_range(0, per_shell - 1));
+    for (int i = 0; i < 400; ++i)
+        add_ray(c, {{0, 0, 0}, 0.0f, draw.unit_vector(), kInfinity}, prim_range(0, per_shell - 1));
     for (int i = 0; i < 400; ++i) {
         const Vec3 from = draw.unit_vector() * 3.0f, to = draw.unit_vector() * 0.3f;
         add_ray(c, {from, 0.0f, to - from, kInfinity}, prim_range(2 * per_shell, 3 * per_shell - 1));
@@ -719,15 +722,21 @@ const std::vector<RobustnessCaseEntry>& robustness_case_list() {
          [] {
              return bad_input("14c", "huge-vertex",
                               "a face using a vertex with a coordinate of 2e19 (>= kMaxCoordinate = 1.844e18, "
-                              "Embree's limit) is " + kRejected, 2);
+                              "Embree's limit) is " +
+                                  kRejected,
+                              2);
          }},
         {"14d",
-         [] { return bad_input("14d", "index-out-of-range", "a face with an index past the vertex array is " + kRejected, 3); }},
+         [] {
+             return bad_input("14d", "index-out-of-range", "a face with an index past the vertex array is " + kRejected,
+                              3);
+         }},
         {"14e",
          [] {
              return bad_input("14e", "unused-nan-vertex",
                               "a NaN vertex that no face uses is accepted and harmless: every floor triangle is hit "
-                              "at its centroid", 4);
+                              "at its centroid",
+                              4);
          }},
         {"15", invalid_rays},
         {"16", nested_shells},
@@ -775,11 +784,12 @@ uint64_t case_memory_limit(const Scene& scene) { return 4096 * uint64_t(scene.tr
 
 std::string CaseVerdict::counts() const {
     std::string s = "leaks=" + std::to_string(leaks) + " false_hits=" + std::to_string(false_hits) +
-                    " wrong_prims=" + std::to_string(wrong_prims) + " nan=" + std::to_string(nan_results) +
-                    " occlusion_mismatches=" + std::to_string(occlusion_mismatches) +
-                    " nondeterministic=" + std::to_string(nondeterministic);
+        " wrong_prims=" + std::to_string(wrong_prims) + " nan=" + std::to_string(nan_results) +
+        " occlusion_mismatches=" + std::to_string(occlusion_mismatches) +
+        " nondeterministic=" + std::to_string(nondeterministic);
     if (leaks_tolerated) s += " leaks_tolerated=" + std::to_string(leaks_tolerated);
-    if (max_depth) s += " depth=" + std::to_string(*max_depth) + "/" + (depth_limit ? std::to_string(*depth_limit) : "-");
+    if (max_depth)
+        s += " depth=" + std::to_string(*max_depth) + "/" + (depth_limit ? std::to_string(*depth_limit) : "-");
     s += " rays=" + std::to_string(rays);
     return s;
 }
@@ -788,7 +798,7 @@ namespace {
 
 bool same_hit(const Hit& a, const Hit& b) {
     return a.prim == b.prim && std::memcmp(&a.t, &b.t, sizeof a.t) == 0 && std::memcmp(&a.u, &b.u, sizeof a.u) == 0 &&
-           std::memcmp(&a.v, &b.v, sizeof a.v) == 0;
+        std::memcmp(&a.v, &b.v, sizeof a.v) == 0;
 }
 
 }  // namespace
@@ -805,7 +815,8 @@ CaseVerdict judge_case(const RobustnessCase& c, const AcceleratorFactory& make, 
         } catch (const std::exception& e) {
             const std::string message = e.what();
             v.pass = message.find(c.rejection_mentions) != std::string::npos;
-            v.detail = (v.pass ? "rejected at load: " : "rejected without naming '" + c.rejection_mentions + "': ") + message;
+            v.detail =
+                (v.pass ? "rejected at load: " : "rejected without naming '" + c.rejection_mentions + "': ") + message;
         }
         return v;
     }
@@ -847,10 +858,8 @@ CaseVerdict judge_case(const RobustnessCase& c, const AcceleratorFactory& make, 
                 break;
             case Expect::Hit:
             case Expect::Prim:
-                if (!h.found())
-                    ++(tolerated ? v.leaks_tolerated : v.leaks);
-                else if (e.kind == Expect::Prim && (h.prim < e.prim_lo || h.prim > e.prim_hi))
-                    ++v.wrong_prims;
+                if (!h.found()) ++(tolerated ? v.leaks_tolerated : v.leaks);
+                else if (e.kind == Expect::Prim && (h.prim < e.prim_lo || h.prim > e.prim_hi)) ++v.wrong_prims;
                 break;
         }
     }
@@ -881,8 +890,9 @@ CaseVerdict judge_case(const RobustnessCase& c, const std::string& accelerator,
                        const std::map<std::string, std::string>& params) {
     ParamSet resolved;
     make_accelerator(accelerator, params, &resolved);  // validates now, so errors are not taken for build failures
-    return judge_case(c, [&] { return make_accelerator(accelerator, params); },
-                      judge_options(*find_accelerator(accelerator), resolved));
+    return judge_case(
+        c, [&] { return make_accelerator(accelerator, params); },
+        judge_options(*find_accelerator(accelerator), resolved));
 }
 
 }  // namespace accelbench

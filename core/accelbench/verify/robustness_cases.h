@@ -41,9 +41,9 @@
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
-#include "accelbench/verify/error_metrics.h"
 #include "accelbench/base/params.h"
 #include "accelbench/scene/scene.h"
+#include "accelbench/verify/error_metrics.h"
 
 namespace accelbench {
 
@@ -126,7 +126,7 @@ struct CaseVerdict {
     uint64_t occlusion_mismatches = 0;  // any_hits disagrees with closest_hits on hit/miss
     uint64_t nondeterministic = 0;      // answers differing between two traces or two builds
     std::optional<uint64_t> max_depth, depth_limit, memory_bytes, memory_limit;
-    HitErrors vs_reference;             // informational: error against the reference
+    HitErrors vs_reference;  // informational: error against the reference
 
     // "leaks=0 false_hits=0 ..." for the verdict table.
     std::string counts() const;

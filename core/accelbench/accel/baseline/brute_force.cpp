@@ -7,13 +7,14 @@
 namespace accelbench {
 
 AcceleratorInfo BruteForce::info() {
-    return {"brute_force",
-            "tests every triangle for every ray (report section 1.2); refuses scenes above max_triangles unless force=true",
-            {
-                {"max_triangles", ParamType::Int, "20000", {}, 0, 1e12, "largest scene it builds without force"},
-                {"force", ParamType::Bool, "false", {}, 0, 1, "build even above max_triangles"},
-            },
-            [](const ParamSet& p) { return std::make_unique<BruteForce>(Config::from(p)); }};
+    return {
+        "brute_force",
+        "tests every triangle for every ray (report section 1.2); refuses scenes above max_triangles unless force=true",
+        {
+            {"max_triangles", ParamType::Int, "20000", {}, 0, 1e12, "largest scene it builds without force"},
+            {"force", ParamType::Bool, "false", {}, 0, 1, "build even above max_triangles"},
+        },
+        [](const ParamSet& p) { return std::make_unique<BruteForce>(Config::from(p)); }};
 }
 
 BruteForce::Config BruteForce::Config::from(const ParamSet& p) {
@@ -45,8 +46,8 @@ void BruteForce::intersect(const Ray& ray, Hit& hit, C& counters) const {
     for (uint32_t i = 0; i < n; ++i) {
         counters.prim();
         float t, u, v;
-        if (intersect_triangle(wr, scene_->vertex(i, 0), scene_->vertex(i, 1), scene_->vertex(i, 2), ray.tmin,
-                               tmax, t, u, v)) {
+        if (intersect_triangle(wr, scene_->vertex(i, 0), scene_->vertex(i, 1), scene_->vertex(i, 2), ray.tmin, tmax, t,
+                               u, v)) {
             tmax = t;
             hit = {i, t, u, v};
         }
@@ -60,8 +61,8 @@ bool BruteForce::occluded(const Ray& ray, C& counters) const {
     for (uint32_t i = 0; i < n; ++i) {
         counters.prim();
         float t, u, v;
-        if (intersect_triangle(wr, scene_->vertex(i, 0), scene_->vertex(i, 1), scene_->vertex(i, 2), ray.tmin,
-                               ray.tmax, t, u, v))
+        if (intersect_triangle(wr, scene_->vertex(i, 0), scene_->vertex(i, 1), scene_->vertex(i, 2), ray.tmin, ray.tmax,
+                               t, u, v))
             return true;
     }
     return false;

@@ -23,8 +23,10 @@ public:
     void build(const Scene& scene) override;
     BuildStats build_stats() const override;
 
-    template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
-    template <class C> bool occluded(const Ray& ray, C& counters) const;
+    template <class C>
+    void intersect(const Ray& ray, Hit& hit, C& counters) const;
+    template <class C>
+    bool occluded(const Ray& ray, C& counters) const;
 
 private:
     Config config_;

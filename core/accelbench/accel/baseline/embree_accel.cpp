@@ -10,7 +10,12 @@ AcceleratorInfo EmbreeAccel::info() {
             .description = "Intel Embree 3 (rtcIntersect1/rtcOccluded1), the production baseline",
             .params =
                 {
-                    {"threads", ParamType::Int, "1", {}, 0, 1024,
+                    {"threads",
+                     ParamType::Int,
+                     "1",
+                     {},
+                     0,
+                     1024,
                      "device build threads (0 = all cores); 1 for single-thread comparisons"},
                     {"quality", ParamType::Enum, "medium", {"low", "medium", "high"}, 0, 0, "RTC_BUILD_QUALITY_*"},
                     {"robust", ParamType::Bool, "false", {}, 0, 1, "RTC_SCENE_FLAG_ROBUST (watertight, slower)"},
@@ -28,7 +33,9 @@ AcceleratorInfo EmbreeAccel::info() {
 EmbreeAccel::Config EmbreeAccel::Config::from(const ParamSet& p) {
     const std::string& q = p.get_enum("quality");
     return {.threads = int(p.get_int("threads")),
-            .quality = q == "low" ? RTC_BUILD_QUALITY_LOW : q == "high" ? RTC_BUILD_QUALITY_HIGH : RTC_BUILD_QUALITY_MEDIUM,
+            .quality = q == "low" ? RTC_BUILD_QUALITY_LOW
+                : q == "high"     ? RTC_BUILD_QUALITY_HIGH
+                                  : RTC_BUILD_QUALITY_MEDIUM,
             .robust = p.get_bool("robust"),
             .compact = p.get_bool("compact")};
 }
@@ -44,7 +51,8 @@ void error_callback(void*, RTCError code, const char* str) {
 
 void check(RTCDevice device, const char* what) {
     RTCError err = rtcGetDeviceError(device);
-    if (err != RTC_ERROR_NONE) throw std::runtime_error(std::string("embree: ") + what + " failed (error " + std::to_string(int(err)) + ")");
+    if (err != RTC_ERROR_NONE)
+        throw std::runtime_error(std::string("embree: ") + what + " failed (error " + std::to_string(int(err)) + ")");
 }
 
 }  // namespace
@@ -63,7 +71,7 @@ EmbreeAccel::~EmbreeAccel() {
 
 std::string EmbreeAccel::version() {
     return std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
-           std::to_string(RTC_VERSION_PATCH);
+        std::to_string(RTC_VERSION_PATCH);
 }
 
 void EmbreeAccel::build(const Scene& scene) {
@@ -111,8 +119,12 @@ void EmbreeAccel::closest_hits(std::span<const Ray> rays, std::span<Hit> hits, s
             continue;
         }
         RTCRayHit rh;
-        rh.ray.org_x = r.org.x; rh.ray.org_y = r.org.y; rh.ray.org_z = r.org.z;
-        rh.ray.dir_x = r.dir.x; rh.ray.dir_y = r.dir.y; rh.ray.dir_z = r.dir.z;
+        rh.ray.org_x = r.org.x;
+        rh.ray.org_y = r.org.y;
+        rh.ray.org_z = r.org.z;
+        rh.ray.dir_x = r.dir.x;
+        rh.ray.dir_y = r.dir.y;
+        rh.ray.dir_z = r.dir.z;
         rh.ray.tnear = r.tmin;
         rh.ray.tfar = r.tmax;
         rh.ray.time = 0.0f;
@@ -123,10 +135,8 @@ void EmbreeAccel::closest_hits(std::span<const Ray> rays, std::span<Hit> hits, s
         rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(scene_, &ctx, &rh);
-        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
-            hits[i] = Hit{rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v};
-        else
-            hits[i] = Hit{};
+        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) hits[i] = Hit{rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v};
+        else hits[i] = Hit{};
     }
 }
 
@@ -141,8 +151,12 @@ void EmbreeAccel::any_hits(std::span<const Ray> rays, std::span<uint8_t> occlude
             continue;
         }
         RTCRay ray;
-        ray.org_x = r.org.x; ray.org_y = r.org.y; ray.org_z = r.org.z;
-        ray.dir_x = r.dir.x; ray.dir_y = r.dir.y; ray.dir_z = r.dir.z;
+        ray.org_x = r.org.x;
+        ray.org_y = r.org.y;
+        ray.org_z = r.org.z;
+        ray.dir_x = r.dir.x;
+        ray.dir_y = r.dir.y;
+        ray.dir_z = r.dir.z;
         ray.tnear = r.tmin;
         ray.tfar = r.tmax;
         ray.time = 0.0f;

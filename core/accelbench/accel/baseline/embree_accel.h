@@ -12,10 +12,10 @@ class EmbreeAccel final : public Accelerator {
 public:
     // The parameters, each as declared in info() (the defaults live there only).
     struct Config {
-        int threads = 0;                               // device build threads (0: all cores)
+        int threads = 0;                                     // device build threads (0: all cores)
         RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;  // RTC_BUILD_QUALITY_*
-        bool robust = false;                           // RTC_SCENE_FLAG_ROBUST: watertight, slower
-        bool compact = false;                          // RTC_SCENE_FLAG_COMPACT: less memory
+        bool robust = false;                                 // RTC_SCENE_FLAG_ROBUST: watertight, slower
+        bool compact = false;                                // RTC_SCENE_FLAG_COMPACT: less memory
         static Config from(const ParamSet& params);
     };
 
@@ -26,8 +26,7 @@ public:
     EmbreeAccel& operator=(const EmbreeAccel&) = delete;
 
     void build(const Scene& scene) override;
-    void closest_hits(std::span<const Ray> rays, std::span<Hit> hits,
-                      std::span<RayStats> stats = {}) const override;
+    void closest_hits(std::span<const Ray> rays, std::span<Hit> hits, std::span<RayStats> stats = {}) const override;
     void any_hits(std::span<const Ray> rays, std::span<uint8_t> occluded,
                   std::span<RayStats> stats = {}) const override;
     // Embree does not expose node counts or per-ray statistics: those stay missing.

@@ -145,14 +145,16 @@ void ReferenceAccel::build(const Scene& scene) {
     std::vector<double> centroids(3 * n);
     for (size_t i = 0; i < n; ++i)
         for (int a = 0; a < 3; ++a)
-            centroids[3 * i + a] = 0.5 * (double(scene.prim_bounds[i].lower[a]) + double(scene.prim_bounds[i].upper[a]));
+            centroids[3 * i + a] =
+                0.5 * (double(scene.prim_bounds[i].lower[a]) + double(scene.prim_bounds[i].upper[a]));
     nodes_.reserve(2 * (n / config_.leaf_size + 1));
     build_node(0, uint32_t(n), 0, centroids);
     if (depth_ >= uint32_t(kStackSize))  // cannot happen with median splits; guards the stack
         throw std::logic_error("reference: depth " + std::to_string(depth_) + " exceeds the traversal stack");
 }
 
-uint32_t ReferenceAccel::build_node(uint32_t begin, uint32_t end, uint32_t depth, const std::vector<double>& centroids) {
+uint32_t ReferenceAccel::build_node(uint32_t begin, uint32_t end, uint32_t depth,
+                                    const std::vector<double>& centroids) {
     const uint32_t index = uint32_t(nodes_.size());
     nodes_.emplace_back();
     depth_ = std::max(depth_, depth);

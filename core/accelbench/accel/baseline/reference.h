@@ -70,10 +70,13 @@ public:
     BuildStats build_stats() const override;
 
     // The closest hit in double precision.
-    template <class C> void intersect_double(const Ray& ray, ReferenceHit& hit, C& counters) const;
+    template <class C>
+    void intersect_double(const Ray& ray, ReferenceHit& hit, C& counters) const;
 
-    template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
-    template <class C> bool occluded(const Ray& ray, C& counters) const;
+    template <class C>
+    void intersect(const Ray& ray, Hit& hit, C& counters) const;
+    template <class C>
+    bool occluded(const Ray& ray, C& counters) const;
 
     // Traversal stack entries: the median split keeps depth <= 32 for any scene of
     // 32-bit primitive ids, and build() checks it.

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
-#include <span>
 #include <vector>
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
@@ -40,21 +40,51 @@ AcceleratorInfo Bvh::info() {
                  "centroid method), centroid mean, equal triangle area (spatial median), binned SAH (Wald 2007)"},
                 {"axis", ParamType::Enum, std::string(kAxisNames[size_t(d.axis)]), choices(kAxisNames), 0, 0,
                  "split axis: longest axis of the node's centroid box (report, Figure 6) or x, y, z by depth"},
-                {"max_prims", ParamType::Int, "auto", {}, 1, BvhNode::kMaxLeafPrims,
+                {"max_prims",
+                 ParamType::Int,
+                 "auto",
+                 {},
+                 1,
+                 BvhNode::kMaxLeafPrims,
                  "largest leaf; auto = " + std::to_string(Config::default_max_prims(Split::median)) +
                      " for the report's splits, " + std::to_string(Config::default_max_prims(Split::sah)) +
                      " for sah, which makes a leaf wherever its SAH cost is not above the best split's",
                  true},
-                {"max_depth", ParamType::Int, format_param(int64_t(d.max_depth)), {}, 0, 1000,
+                {"max_depth",
+                 ParamType::Int,
+                 format_param(int64_t(d.max_depth)),
+                 {},
+                 0,
+                 1000,
                  "nodes at this depth become leaves whatever their size (report Table 3: 50)"},
-                {"bins", ParamType::Int, format_param(int64_t(d.bins)), {}, 2, 1024,
+                {"bins",
+                 ParamType::Int,
+                 format_param(int64_t(d.bins)),
+                 {},
+                 2,
+                 1024,
                  "SAH bins along the split axis (split=sah only)"},
-                {"traversal_cost", ParamType::Float, format_param(double(d.traversal_cost)), {}, 0, 1e6,
+                {"traversal_cost",
+                 ParamType::Float,
+                 format_param(double(d.traversal_cost)),
+                 {},
+                 0,
+                 1e6,
                  "SAH cost of visiting a node (split=sah only)"},
-                {"isect_cost", ParamType::Float, format_param(double(d.isect_cost)), {}, 1e-6, 1e6,
+                {"isect_cost",
+                 ParamType::Float,
+                 format_param(double(d.isect_cost)),
+                 {},
+                 1e-6,
+                 1e6,
                  "SAH cost of one triangle test (split=sah only)"},
                 bvh_traversal_param(),
-                {"reinsertion", ParamType::Int, format_param(int64_t(d.reinsertion)), {}, 0, 100,
+                {"reinsertion",
+                 ParamType::Int,
+                 format_param(int64_t(d.reinsertion)),
+                 {},
+                 0,
+                 100,
                  "passes of the reinsertion optimizer after the build (Meister & Bittner 2018; 0 = off, bvh v2 "
                  "uses 3): lower SAH cost for a longer build, the same answers"},
             },
@@ -81,7 +111,8 @@ namespace {
 // split when that leaves a side empty.
 std::optional<BvhSplit> partition_at(std::span<BvhPrimRef> refs, int axis, float plane) {
     const size_t mid = with_axis(axis, [&](auto a) {
-        return size_t(std::partition(refs.begin(), refs.end(), [a, plane](const BvhPrimRef& r) { return r.centroid(a) < plane; }) -
+        return size_t(std::partition(refs.begin(), refs.end(),
+                                     [a, plane](const BvhPrimRef& r) { return r.centroid(a) < plane; }) -
                       refs.begin());
     });
     if (mid == 0 || mid == refs.size()) return std::nullopt;
@@ -128,7 +159,8 @@ public:
     explicit SpatialMedianSplit(const Scene& scene) : area_(scene.triangle_count()) {
         for (size_t i = 0; i < area_.size(); ++i) {
             const Vec3 p0 = scene.vertex(uint32_t(i), 0);
-            area_[i] = 0.5 * double(length(cross(scene.vertex(uint32_t(i), 1) - p0, scene.vertex(uint32_t(i), 2) - p0)));
+            area_[i] =
+                0.5 * double(length(cross(scene.vertex(uint32_t(i), 1) - p0, scene.vertex(uint32_t(i), 2) - p0)));
         }
     }
 
@@ -170,8 +202,13 @@ public:
     static constexpr bool kMayStopEarly = true;
 
     SahSplit(uint32_t bins, float traversal_cost, float isect_cost)
-        : bins_(bins), traversal_cost_(traversal_cost), isect_cost_(isect_cost), bin_bounds_(bins), bin_counts_(bins),
-          right_area_(bins), right_count_(bins) {}
+        : bins_(bins),
+          traversal_cost_(traversal_cost),
+          isect_cost_(isect_cost),
+          bin_bounds_(bins),
+          bin_counts_(bins),
+          right_area_(bins),
+          right_count_(bins) {}
 
     std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) {
         const int axis = r.axis;
@@ -216,7 +253,7 @@ public:
             count += bin_counts_[i - 1];
             if (right_count_[i] == 0) continue;
             const float cost = traversal_cost_ * node_area +
-                               isect_cost_ * (acc.area() * float(count) + right_area_[i] * float(right_count_[i]));
+                isect_cost_ * (acc.area() * float(count) + right_area_[i] * float(right_count_[i]));
             if (cost < best_cost) {
                 best_cost = cost;
                 best_plane = i;

@@ -43,15 +43,15 @@ public:
 
     // The parameters with their defaults (info() declares them from these values).
     struct Config {
-        Split split = Split::median;               // where a node splits (report 2.2.1: median)
-        BvhAxisRule axis = BvhAxisRule::longest;   // split axis (report, Figure 6)
-        std::optional<uint32_t> max_prims;         // largest leaf; empty: default_max_prims(split)
-        uint32_t max_depth = 50;                   // nodes at this depth are leaves (report Table 3)
-        uint32_t bins = 16;                        // SAH bins (split=sah)
-        float traversal_cost = 1.0f;               // SAH cost of a node visit (split=sah)
-        float isect_cost = 1.0f;                   // SAH cost of a triangle test (split=sah)
+        Split split = Split::median;              // where a node splits (report 2.2.1: median)
+        BvhAxisRule axis = BvhAxisRule::longest;  // split axis (report, Figure 6)
+        std::optional<uint32_t> max_prims;        // largest leaf; empty: default_max_prims(split)
+        uint32_t max_depth = 50;                  // nodes at this depth are leaves (report Table 3)
+        uint32_t bins = 16;                       // SAH bins (split=sah)
+        float traversal_cost = 1.0f;              // SAH cost of a node visit (split=sah)
+        float isect_cost = 1.0f;                  // SAH cost of a triangle test (split=sah)
         BvhTraversal traversal = BvhTraversal::ordered;
-        uint32_t reinsertion = 0;                  // reinsertion passes after the build (0: off)
+        uint32_t reinsertion = 0;  // reinsertion passes after the build (0: off)
 
         static Config from(const ParamSet& params);
         // 1 for the report's splits, which always split down to one triangle; 8 for the
@@ -67,8 +67,10 @@ public:
     void build(const Scene& scene) override;
     BuildStats build_stats() const override;
 
-    template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
-    template <class C> bool occluded(const Ray& ray, C& counters) const;
+    template <class C>
+    void intersect(const Ray& ray, Hit& hit, C& counters) const;
+    template <class C>
+    bool occluded(const Ray& ray, C& counters) const;
 
     const FlatBvh& tree() const { return bvh_; }
 

@@ -7,7 +7,7 @@ BvhMetrics measure_bvh(const FlatBvh& bvh) {
     m.nodes = bvh.nodes.size();
     m.max_depth = bvh.depth;
     m.memory_bytes = bvh.nodes.size() * sizeof(BvhNode) + bvh.prim_ids.size() * sizeof(uint32_t) +
-                     bvh.triangles.size() * sizeof(LeafTriangle);
+        bvh.triangles.size() * sizeof(LeafTriangle);
     double inner_area = 0, leaf_area = 0;  // sums in double: millions of terms
     uint64_t prims = 0;
     for (const BvhNode& n : bvh.nodes) {
@@ -21,8 +21,7 @@ BvhMetrics measure_bvh(const FlatBvh& bvh) {
     }
     if (m.leaves) m.avg_leaf_size = double(prims) / double(m.leaves);
     const double root_area = bvh.empty() ? 0.0 : double(bvh.nodes[0].bounds.area());
-    if (root_area > 0)
-        m.sah_cost = (kSahCostTraversal * inner_area + kSahCostIntersection * leaf_area) / root_area;
+    if (root_area > 0) m.sah_cost = (kSahCostTraversal * inner_area + kSahCostIntersection * leaf_area) / root_area;
     return m;
 }
 

@@ -27,9 +27,9 @@ namespace accelbench {
 struct BvhMetrics {
     uint64_t nodes = 0;
     uint64_t leaves = 0;
-    uint64_t max_depth = 0;      // edges on the longest root-to-leaf path (root alone: 0)
-    uint64_t memory_bytes = 0;   // nodes + primitive ids + leaf triangle copies
-    double avg_leaf_size = 0;    // primitives per leaf (0 without leaves)
+    uint64_t max_depth = 0;     // edges on the longest root-to-leaf path (root alone: 0)
+    uint64_t memory_bytes = 0;  // nodes + primitive ids + leaf triangle copies
+    double avg_leaf_size = 0;   // primitives per leaf (0 without leaves)
     std::optional<double> sah_cost;
 };
 

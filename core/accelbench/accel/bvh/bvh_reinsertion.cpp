@@ -15,8 +15,11 @@ namespace {
 class LinkedTree {
 public:
     explicit LinkedTree(const FlatBvh& bvh)
-        : nodes_(bvh.nodes), box_(bvh.nodes.size()), left_(bvh.nodes.size(), kInvalidId),
-          right_(bvh.nodes.size(), kInvalidId), parent_(bvh.nodes.size(), kInvalidId) {
+        : nodes_(bvh.nodes),
+          box_(bvh.nodes.size()),
+          left_(bvh.nodes.size(), kInvalidId),
+          right_(bvh.nodes.size(), kInvalidId),
+          parent_(bvh.nodes.size(), kInvalidId) {
         for (uint32_t i = 0; i < size(); ++i) {
             box_[i] = nodes_[i].bounds;
             if (nodes_[i].is_leaf()) continue;

@@ -162,10 +162,8 @@ namespace detail {
 
 template <class S>
 constexpr bool may_stop_early() {
-    if constexpr (requires { S::kMayStopEarly; })
-        return S::kMayStopEarly;
-    else
-        return false;
+    if constexpr (requires { S::kMayStopEarly; }) return S::kMayStopEarly;
+    else return false;
 }
 
 inline void fit(std::span<const BvhPrimRef> refs, Bounds3& bounds, Bounds3& centroid_bounds) {
@@ -192,7 +190,8 @@ inline void fit(std::span<const BvhPrimRef> refs, Bounds3& bounds, Bounds3& cent
 // into three groups (below, in, above that bin) through `scratch`, and nth_element
 // finishes inside the median's bin only. The binning is monotonic in the centroid, so
 // the three groups are ordered.
-inline BvhSplit split_equal_counts(std::span<BvhPrimRef> refs, std::span<BvhPrimRef> scratch, int axis, float lo, float hi) {
+inline BvhSplit split_equal_counts(std::span<BvhPrimRef> refs, std::span<BvhPrimRef> scratch, int axis, float lo,
+                                   float hi) {
     const size_t n = refs.size(), mid = n / 2;
     with_axis(axis, [&](auto a) {
         auto by_centroid = [a](const BvhPrimRef& x, const BvhPrimRef& y) { return x.centroid(a) < y.centroid(a); };
@@ -311,8 +310,8 @@ FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& setting
         Range second{mid, range.end, range.depth + 1, index, {}, {}};
         detail::fit(std::span<const BvhPrimRef>(refs.data() + first.begin, first.end - first.begin), first.bounds,
                     first.centroid_bounds);
-        detail::fit(std::span<const BvhPrimRef>(refs.data() + second.begin, second.end - second.begin),
-                    second.bounds, second.centroid_bounds);
+        detail::fit(std::span<const BvhPrimRef>(refs.data() + second.begin, second.end - second.begin), second.bounds,
+                    second.centroid_bounds);
         pending.push_back(second);
         range = first;
     }

@@ -62,7 +62,12 @@ enum class BvhTraversal { ordered, report };
 
 // The `traversal` parameter as both BVH structures declare it, and its value.
 inline ParamSpec bvh_traversal_param() {
-    return {"traversal", ParamType::Enum, "ordered", {"ordered", "report"}, 0, 0,
+    return {"traversal",
+            ParamType::Enum,
+            "ordered",
+            {"ordered", "report"},
+            0,
+            0,
             "ordered: near child first, clipped to the closest hit (pbrt/Embree); "
             "report: the report's Algorithm 1 (every hit box, nearest of the collected hits)"};
 }
@@ -137,8 +142,8 @@ inline bool intersect_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const Wa
 
 // Whether any triangle of one leaf lies within [tmin, tmax).
 template <class C>
-inline bool occluded_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const WatertightRay& wr, float tmin,
-                              float tmax, C& c) {
+inline bool occluded_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const WatertightRay& wr, float tmin, float tmax,
+                              C& c) {
     const uint32_t end = leaf.first_prim() + leaf.prim_count();
     for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
         c.prim();
@@ -255,17 +260,15 @@ ACCELBENCH_BVH_HOT void intersect_bvh_report(const FlatBvh& bvh, const Ray& ray,
 template <class C>
 ACCELBENCH_BVH_HOT bool occluded_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c) {
     const WatertightRay wr(ray);
-    return visit_bvh_report(bvh, ray, c,
-                            [&](const BvhNode& leaf) { return occluded_bvh_leaf(bvh, leaf, wr, ray.tmin, ray.tmax, c); });
+    return visit_bvh_report(
+        bvh, ray, c, [&](const BvhNode& leaf) { return occluded_bvh_leaf(bvh, leaf, wr, ray.tmin, ray.tmax, c); });
 }
 
 // Dispatch by the structure's `traversal` parameter (one predictable branch per ray).
 template <class C>
 inline void intersect_bvh(BvhTraversal traversal, const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
-    if (traversal == BvhTraversal::ordered)
-        intersect_bvh_ordered(bvh, ray, hit, c);
-    else
-        intersect_bvh_report(bvh, ray, hit, c);
+    if (traversal == BvhTraversal::ordered) intersect_bvh_ordered(bvh, ray, hit, c);
+    else intersect_bvh_report(bvh, ray, hit, c);
 }
 
 template <class C>

@@ -40,7 +40,8 @@ void FlatBvh::finalize(const Scene& scene) {
                                    std::to_string(second) + ", not after its first child and inside the array");
         pending.push_back({second, d + 1});
     }
-    if (!pending.empty()) throw std::logic_error("FlatBvh: second child " + std::to_string(pending.back().node) + " never reached");
+    if (!pending.empty())
+        throw std::logic_error("FlatBvh: second child " + std::to_string(pending.back().node) + " never reached");
 }
 
 }  // namespace accelbench

@@ -20,18 +20,48 @@ AcceleratorInfo Lbvh::info() {
             "linear BVH (report section 3): Morton codes of the centroids, one radix sort, split at the highest "
             "differing code bit (Karras 2012); node boxes bottom-up; optional subtree threads",
             {
-                {"bits", ParamType::Int, format_param(int64_t(d.bits)), {}, kMortonMinBits, kMortonMaxBits<uint64_t>,
+                {"bits",
+                 ParamType::Int,
+                 format_param(int64_t(d.bits)),
+                 {},
+                 kMortonMinBits,
+                 kMortonMaxBits<uint64_t>,
                  "Morton grid bits per axis (2^bits cells); up to 10 sorts 32-bit codes, 11..21 64-bit codes"},
-                {"max_prims", ParamType::Int, format_param(int64_t(d.max_prims)), {}, 1, BvhNode::kMaxLeafPrims,
+                {"max_prims",
+                 ParamType::Int,
+                 format_param(int64_t(d.max_prims)),
+                 {},
+                 1,
+                 BvhNode::kMaxLeafPrims,
                  "a range of at most this many primitives becomes a leaf (the report: 1)"},
-                {"max_depth", ParamType::Int, format_param(int64_t(d.max_depth)), {}, 0, 1000,
+                {"max_depth",
+                 ParamType::Int,
+                 format_param(int64_t(d.max_depth)),
+                 {},
+                 0,
+                 1000,
                  "a node at this depth becomes a leaf whatever its size (root: depth 0; the report: 50)"},
-                {"threads", ParamType::Int, format_param(int64_t(d.threads)), {}, 0, 256,
+                {"threads",
+                 ParamType::Int,
+                 format_param(int64_t(d.threads)),
+                 {},
+                 0,
+                 256,
                  "build threads (0 = all cores); the tree is the same for every value"},
-                {"task_threshold", ParamType::Int, format_param(int64_t(d.task_threshold)), {}, 1, 1e9,
+                {"task_threshold",
+                 ParamType::Int,
+                 format_param(int64_t(d.task_threshold)),
+                 {},
+                 1,
+                 1e9,
                  "a subtree goes to another thread only above this many primitives (the report: 100)"},
-                {"sort_digit_bits", ParamType::Int, format_param(int64_t(d.sort_digit_bits)), {}, kRadixMinDigitBits,
-                 kRadixMaxDigitBits, "radix sort digit width: bits per counting pass"},
+                {"sort_digit_bits",
+                 ParamType::Int,
+                 format_param(int64_t(d.sort_digit_bits)),
+                 {},
+                 kRadixMinDigitBits,
+                 kRadixMaxDigitBits,
+                 "radix sort digit width: bits per counting pass"},
                 bvh_traversal_param(),
             },
             [](const ParamSet& p) { return std::make_unique<Lbvh>(p); }};
@@ -110,8 +140,8 @@ private:
         return b;
     }
 
-    Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out,
-                        Lbvh::Counts& counts, int threads) {
+    Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts,
+                        int threads) {
         const uint32_t self = uint32_t(out.size());
         out.emplace_back();  // written once the children's bounds are known
         const Split split = find_split(begin, end);
@@ -124,8 +154,8 @@ private:
             // thread builds the first child meanwhile, then appends the second's nodes
             // right after the first's: the order a one-thread build produces. Each side
             // keeps at least one thread of the budget, the rest by primitive count.
-            const int task_threads = std::clamp(
-                int(int64_t(threads) * (end - split.index) / (end - begin)), 1, threads - 1);
+            const int task_threads =
+                std::clamp(int(int64_t(threads) * (end - split.index) / (end - begin)), 1, threads - 1);
             ++counts.tasks;
             std::vector<BvhNode> task_nodes;
             Lbvh::Counts task_counts;
@@ -196,16 +226,15 @@ private:
 }  // namespace
 
 void Lbvh::build(const Scene& scene) {
-    if (config_.bits <= kMortonMaxBits<uint32_t>)
-        build_with<uint32_t>(scene);
-    else
-        build_with<uint64_t>(scene);
+    if (config_.bits <= kMortonMaxBits<uint32_t>) build_with<uint32_t>(scene);
+    else build_with<uint64_t>(scene);
 }
 
 template <class Code>
 void Lbvh::build_with(const Scene& scene) {
     SortBuffers<Code>& buffers = [this]() -> SortBuffers<Code>& {
-        if constexpr (sizeof(Code) == 4) return sort32_; else return sort64_;
+        if constexpr (sizeof(Code) == 4) return sort32_;
+        else return sort64_;
     }();
     std::vector<KeyValue<Code>>& sorted = buffers.sorted;
     // The tree is rebuilt in place, reusing its arrays' capacity; a build that throws
@@ -216,8 +245,7 @@ void Lbvh::build_with(const Scene& scene) {
     const size_t n = scene.triangle_count();
     try {
         if (n > 0) {
-            if (n > UINT32_MAX / 2)
-                throw std::runtime_error("lbvh: scene '" + scene.name + "' has too many triangles");
+            if (n > UINT32_MAX / 2) throw std::runtime_error("lbvh: scene '" + scene.name + "' has too many triangles");
             // Codes over the centroid bounds, then one sort.
             const MortonQuantizer quantizer(point_bounds(scene.centroids), config_.bits);
             sorted.resize(n);
@@ -252,7 +280,7 @@ void Lbvh::build_with(const Scene& scene) {
 uint64_t Lbvh::reserved_bytes() const {
     auto bytes = [](const auto& v) { return uint64_t(v.capacity()) * sizeof(v[0]); };
     return bytes(bvh_.nodes) + bytes(bvh_.prim_ids) + bytes(bvh_.triangles) + bytes(sort32_.sorted) +
-           bytes(sort32_.scratch) + bytes(sort64_.sorted) + bytes(sort64_.scratch) + bytes(sorted_bounds_);
+        bytes(sort32_.scratch) + bytes(sort64_.sorted) + bytes(sort64_.scratch) + bytes(sorted_bounds_);
 }
 
 BuildStats Lbvh::build_stats() const {

@@ -27,8 +27,8 @@
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
-#include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
+#include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/accel/bvh/radix_sort.h"
 
 namespace accelbench {
@@ -40,14 +40,14 @@ public:
         // 10: on every model we have (bunny to the 871k dragon) 21 bits give the same tree
         // quality within 0.02% SAH, while 30-bit codes sort as 8-byte items in 3 passes
         // instead of 16-byte items in 6-7 (3-4x faster).
-        int bits = 10;                 // Morton grid bits per axis
-        uint32_t max_prims = 1;        // a range of at most this many primitives is a leaf (report: 1)
-        uint32_t max_depth = 50;       // a node at this depth is a leaf (report: 50)
-        int threads = 1;               // build threads; 0 in the parameter = all cores
-        uint32_t task_threshold = 100; // a subtree goes to another thread only above this size (report: 100)
+        int bits = 10;                  // Morton grid bits per axis
+        uint32_t max_prims = 1;         // a range of at most this many primitives is a leaf (report: 1)
+        uint32_t max_depth = 50;        // a node at this depth is a leaf (report: 50)
+        int threads = 1;                // build threads; 0 in the parameter = all cores
+        uint32_t task_threshold = 100;  // a subtree goes to another thread only above this size (report: 100)
         // 10: a 30-bit code is exactly three digits, and three 1024-entry histograms
         // (12 KB) stay in L1 while counting. 8 needs a 4th pass.
-        int sort_digit_bits = 10;      // radix sort digit width
+        int sort_digit_bits = 10;  // radix sort digit width
         BvhTraversal traversal = BvhTraversal::ordered;
 
         static Config from(const ParamSet& params);
@@ -60,8 +60,10 @@ public:
     void build(const Scene& scene) override;
     BuildStats build_stats() const override;
 
-    template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
-    template <class C> bool occluded(const Ray& ray, C& counters) const;
+    template <class C>
+    void intersect(const Ray& ray, Hit& hit, C& counters) const;
+    template <class C>
+    bool occluded(const Ray& ray, C& counters) const;
 
     // The finished tree (tests compare trees built with different thread counts).
     const FlatBvh& tree() const { return bvh_; }

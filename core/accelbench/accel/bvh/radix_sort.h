@@ -50,8 +50,8 @@ RadixSortStats radix_sort(std::vector<KeyValue<Key>>& items, std::vector<KeyValu
     static_assert(std::is_unsigned_v<Key>);
     if (digit_bits < kRadixMinDigitBits || digit_bits > kRadixMaxDigitBits)
         throw std::invalid_argument("radix_sort: digit_bits " + std::to_string(digit_bits) + " is outside [" +
-                                    std::to_string(kRadixMinDigitBits) + ", " +
-                                    std::to_string(kRadixMaxDigitBits) + "]");
+                                    std::to_string(kRadixMinDigitBits) + ", " + std::to_string(kRadixMaxDigitBits) +
+                                    "]");
     if (key_bits < 0 || key_bits > int(8 * sizeof(Key)))
         throw std::invalid_argument("radix_sort: key_bits " + std::to_string(key_bits) + " does not fit the key type");
 

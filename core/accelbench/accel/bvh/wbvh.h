@@ -56,9 +56,9 @@ struct WbvhTree {
 // Statistics of a finished wide tree (measure_wbvh), reported as BuildStats.
 struct WbvhMetrics {
     uint64_t nodes = 0, leaves = 0, max_depth = 0, memory_bytes = 0, packets = 0;
-    double avg_leaf_size = 0;     // triangles per leaf child
-    double avg_children = 0;      // used child slots per node
-    double packet_fill = 0;       // used lanes / lanes of all packets
+    double avg_leaf_size = 0;        // triangles per leaf child
+    double avg_children = 0;         // used child slots per node
+    double packet_fill = 0;          // used lanes / lanes of all packets
     std::optional<double> sah_cost;  // C_trav = C_isect = 1 (bvh_metrics.h), wide nodes' areas
 };
 
@@ -88,8 +88,10 @@ public:
     void build(const Scene& scene) override;
     BuildStats build_stats() const override;
 
-    template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
-    template <class C> bool occluded(const Ray& ray, C& counters) const;
+    template <class C>
+    void intersect(const Ray& ray, Hit& hit, C& counters) const;
+    template <class C>
+    bool occluded(const Ray& ray, C& counters) const;
 
     const Config& config() const { return config_; }
     const WbvhTree<4>& tree4() const { return tree4_; }

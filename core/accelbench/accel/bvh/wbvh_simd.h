@@ -59,7 +59,7 @@ inline constexpr const char* kWbvhWide8Isa =
 #elif defined(ACCELBENCH_WBVH_SSE)
     "sse";
 #else
-    "scalar";
+        "scalar";
 #endif
 
 // A wide node: up to W children, packed at the front (an unused slot has child kInvalidId
@@ -225,18 +225,21 @@ inline WbvhPacketHits wbvh_packet_test(const WbvhTriPacket& p, int lanes, const 
         const __m128 zero = _mm_setzero_ps();
         const uint32_t edge_zero = uint32_t(_mm_movemask_ps(
             _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)), _mm_cmpeq_ps(e2, zero))));
-        const __m128 any_neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
-        const __m128 any_pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
+        const __m128 any_neg =
+            _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
+        const __m128 any_pos =
+            _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
         const uint32_t outside = uint32_t(_mm_movemask_ps(_mm_and_ps(any_neg, any_pos)));
         const __m128 det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
-        const __m128 ts = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, sh[0][2]), _mm_mul_ps(e1, sh[1][2])),
-                                     _mm_mul_ps(e2, sh[2][2]));
+        const __m128 ts =
+            _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, sh[0][2]), _mm_mul_ps(e1, sh[1][2])), _mm_mul_ps(e2, sh[2][2]));
         const __m128 sign = _mm_set1_ps(-0.0f);
         const __m128 flt_min = _mm_set1_ps(std::numeric_limits<float>::min());
         const __m128 abs_ts = _mm_andnot_ps(sign, ts);
-        const __m128 representable = _mm_and_ps(_mm_cmpge_ps(_mm_andnot_ps(sign, det), flt_min),
-                                                _mm_and_ps(_mm_cmpge_ps(abs_ts, flt_min),
-                                                           _mm_cmple_ps(abs_ts, _mm_set1_ps(std::numeric_limits<float>::max()))));
+        const __m128 representable =
+            _mm_and_ps(_mm_cmpge_ps(_mm_andnot_ps(sign, det), flt_min),
+                       _mm_and_ps(_mm_cmpge_ps(abs_ts, flt_min),
+                                  _mm_cmple_ps(abs_ts, _mm_set1_ps(std::numeric_limits<float>::max()))));
         const uint32_t unrepresentable = ~uint32_t(_mm_movemask_ps(representable)) & 0xfu;
         // t in [tmin, tmax) compared before dividing, the inequalities flipped with det's sign
         // (the negations written as NLT / NGT, exactly the scalar code's !(a < b)).

@@ -16,20 +16,56 @@ AcceleratorInfo KdTree::info() {
     return {"kdtree",
             "SAH kd-tree after pbrt-v3 (report section 4): 8-byte nodes, edge-event SAH, front-to-back traversal",
             {
-                {"build", ParamType::Enum, d.build == BuildAlgorithm::NLogN ? "nlogn" : "pbrt", {"nlogn", "pbrt"}, 0, 0,
+                {"build",
+                 ParamType::Enum,
+                 d.build == BuildAlgorithm::NLogN ? "nlogn" : "pbrt",
+                 {"nlogn", "pbrt"},
+                 0,
+                 0,
                  "nlogn: events sorted once, split in linear time (Wald & Havran 2006); pbrt: edges sorted at "
                  "every node. Both give the same tree"},
-                {"isect_cost", ParamType::Float, format_param(double(d.isect_cost)), {}, 1e-4, 1e4,
+                {"isect_cost",
+                 ParamType::Float,
+                 format_param(double(d.isect_cost)),
+                 {},
+                 1e-4,
+                 1e4,
                  "SAH cost of one ray/triangle test C_I"},
-                {"traversal_cost", ParamType::Float, format_param(double(d.traversal_cost)), {}, 1e-4, 1e4,
+                {"traversal_cost",
+                 ParamType::Float,
+                 format_param(double(d.traversal_cost)),
+                 {},
+                 1e-4,
+                 1e4,
                  "SAH cost of one traversal step C_T"},
-                {"empty_bonus", ParamType::Float, format_param(double(d.empty_bonus)), {}, 0, 1,
+                {"empty_bonus",
+                 ParamType::Float,
+                 format_param(double(d.empty_bonus)),
+                 {},
+                 0,
+                 1,
                  "b_e: fraction of the cost forgiven when one child is empty"},
-                {"max_prims", ParamType::Int, format_param(int64_t(d.max_prims)), {}, 0, KdNode::kMaxIndex,
+                {"max_prims",
+                 ParamType::Int,
+                 format_param(int64_t(d.max_prims)),
+                 {},
+                 0,
+                 KdNode::kMaxIndex,
                  "nodes with at most this many primitives become leaves"},
-                {"max_depth", ParamType::Int, "auto", {}, 0, kMaxDepthLimit,
-                 "deepest level; auto = round(8 + 1.3 log2 N)", true},
-                {"mailbox", ParamType::Bool, d.mailbox ? "true" : "false", {}, 0, 0,
+                {"max_depth",
+                 ParamType::Int,
+                 "auto",
+                 {},
+                 0,
+                 kMaxDepthLimit,
+                 "deepest level; auto = round(8 + 1.3 log2 N)",
+                 true},
+                {"mailbox",
+                 ParamType::Bool,
+                 d.mailbox ? "true" : "false",
+                 {},
+                 0,
+                 0,
                  "test a triangle once per ray even when several leaves the ray visits hold it (the same "
                  "answers; prim_tests then counts the tests made)"},
             },
@@ -52,8 +88,8 @@ KdTree::KdTree(const ParamSet& params) : KdTree(Config::from(params)) {}
 
 KdTree::KdTree(const Config& config) : config_(config) {
     if (config_.max_depth && (*config_.max_depth < 0 || *config_.max_depth > kMaxDepthLimit))
-        throw std::invalid_argument("kdtree: max_depth " + std::to_string(*config_.max_depth) +
-                                    " is outside [0, " + std::to_string(kMaxDepthLimit) + "]");
+        throw std::invalid_argument("kdtree: max_depth " + std::to_string(*config_.max_depth) + " is outside [0, " +
+                                    std::to_string(kMaxDepthLimit) + "]");
     if (config_.max_prims < 0) throw std::invalid_argument("kdtree: max_prims must be >= 0");
     if (!(config_.isect_cost > 0) || !(config_.traversal_cost > 0) || !(config_.empty_bonus >= 0) ||
         !(config_.empty_bonus <= 1))
@@ -101,9 +137,7 @@ uint32_t ordered_bits(float f) {
     const uint32_t b = std::bit_cast<uint32_t>(f + 0.0f);
     return (b & 0x80000000u) ? ~b : (b | 0x80000000u);
 }
-float position_of_bits(uint32_t k) {
-    return std::bit_cast<float>((k & 0x80000000u) ? (k & 0x7fffffffu) : ~k);
-}
+float position_of_bits(uint32_t k) { return std::bit_cast<float>((k & 0x80000000u) ? (k & 0x7fffffffu) : ~k); }
 EventKey make_event(float t, EventType type, uint32_t prim) {
     return (EventKey(ordered_bits(t)) << 32) | (uint32_t(type) << kPrimBits) | prim;
 }
@@ -154,8 +188,8 @@ struct SahConstants {
 // (including parts outside the node, which only shift the counts); every distinct
 // position strictly inside the node is a candidate. Updates `best` when a candidate is
 // strictly cheaper, so among equal costs the first axis tried and the lowest position win.
-void sweep_axis(std::span<const EventKey> events, int axis, const Bounds3& node, uint32_t n,
-                const SahConstants& k, Split& best) {
+void sweep_axis(std::span<const EventKey> events, int axis, const Bounds3& node, uint32_t n, const SahConstants& k,
+                Split& best) {
     const float lo = node.lower[axis], hi = node.upper[axis];
     if (!(lo < hi)) return;
     const Vec3 d = node.diagonal();
@@ -229,9 +263,9 @@ public:
           max_prims_(uint32_t(s.max_prims)),
           max_depth_(max_depth),
           presorted_(s.build == KdTree::BuildAlgorithm::NLogN),
-          ref_budget_(s.max_refs ? *s.max_refs
-                                 : std::max<uint64_t>(KdTree::kMinRefBudget,
-                                                      KdTree::kMaxRefsPerPrim * scene.triangle_count())),
+          ref_budget_(
+              s.max_refs ? *s.max_refs
+                         : std::max<uint64_t>(KdTree::kMinRefBudget, KdTree::kMaxRefsPerPrim * scene.triangle_count())),
           nodes_(nodes),
           prim_indices_(prim_indices),
           side_(scene.triangle_count()) {}
@@ -399,10 +433,10 @@ private:
     uint64_t ref_budget_;
     std::vector<KdNode>& nodes_;
     std::vector<uint32_t>& prim_indices_;
-    std::vector<uint8_t> side_;        // per primitive, set for the node being split
-    ListStack<uint32_t> prims_;        // primitive lists
-    ListStack<EventKey> events_[3];    // nlogn: sorted event lists per axis
-    std::vector<EventKey> scratch_;    // one node's events on one axis, sorted on the spot
+    std::vector<uint8_t> side_;      // per primitive, set for the node being split
+    ListStack<uint32_t> prims_;      // primitive lists
+    ListStack<EventKey> events_[3];  // nlogn: sorted event lists per axis
+    std::vector<EventKey> scratch_;  // one node's events on one axis, sorted on the spot
     BuildCounters counters_;
     uint64_t leaf_refs_ = 0;  // references held by the leaves made so far
     uint64_t live_refs_ = 0;  // references in the lists still to be split
@@ -449,7 +483,8 @@ void KdTree::build(const Scene& scene) {
 }
 
 uint64_t KdTree::memory_bytes() const {
-    return nodes_.size() * sizeof(KdNode) + prim_indices_.size() * sizeof(uint32_t) + corners_.size() * sizeof(corners_[0]);
+    return nodes_.size() * sizeof(KdNode) + prim_indices_.size() * sizeof(uint32_t) +
+        corners_.size() * sizeof(corners_[0]);
 }
 
 // Walks the tree with each node's box. Both SAH costs are expected costs of a ray
@@ -545,8 +580,8 @@ struct StackEntry {
 // box. visit_leaf(node) returns false to stop. keep_going(t_min) is asked before each
 // popped node: closest-hit stops once its best hit lies before that node.
 template <class C, class VisitLeaf, class KeepGoing>
-void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& ray, C& counters,
-              VisitLeaf&& visit_leaf, KeepGoing&& keep_going) {
+void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& ray, C& counters, VisitLeaf&& visit_leaf,
+              KeepGoing&& keep_going) {
     if (nodes.empty()) return;
     const RayPrecomp rp(ray);
     counters.box();
@@ -560,8 +595,8 @@ void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& r
     const float inv_dir[3] = {rp.inv_dir.x, rp.inv_dir.y, rp.inv_dir.z};
     // Bit a set: the ray meets the above child first on axis a. A register, not an
     // array, because the next node's index depends on it.
-    const uint32_t above_first = uint32_t(rp.near_is_upper[0]) | uint32_t(rp.near_is_upper[1]) << 1 |
-                                 uint32_t(rp.near_is_upper[2]) << 2;
+    const uint32_t above_first =
+        uint32_t(rp.near_is_upper[0]) | uint32_t(rp.near_is_upper[1]) << 1 | uint32_t(rp.near_is_upper[2]) << 2;
     StackEntry stack[KdTree::kMaxDepthLimit];
     int top = 0;
     uint32_t index = 0;
@@ -610,8 +645,7 @@ bool KdTree::any_leaf_prim(const KdNode& leaf, F&& f) const {
 
 bool KdTree::hit_triangle(const WatertightRay& wr, uint32_t prim, float tmin, float tmax, Hit& hit) const {
     const std::array<Vec3, 3>& tri = corners_[prim];
-    if (!intersect_triangle(wr, tri[0], tri[1], tri[2], tmin, tmax, hit.t, hit.u, hit.v))
-        return false;
+    if (!intersect_triangle(wr, tri[0], tri[1], tri[2], tmin, tmax, hit.t, hit.u, hit.v)) return false;
     hit.prim = prim;
     return true;
 }
@@ -686,10 +720,8 @@ bool KdTree::occluded_with(const Ray& ray, C& counters) const {
 
 template <class C>
 void KdTree::intersect(const Ray& ray, Hit& hit, C& counters) const {
-    if (config_.mailbox)
-        intersect_with<true>(ray, hit, counters);
-    else
-        intersect_with<false>(ray, hit, counters);
+    if (config_.mailbox) intersect_with<true>(ray, hit, counters);
+    else intersect_with<false>(ray, hit, counters);
 }
 
 template <class C>

@@ -40,9 +40,7 @@ public:
     static KdNode interior(int axis, float split, uint32_t above_child) {
         return KdNode(std::bit_cast<uint32_t>(split), uint32_t(axis) | (above_child << 2));
     }
-    static KdNode leaf(uint32_t count, uint32_t prim_or_offset) {
-        return KdNode(prim_or_offset, 3u | (count << 2));
-    }
+    static KdNode leaf(uint32_t count, uint32_t prim_or_offset) { return KdNode(prim_or_offset, 3u | (count << 2)); }
     KdNode() = default;
 
     bool is_leaf() const { return (bits_ & 3u) == 3u; }
@@ -82,9 +80,9 @@ public:
 
     // The parameters with their defaults (info() declares them from these values).
     struct Config {
-        float isect_cost = 80.0f;      // C_I, pbrt-v3's default
-        float traversal_cost = 1.0f;   // C_T
-        float empty_bonus = 0.5f;      // b_e
+        float isect_cost = 80.0f;     // C_I, pbrt-v3's default
+        float traversal_cost = 1.0f;  // C_T
+        float empty_bonus = 0.5f;     // b_e
         int max_prims = 1;
         std::optional<int> max_depth;  // empty: default_max_depth(N)
         BuildAlgorithm build = BuildAlgorithm::NLogN;
@@ -106,8 +104,10 @@ public:
     // measure_kdtree() of the built tree plus what the build counted.
     BuildStats build_stats() const override;
 
-    template <class C> void intersect(const Ray& ray, Hit& hit, C& counters) const;
-    template <class C> bool occluded(const Ray& ray, C& counters) const;
+    template <class C>
+    void intersect(const Ray& ray, Hit& hit, C& counters) const;
+    template <class C>
+    bool occluded(const Ray& ray, C& counters) const;
 
     // pbrt's rule (report equation 5): round(8 + 1.3 log2 N); 8 for N <= 1.
     static int default_max_depth(size_t prim_count);
@@ -123,9 +123,12 @@ public:
     uint64_t memory_bytes() const;
 
 private:
-    template <class F> bool any_leaf_prim(const KdNode& leaf, F&& f) const;
-    template <bool kMailbox, class C> void intersect_with(const Ray& ray, Hit& hit, C& counters) const;
-    template <bool kMailbox, class C> bool occluded_with(const Ray& ray, C& counters) const;
+    template <class F>
+    bool any_leaf_prim(const KdNode& leaf, F&& f) const;
+    template <bool kMailbox, class C>
+    void intersect_with(const Ray& ray, Hit& hit, C& counters) const;
+    template <bool kMailbox, class C>
+    bool occluded_with(const Ray& ray, C& counters) const;
     bool hit_triangle(const WatertightRay& wr, uint32_t prim, float tmin, float tmax, Hit& hit) const;
 
     Config config_;
