@@ -51,6 +51,8 @@ EXACT_COUNTS = [
 # a structure answering differently. Compared where the baseline has them (older
 # baselines predate the columns).
 ERROR_COUNTS = ["false_misses", "false_hits", "prim_mismatches", "nan_results"]
+# Answers (not counters) of the third-party row, which vary between runs (tier_counts).
+THIRD_PARTY_ANSWERS = ["hits", "shadow_hits", *ERROR_COUNTS]
 SAH_COLUMN = "sah_cost"
 SAH_RTOL = 1e-9
 INSTRUCTIONS_TOLERANCE = 0.10  # fail above +10%, remind to update the baseline below -10%
@@ -194,6 +196,7 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
     )
     changed_combos = set()
     unchecked_errors: set[str] = set()
+    third_party_changes: list[str] = []
     common = [k for k in base if k in cur]
     for k in common:
         b, c = base[k], cur[k]
@@ -208,6 +211,20 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
         unchecked_errors |= {m for m in ERROR_COUNTS if _missing(b.get(m)) and not _missing(c.get(m))}
         for metric in EXACT_COUNTS + [SAH_COLUMN] + errors:
             old, new = b[metric], c.get(metric)
+            if (
+                _count_changed(metric, old, new)
+                and b.get("accel") == RATIO_DENOMINATOR
+                and metric in THIRD_PARTY_ANSWERS
+                and not _missing(old)
+                and not _missing(new)
+            ):
+                # Embree's answers are not ours to regress: measured here, its bunny shadow
+                # hits at 160x120 are 613 in one run and 614 in the next of the same build
+                # (robust=false decides near-edge rays by its build order). Shown, not failed.
+                third_party_changes.append(
+                    f"{name[k]} {metric} {_fmt_value(metric, old)} -> {_fmt_value(metric, new)}"
+                )
+                continue
             if _count_changed(metric, old, new):
                 t.rows.append(
                     [
@@ -225,6 +242,12 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
         t.notes.append(
             "Missing from this run (a failure: the baseline measured them): "
             + "; ".join(name[k] for k in missing)
+            + "."
+        )
+    if third_party_changes:
+        t.notes.append(
+            f"Changed in the {RATIO_DENOMINATOR} rows (third-party answers, not compared exactly): "
+            + "; ".join(third_party_changes)
             + "."
         )
     if unchecked_errors:

@@ -91,6 +91,17 @@ def test_changed_node_count_fails_with_a_table(run, capsys):
     assert "2 values changed in 2 combinations" in out
 
 
+def test_embree_answers_are_shown_not_failed(run, capsys):
+    def embree_differs(rows):
+        r = find(rows, "stanford-bunny", "embree")
+        r["shadow_hits"] = int(r["shadow_hits"]) + 1
+
+    code, out = regress(run("base"), run("cur", embree_differs), capsys=capsys)
+    assert code == 0
+    assert "third-party answers, not compared exactly" in out
+    assert "stanford-bunny / embree shadow_hits" in out
+
+
 @pytest.mark.parametrize(
     "metric", ["leaves", "stat_max_depth", "hits", "shadow_hits", "rays", "shadow_rays", "node_visits"]
 )
