@@ -106,7 +106,10 @@ const Provenance& provenance() {
         const std::string git = std::string("git -C '") + ACCELBENCH_SOURCE_DIR + "' ";
         p.git_sha = run(git + "rev-parse HEAD 2>/dev/null");
         if (p.git_sha.empty()) p.git_sha = "unknown";
-        p.git_dirty = !run(git + "status --porcelain --untracked-files=no 2>/dev/null").empty();
+        // Dirty = the code differs from the commit. results/ is left out: it holds outputs
+        // (a reference run rewrites results/reference/ while it measures), not code.
+        p.git_dirty =
+            !run(git + "status --porcelain --untracked-files=no -- . ':(exclude)results' 2>/dev/null").empty();
 #if defined(__clang__)
         p.compiler = "clang " __clang_version__;
 #elif defined(__GNUC__)
