@@ -100,21 +100,7 @@ TEST(Bvh, AgreesWithEmbreeOnLargerLeavesAndOtherBinCounts) {
 // A closed surface of shared edges: a ray hitting an edge must hit one of its triangles
 // (watertightness is preserved by the hierarchy: no box may drop a triangle).
 TEST(Bvh, AgreesWithEmbreeOnClosedGrid) {
-    Scene scene;
-    scene.name = "test-grid";
-    const int w = 40;
-    for (int j = 0; j <= w; ++j)
-        for (int i = 0; i <= w; ++i) {
-            const float x = float(i) / w, y = float(j) / w;
-            scene.vertices.push_back({x, y, 0.1f * std::sin(6 * x) * std::cos(5 * y)});
-        }
-    for (int j = 0; j < w; ++j)
-        for (int i = 0; i < w; ++i) {
-            const uint32_t a = uint32_t(j * (w + 1) + i), b = a + 1, c = a + uint32_t(w + 1), d = c + 1;
-            scene.triangles.push_back({a, b, d});
-            scene.triangles.push_back({a, d, c});
-        }
-    scene.finalize();
+    const Scene scene = closed_grid();
     const auto rays = probe_rays(scene, 3000, 7);
     for (const std::string& split : kSplits)
         for (const std::string traversal : {"ordered", "report"}) {

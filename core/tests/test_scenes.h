@@ -2,6 +2,7 @@
 // worked out by hand. Deterministic (xorshift), so a failing case reproduces.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <stdexcept>
@@ -41,6 +42,27 @@ inline void add_triangle(Scene& s, Vec3 a, Vec3 b, Vec3 c) {
     const uint32_t i = uint32_t(s.vertices.size());
     s.vertices.insert(s.vertices.end(), {a, b, c});
     s.triangles.push_back({i, i + 1, i + 2});
+}
+
+// A closed height field of shared edges (40 x 40 cells, two triangles each): a ray hitting
+// an edge must hit one of its triangles, so a hierarchy that drops one shows as a miss.
+inline Scene closed_grid() {
+    Scene scene;
+    scene.name = "test-grid";
+    const int w = 40;
+    for (int j = 0; j <= w; ++j)
+        for (int i = 0; i <= w; ++i) {
+            const float x = float(i) / w, y = float(j) / w;
+            scene.vertices.push_back({x, y, 0.1f * std::sin(6 * x) * std::cos(5 * y)});
+        }
+    for (int j = 0; j < w; ++j)
+        for (int i = 0; i < w; ++i) {
+            const uint32_t a = uint32_t(j * (w + 1) + i), b = a + 1, c = a + uint32_t(w + 1), d = c + 1;
+            scene.triangles.push_back({a, b, d});
+            scene.triangles.push_back({a, d, c});
+        }
+    scene.finalize();
+    return scene;
 }
 
 // Random triangles (size ~0.2) in a unit box: many overlaps, many near-grazing hits.

@@ -139,26 +139,6 @@ void expect_kernels_identical(const Scene& scene, const Params& params, const st
                 shadows.size(), kWbvhHasVector ? kWbvhWide8Isa : "not compiled in");
 }
 
-// A closed height field of shared edges (as the BVH test's grid).
-Scene closed_grid() {
-    Scene scene;
-    scene.name = "test-grid";
-    const int w = 40;
-    for (int j = 0; j <= w; ++j)
-        for (int i = 0; i <= w; ++i) {
-            const float x = float(i) / w, y = float(j) / w;
-            scene.vertices.push_back({x, y, 0.1f * std::sin(6 * x) * std::cos(5 * y)});
-        }
-    for (int j = 0; j < w; ++j)
-        for (int i = 0; i < w; ++i) {
-            const uint32_t a = uint32_t(j * (w + 1) + i), b = a + 1, c = a + uint32_t(w + 1), d = c + 1;
-            scene.triangles.push_back({a, b, d});
-            scene.triangles.push_back({a, d, c});
-        }
-    scene.finalize();
-    return scene;
-}
-
 // ---- agreement ---------------------------------------------------------------------------
 
 TEST(Wbvh, AgreesWithEmbreeOnRandomSoupAndGrid) {
