@@ -18,7 +18,75 @@ namespace accelbench {
 
 namespace {
 const std::string kParamKey = "param:";
-}
+
+// The columns after the parameters, in order, and what each holds: merge refuses a row
+// whose Number column is neither empty (not measured) nor a finite number.
+enum class ColumnKind { Text, Number };
+struct MeasuredColumn {
+    const char* name;
+    ColumnKind kind;
+};
+const MeasuredColumn kMeasuredColumns[] = {
+    {"status", ColumnKind::Text},
+    {"message", ColumnKind::Text},
+    {"repetitions", ColumnKind::Number},
+    {"build_s_median", ColumnKind::Number},
+    {"build_s_mean", ColumnKind::Number},
+    {"build_s_stddev", ColumnKind::Number},
+    {"build_s_ci_lo", ColumnKind::Number},
+    {"build_s_ci_hi", ColumnKind::Number},
+    {"render_s_median", ColumnKind::Number},
+    {"render_s_mean", ColumnKind::Number},
+    {"render_s_stddev", ColumnKind::Number},
+    {"render_s_ci_lo", ColumnKind::Number},
+    {"render_s_ci_hi", ColumnKind::Number},
+    {"ci_coverage", ColumnKind::Number},
+    {"render_cpu_s_median", ColumnKind::Number},
+    {"rays", ColumnKind::Number},
+    {"hits", ColumnKind::Number},
+    {"shadow_rays", ColumnKind::Number},
+    {"shadow_hits", ColumnKind::Number},
+    {"mrays_per_s", ColumnKind::Number},
+    {"nodes", ColumnKind::Number},
+    {"leaves", ColumnKind::Number},
+    {"max_depth", ColumnKind::Number},
+    {"memory_bytes", ColumnKind::Number},
+    {"sah_cost", ColumnKind::Number},
+    {"avg_leaf_size", ColumnKind::Number},
+    {"build_extra", ColumnKind::Text},
+    {"prim_tests", ColumnKind::Number},
+    {"node_visits", ColumnKind::Number},
+    {"box_tests", ColumnKind::Number},
+    {"prim_tests_per_ray", ColumnKind::Number},
+    {"node_visits_per_ray", ColumnKind::Number},
+    {"instructions", ColumnKind::Number},
+    {"false_misses", ColumnKind::Number},
+    {"false_hits", ColumnKind::Number},
+    {"prim_mismatches", ColumnKind::Number},
+    {"t_err_ulp_p50", ColumnKind::Number},
+    {"t_err_ulp_max", ColumnKind::Number},
+    {"nan_results", ColumnKind::Number},
+    {"image_rmse", ColumnKind::Number},
+    {"hole_pixels", ColumnKind::Number},
+    {"peak_rss_bytes", ColumnKind::Number},
+    {"verdict", ColumnKind::Text},
+    {"verdict_counts", ColumnKind::Text},
+    {"width", ColumnKind::Number},
+    {"height", ColumnKind::Number},
+    {"spp", ColumnKind::Number},
+    {"light", ColumnKind::Text},
+    {"shading", ColumnKind::Text},
+    {"git_sha", ColumnKind::Text},
+    {"git_dirty", ColumnKind::Text},
+    {"compiler", ColumnKind::Text},
+    {"build_type", ColumnKind::Text},
+    {"cpu", ColumnKind::Text},
+    {"threads", ColumnKind::Text},
+    {"embree_version", ColumnKind::Text},
+    {"timestamp", ColumnKind::Text},
+    {"isa", ColumnKind::Text},
+};
+}  // namespace
 
 std::string param_column(const std::string& param) { return kParamKey + param; }
 
@@ -40,65 +108,7 @@ std::vector<std::string> result_columns() {
     for (const auto& info : accelerator_registry())
         for (const auto& p : info.params)
             if (seen.insert(p.name).second) c.push_back(param_column(p.name));
-    for (const char* col : {"status",
-                            "message",
-                            "repetitions",  //
-                            "build_s_median",
-                            "build_s_mean",
-                            "build_s_stddev",
-                            "build_s_ci_lo",
-                            "build_s_ci_hi",  //
-                            "render_s_median",
-                            "render_s_mean",
-                            "render_s_stddev",
-                            "render_s_ci_lo",
-                            "render_s_ci_hi",
-                            "ci_coverage",
-                            "render_cpu_s_median",  //
-                            "rays",
-                            "hits",
-                            "shadow_rays",
-                            "shadow_hits",
-                            "mrays_per_s",  //
-                            "nodes",
-                            "leaves",
-                            "max_depth",
-                            "memory_bytes",
-                            "sah_cost",
-                            "avg_leaf_size",
-                            "build_extra",  //
-                            "prim_tests",
-                            "node_visits",
-                            "box_tests",
-                            "prim_tests_per_ray",
-                            "node_visits_per_ray",  //
-                            "instructions",         //
-                            "false_misses",
-                            "false_hits",
-                            "prim_mismatches",
-                            "t_err_ulp_p50",
-                            "t_err_ulp_max",
-                            "nan_results",
-                            "image_rmse",
-                            "hole_pixels",
-                            "peak_rss_bytes",
-                            "verdict",
-                            "verdict_counts",  //
-                            "width",
-                            "height",
-                            "spp",
-                            "light",
-                            "shading",  //
-                            "git_sha",
-                            "git_dirty",
-                            "compiler",
-                            "build_type",
-                            "cpu",
-                            "threads",
-                            "embree_version",
-                            "timestamp",
-                            "isa"})
-        c.push_back(col);
+    for (const MeasuredColumn& col : kMeasuredColumns) c.push_back(col.name);
     return c;
 }
 
@@ -254,49 +264,12 @@ namespace {
 // the header) name each refusal.
 void check_result_rows(const CsvData& d, const std::string& path) {
     static const std::set<std::string> statuses = {"ok", "skipped", "error", "timeout"};
-    static const std::set<std::string> numeric = {"triangles",
-                                                  "vertices",
-                                                  "repetitions",
-                                                  "build_s_median",
-                                                  "build_s_mean",
-                                                  "build_s_stddev",
-                                                  "build_s_ci_lo",
-                                                  "build_s_ci_hi",
-                                                  "render_s_median",
-                                                  "render_s_mean",
-                                                  "render_s_stddev",
-                                                  "render_s_ci_lo",
-                                                  "render_s_ci_hi",
-                                                  "ci_coverage",
-                                                  "rays",
-                                                  "hits",
-                                                  "shadow_rays",
-                                                  "shadow_hits",
-                                                  "mrays_per_s",
-                                                  "nodes",
-                                                  "leaves",
-                                                  "max_depth",
-                                                  "memory_bytes",
-                                                  "sah_cost",
-                                                  "avg_leaf_size",
-                                                  "prim_tests",
-                                                  "node_visits",
-                                                  "box_tests",
-                                                  "prim_tests_per_ray",
-                                                  "node_visits_per_ray",
-                                                  "instructions",
-                                                  "false_misses",
-                                                  "false_hits",
-                                                  "prim_mismatches",
-                                                  "t_err_ulp_p50",
-                                                  "t_err_ulp_max",
-                                                  "nan_results",
-                                                  "image_rmse",
-                                                  "hole_pixels",
-                                                  "peak_rss_bytes",
-                                                  "width",
-                                                  "height",
-                                                  "spp"};
+    static const std::set<std::string> numeric = [] {
+        std::set<std::string> n = {"triangles", "vertices"};
+        for (const MeasuredColumn& col : kMeasuredColumns)
+            if (col.kind == ColumnKind::Number) n.insert(col.name);
+        return n;
+    }();
     const size_t id = column_index(d, "combo_id", path);
     auto optional_column = [&](const char* name) {
         const auto it = std::find(d.header.begin(), d.header.end(), name);
