@@ -264,7 +264,7 @@ LoadedModel loaded_model_from_bytes(const std::string& bytes, const ModelSpec& s
 
 std::optional<uint64_t> known_triangles(const ModelSpec& spec, const ModelRegistry& registry) {
     // A transformed model's count is known once it is made (decimation stops near, not at,
-    // its target; subdivision drops faces the half-edge mesh refuses).
+    // its target).
     if (spec.kind != ModelSpec::Kind::Registry || spec.transform) return std::nullopt;
     const ModelEntry* entry = registry.find(spec.name);
     return entry ? std::optional<uint64_t>(entry->triangles) : std::nullopt;
