@@ -131,7 +131,7 @@ private:
 // before a value does.
 class ByteReader {
 public:
-    ByteReader(const std::string& in, const char* what) : in_(in), what_(what) {}
+    ByteReader(std::string_view in, const char* what) : in_(in), what_(what) {}
 
     template <class T>
     T take() {
@@ -163,7 +163,7 @@ private:
     }
     [[noreturn]] void truncated() const { throw std::runtime_error(std::string(what_) + ": truncated"); }
 
-    const std::string& in_;
+    std::string_view in_;
     const char* what_;
     size_t at_ = 0;
 };
@@ -239,7 +239,7 @@ std::string loaded_model_bytes(const LoadedModel& m) {
     return w.take();
 }
 
-LoadedModel loaded_model_from_bytes(const std::string& bytes, const ModelSpec& spec) {
+LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spec) {
     ByteReader r(bytes, "prepared model");
     LoadedModel m;
     m.scene.name = r.take_string();

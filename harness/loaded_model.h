@@ -4,6 +4,8 @@
 #pragma once
 
 #include <memory>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/render/renderer.h"
@@ -67,7 +69,7 @@ void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySet
 // sent (std::logic_error): it is made in the parent. Throws std::runtime_error for bytes
 // that end early or go on after the model.
 std::string loaded_model_bytes(const LoadedModel& model);
-LoadedModel loaded_model_from_bytes(const std::string& bytes, const ModelSpec& spec);
+LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spec);
 
 // The view: the config's camera, else the registry's or procedural scene's own, else
 // Camera::fit for the image's aspect. The light: the registry's or procedural scene's,

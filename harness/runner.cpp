@@ -153,7 +153,7 @@ private:
             const size_t nl = o.result->find('\n');
             const size_t n = std::stoull(o.result->substr(1, nl - 1));
             reference_error = o.result->substr(nl + 1, n);
-            loaded_ = loaded_model_from_bytes(o.result->substr(nl + 1 + n), spec_);
+            loaded_ = loaded_model_from_bytes(std::string_view(*o.result).substr(nl + 1 + n), spec_);
         }
     }
 
