@@ -33,8 +33,11 @@ class ModelOnDemand {
 public:
     ModelOnDemand(const ModelSpec& spec, const RunPlan& plan, std::vector<const Combination*> combinations,
                   bool reference_wanted, bool in_process)
-        : spec_(spec), plan_(plan), combinations_(std::move(combinations)),
-          reference_wanted_(reference_wanted), in_process_(in_process) {
+        : spec_(spec),
+          plan_(plan),
+          combinations_(std::move(combinations)),
+          reference_wanted_(reference_wanted),
+          in_process_(in_process) {
         triangles = known_triangles(spec, plan.registry);
         if (const ModelEntry* entry = spec.kind == ModelSpec::Kind::Registry ? plan.registry.find(spec.name) : nullptr)
             vertices = entry->vertices;
@@ -59,7 +62,8 @@ public:
         else if (loaded_->reference)
             std::fprintf(stderr, "accelbench run: reference answers for %s: %zu primary rays in %.2f s\n",
                          spec_.label.c_str(), loaded_->reference->hits.size(), loaded_->reference->seconds);
-        if (loaded_ && !triangles) triangles = loaded_->scene.triangle_count(), vertices = loaded_->scene.vertex_count();
+        if (loaded_ && !triangles)
+            triangles = loaded_->scene.triangle_count(), vertices = loaded_->scene.vertex_count();
         return loaded_ ? &*loaded_ : nullptr;
     }
 
@@ -90,9 +94,8 @@ private:
             p.load_error = e.what();
             return p;
         }
-        std::fprintf(stderr, "accelbench run: loaded %s: %zu triangles, %zu vertices in %.2f s\n",
-                     spec_.label.c_str(), p.model->scene.triangle_count(), p.model->scene.vertex_count(),
-                     seconds_since(t0));
+        std::fprintf(stderr, "accelbench run: loaded %s: %zu triangles, %zu vertices in %.2f s\n", spec_.label.c_str(),
+                     p.model->scene.triangle_count(), p.model->scene.vertex_count(), seconds_since(t0));
         if (!reference_needed(*p.model)) return p;
         try {
             // Single-threaded, outside anything timed.
@@ -185,7 +188,8 @@ public:
             r.load_error = model.load_error;
         } else if (!model.reference_error.empty()) {
             r.measurement.status = "error";
-            r.measurement.message = "no error measurement: the reference cannot trace the model: " + model.reference_error;
+            r.measurement.message =
+                "no error measurement: the reference cannot trace the model: " + model.reference_error;
         } else {
             const auto t0 = Clock::now();
             r.measurement = measure_combination(c, *loaded);

@@ -164,8 +164,8 @@ TEST(LoopSubdivide, KeepsEveryFaceOfANonManifoldFan) {
             EXPECT_GT(double_area(s, i), 0.0f) << i;
             bool in_plane = true;
             for (int k = 0; k < 3; ++k) in_plane &= s.vertex(uint32_t(i), k).y == 0.0f;
-            upright += in_plane && (s.vertex(uint32_t(i), 0).z > 0 || s.vertex(uint32_t(i), 1).z > 0 ||
-                                    s.vertex(uint32_t(i), 2).z > 0);
+            upright += in_plane &&
+                (s.vertex(uint32_t(i), 0).z > 0 || s.vertex(uint32_t(i), 1).z > 0 || s.vertex(uint32_t(i), 2).z > 0);
         }
         EXPECT_EQ(upright, expected / 3) << levels;
     }

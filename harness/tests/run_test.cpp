@@ -345,8 +345,7 @@ accelerators:
     for (size_t i = 0; i < 2; ++i) {
         auto r = as_map(d, i);
         EXPECT_EQ(r["status"], "timeout");
-        EXPECT_NE(r["message"].find("exceeded the time limit (timeout_s = 0.5 s)"), std::string::npos)
-            << r["message"];
+        EXPECT_NE(r["message"].find("exceeded the time limit (timeout_s = 0.5 s)"), std::string::npos) << r["message"];
         EXPECT_EQ(r["message"].find("loading"), std::string::npos) << r["message"];  // a measurement's stage
         EXPECT_EQ(r["triangles"], "20000");
         EXPECT_EQ(r["render_s_median"], "");
@@ -359,12 +358,11 @@ accelerators:
 // memory high-water mark, no clock), keyed by combo_id.
 std::map<std::string, std::map<std::string, std::string>> answers_and_counts(const std::string& csv) {
     static const std::vector<std::string> deterministic = {
-        "model",       "triangles",    "vertices",     "ray_source",   "ray_set",       "ray_set_hash",
-        "accel",       "params",       "status",       "message",      "rays",          "hits",
-        "shadow_rays", "shadow_hits",  "nodes",        "leaves",       "max_depth",     "memory_bytes",
-        "sah_cost",    "avg_leaf_size", "build_extra", "prim_tests",   "node_visits",   "box_tests",
-        "false_misses", "false_hits",  "prim_mismatches", "t_err_ulp_p50", "t_err_ulp_max", "nan_results",
-        "image_rmse",  "hole_pixels"};
+        "model",         "triangles",   "vertices",   "ray_source",   "ray_set",    "ray_set_hash",    "accel",
+        "params",        "status",      "message",    "rays",         "hits",       "shadow_rays",     "shadow_hits",
+        "nodes",         "leaves",      "max_depth",  "memory_bytes", "sah_cost",   "avg_leaf_size",   "build_extra",
+        "prim_tests",    "node_visits", "box_tests",  "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50",
+        "t_err_ulp_max", "nan_results", "image_rmse", "hole_pixels"};
     const CsvData d = read_csv(csv);
     std::map<std::string, std::map<std::string, std::string>> out;
     for (size_t i = 0; i < d.rows.size(); ++i) {

@@ -28,8 +28,8 @@ struct MeshTransformInfo {
     // of their corners (none is dropped): non-manifold ones, and ones with a repeated corner.
     uint64_t detached_faces = 0;
     uint64_t degenerate_faces = 0;
-    uint64_t triangles = 0;      // of the result
-    uint64_t vertices = 0;       // of the result (only vertices some triangle uses)
+    uint64_t triangles = 0;  // of the result
+    uint64_t vertices = 0;   // of the result (only vertices some triangle uses)
 };
 
 // Collapses edges in order of least quadric error until at most `target_triangles`
