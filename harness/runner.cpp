@@ -48,7 +48,7 @@ public:
     // The prepared model, prepared if it was not; nullptr when it is not there: load_error
     // (it does not load) or timeout (its preparation passed the deadline).
     const LoadedModel* prepare() {
-        if (prepared_ || !load_error.empty() || !timeout.empty()) return loaded_ ? &*loaded_ : nullptr;
+        if (prepared_) return loaded_ ? &*loaded_ : nullptr;
         prepared_ = true;
         if (in_process_ || spec_.kind == ModelSpec::Kind::Case) take(prepare_here({}));
         else prepare_in_child();
@@ -156,7 +156,11 @@ private:
             const size_t nl = o.result->find('\n');
             const size_t n = std::stoull(o.result->substr(1, nl - 1));
             reference_error = o.result->substr(nl + 1, n);
-            loaded_ = loaded_model_from_bytes(std::string_view(*o.result).substr(nl + 1 + n), spec_);
+            try {
+                loaded_ = loaded_model_from_bytes(std::string_view(*o.result).substr(nl + 1 + n), spec_);
+            } catch (const std::exception& e) {  // a bug of ours: no model, no rows
+                load_error = concat("the prepared model came back damaged from its process: ", e.what());
+            }
         }
     }
 
