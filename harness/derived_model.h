@@ -22,7 +22,8 @@ std::string derived_model_path(const ModelRegistry& registry, const ModelEntry& 
 // The transformed model: from the cache when it is valid, else made from the registry
 // model, written to the cache (atomically: concurrent shards never read a partial file)
 // and returned. Reports on stderr when it transforms and how many faces the half-edge
-// mesh refused. The scene's name is "<name>@<transform>".
+// mesh refused (detached with their own vertex copies and kept, MeshTransformInfo). The
+// scene's name is "<name>@<transform>".
 Scene load_derived_scene(const ModelRegistry& registry, const ModelEntry& entry, const ModelTransformSpec& t);
 
 }  // namespace accelbench

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
+#include <type_traits>
 
 #include "accelbench/accel/registry.h"
 #include "accelbench/scene/mesh_io.h"
@@ -101,59 +102,169 @@ const GeneratedRaySet& LoadedModel::ray_set(RaySetKind kind) const {
 
 namespace {
 
-template <class T>
-void put(std::string& out, const T& v) {
-    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+// Raw bytes, in this machine's layout: they only cross a pipe from a child process to its
+// parent, both this program.
+class ByteWriter {
+public:
+    template <class T>
+    void put(const T& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        out_.append(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+    template <class T>
+    void put_vector(const std::vector<T>& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        put(uint64_t(v.size()));
+        out_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+    }
+    void put_string(const std::string& s) {
+        put(uint64_t(s.size()));
+        out_ += s;
+    }
+    std::string take() { return std::move(out_); }
+
+private:
+    std::string out_;
+};
+
+// Reads what ByteWriter wrote; throws std::runtime_error naming `what` when the bytes end
+// before a value does.
+class ByteReader {
+public:
+    ByteReader(std::string_view in, const char* what) : in_(in), what_(what) {}
+
+    template <class T>
+    T take() {
+        T v;
+        std::memcpy(&v, next(sizeof v), sizeof v);
+        return v;
+    }
+    template <class T>
+    std::vector<T> take_vector() {
+        const uint64_t n = take<uint64_t>();
+        if (n > (in_.size() - at_) / sizeof(T)) truncated();
+        std::vector<T> v(n);
+        std::memcpy(v.data(), next(n * sizeof(T)), n * sizeof(T));
+        return v;
+    }
+    std::string take_string() {
+        const uint64_t n = take<uint64_t>();
+        if (n > in_.size() - at_) truncated();
+        return std::string(next(n), n);
+    }
+    bool at_end() const { return at_ == in_.size(); }
+
+private:
+    const char* next(size_t n) {
+        if (n > in_.size() - at_) truncated();
+        const char* p = in_.data() + at_;
+        at_ += n;
+        return p;
+    }
+    [[noreturn]] void truncated() const { throw std::runtime_error(std::string(what_) + ": truncated"); }
+
+    std::string_view in_;
+    const char* what_;
+    size_t at_ = 0;
+};
+
+void put_reference(ByteWriter& w, const ReferenceAnswers& r) {
+    w.put(r.seconds);
+    w.put_vector(r.hits);
+    w.put(uint8_t(r.image.has_value()));
+    if (r.image) {
+        w.put(int32_t(r.image->width));
+        w.put(int32_t(r.image->height));
+        w.put_vector(r.image->rgb);
+    }
 }
 
-template <class T>
-T take(const std::string& in, size_t& at) {
-    if (at + sizeof(T) > in.size()) throw std::runtime_error("reference answers: truncated");
-    T v;
-    std::memcpy(&v, in.data() + at, sizeof v);
-    at += sizeof v;
-    return v;
+std::shared_ptr<const ReferenceAnswers> take_reference(ByteReader& r) {
+    auto a = std::make_shared<ReferenceAnswers>();
+    a->seconds = r.take<double>();
+    a->hits = r.take_vector<Hit>();
+    if (r.take<uint8_t>()) {
+        const int32_t w = r.take<int32_t>(), h = r.take<int32_t>();
+        Image image(w, h);
+        auto rgb = r.take_vector<uint8_t>();
+        if (rgb.size() != image.rgb.size()) throw std::runtime_error("prepared model: image of the wrong size");
+        image.rgb = std::move(rgb);
+        a->image = std::move(image);
+    }
+    return a;
+}
+
+void put_ray_set(ByteWriter& w, const GeneratedRaySet& s) {
+    w.put(s.kind);
+    w.put(s.query);
+    w.put_vector(s.rays);
+    w.put_vector(s.reference_hits);
+    w.put_vector(s.reference_occluded);
+    w.put_vector(s.bounce_begin);
+    w.put(s.hash);
+}
+
+GeneratedRaySet take_ray_set(ByteReader& r) {
+    GeneratedRaySet s;
+    s.kind = r.take<RaySetKind>();
+    s.query = r.take<RayQuery>();
+    s.rays = r.take_vector<Ray>();
+    s.reference_hits = r.take_vector<Hit>();
+    s.reference_occluded = r.take_vector<uint8_t>();
+    s.bounce_begin = r.take_vector<size_t>();
+    s.hash = r.take<uint64_t>();
+    return s;
 }
 
 }  // namespace
 
-// Raw bytes, in this machine's layout: they only cross a pipe to the parent process.
-std::string reference_bytes(const ReferenceAnswers& r) {
-    std::string out;
-    put(out, r.seconds);
-    put(out, uint64_t(r.hits.size()));
-    out.append(reinterpret_cast<const char*>(r.hits.data()), r.hits.size() * sizeof(Hit));
-    put(out, uint8_t(r.image.has_value()));
-    if (r.image) {
-        put(out, int32_t(r.image->width));
-        put(out, int32_t(r.image->height));
-        out.append(reinterpret_cast<const char*>(r.image->rgb.data()), r.image->rgb.size());
+// The scene's own arrays only: the derived ones (bounds, centroids) are made again by
+// finalize(), which is deterministic, so the parent's scene is the child's bit for bit.
+std::string loaded_model_bytes(const LoadedModel& m) {
+    if (m.robustness_case) throw std::logic_error("a robustness case is made where it is judged, never sent");
+    ByteWriter w;
+    w.put_string(m.scene.name);
+    w.put_vector(m.scene.vertices);
+    w.put_vector(m.scene.triangles);
+    w.put(m.camera);
+    w.put(m.light);
+    w.put_vector(m.albedo);
+    w.put(uint8_t(m.reference != nullptr));
+    if (m.reference) put_reference(w, *m.reference);
+    w.put(uint8_t(m.ray_sets != nullptr));
+    if (m.ray_sets) {
+        w.put(uint64_t(m.ray_sets->size()));
+        for (const GeneratedRaySet& s : *m.ray_sets) put_ray_set(w, s);
     }
-    return out;
+    return w.take();
 }
 
-std::shared_ptr<const ReferenceAnswers> reference_from_bytes(const std::string& in) {
-    auto r = std::make_shared<ReferenceAnswers>();
-    size_t at = 0;
-    r->seconds = take<double>(in, at);
-    const uint64_t n = take<uint64_t>(in, at);
-    if (n > (in.size() - at) / sizeof(Hit)) throw std::runtime_error("reference answers: truncated");
-    r->hits.resize(n);
-    std::memcpy(r->hits.data(), in.data() + at, n * sizeof(Hit));
-    at += n * sizeof(Hit);
-    if (take<uint8_t>(in, at)) {
-        const int32_t w = take<int32_t>(in, at), h = take<int32_t>(in, at);
-        Image image(w, h);
-        if (in.size() - at != image.rgb.size()) throw std::runtime_error("reference answers: truncated image");
-        std::memcpy(image.rgb.data(), in.data() + at, image.rgb.size());
-        r->image = std::move(image);
+LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spec) {
+    ByteReader r(bytes, "prepared model");
+    LoadedModel m;
+    m.scene.name = r.take_string();
+    m.scene.vertices = r.take_vector<Vec3>();
+    m.scene.triangles = r.take_vector<std::array<uint32_t, 3>>();
+    m.scene.finalize();
+    m.camera = r.take<Camera>();
+    m.light = r.take<Light>();
+    m.albedo = r.take_vector<Vec3>();
+    if (r.take<uint8_t>()) m.reference = take_reference(r);
+    if (r.take<uint8_t>()) {
+        const uint64_t n = r.take<uint64_t>();
+        if (n > bytes.size()) throw std::runtime_error("prepared model: truncated");
+        auto sets = std::make_shared<std::vector<GeneratedRaySet>>(n);
+        for (GeneratedRaySet& s : *sets) s = take_ray_set(r);
+        m.ray_sets = std::move(sets);
     }
-    return r;
+    if (!r.at_end()) throw std::runtime_error("prepared model: bytes after the end");
+    m.rays = spec.rays;  // the config's ray file, read by the parent when it read the config
+    return m;
 }
 
 std::optional<uint64_t> known_triangles(const ModelSpec& spec, const ModelRegistry& registry) {
     // A transformed model's count is known once it is made (decimation stops near, not at,
-    // its target; subdivision drops faces the half-edge mesh refuses).
+    // its target).
     if (spec.kind != ModelSpec::Kind::Registry || spec.transform) return std::nullopt;
     const ModelEntry* entry = registry.find(spec.name);
     return entry ? std::optional<uint64_t>(entry->triangles) : std::nullopt;

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <memory>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/render/renderer.h"
@@ -18,8 +20,8 @@ class ModelRegistry;
 struct RobustnessCase;
 
 // What the `reference` accelerator answers for a model's rays: the error columns
-// of every combination on the model are measured against it. Traced once per model, in
-// the parent process, before any combination's measurement.
+// of every combination on the model are measured against it. Traced once per model, when
+// the model is prepared (runner.cpp), before any combination's measurement.
 struct ReferenceAnswers {
     std::vector<Hit> hits;       // one per primary ray (TraceOutput::primary_hits)
     std::optional<Image> image;  // image runs (shading on) only
@@ -55,13 +57,19 @@ TraceOutput trace_model(const Accelerator& accel, const LoadedModel& model, cons
 void add_reference_answers(LoadedModel& model, const RenderSettings& render);
 
 // Makes the config's ray sets for the model (make_ray_sets: from its camera's rays, the
-// reference's hits and its light), once per model in the parent process, outside anything
+// reference's hits and its light), once per model when it is prepared, outside anything
 // timed, so every accelerator traces the same rays. Prints each set's size and hash.
 void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySetsSpec& spec);
-// The answers as bytes and back, to bring them from the child process that traces them
-// under the time limit (runner.cpp) to the parent.
-std::string reference_bytes(const ReferenceAnswers& answers);
-std::shared_ptr<const ReferenceAnswers> reference_from_bytes(const std::string& bytes);
+
+// A prepared model (loaded, with its reference answers and ray sets when made) as bytes
+// and back, to bring it from the child process that prepares it under the time limit
+// (runner.cpp) to the parent: the scene's vertices and triangles (finalized again on
+// arrival), view, light, colours, reference answers and ray sets. The ray file is not
+// sent: it is the config's (spec.rays), which the parent has. A robustness case is never
+// sent (std::logic_error): it is made in the parent. Throws std::runtime_error for bytes
+// that end early or go on after the model.
+std::string loaded_model_bytes(const LoadedModel& model);
+LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spec);
 
 // The view: the config's camera, else the registry's or procedural scene's own, else
 // Camera::fit for the image's aspect. The light: the registry's or procedural scene's,

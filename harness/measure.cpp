@@ -663,7 +663,8 @@ void send_frame(int fd, char tag, const std::string& payload) {
 
 }  // namespace
 
-ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s) {
+ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s,
+                          const std::string& first_stage) {
     int fds[2];
     if (pipe(fds) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
     std::cout.flush();
@@ -687,7 +688,7 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
         Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
     std::string buffer;
     ChildOutcome o;
-    o.stage = "start-up";
+    o.stage = first_stage;
     for (;;) {
         const double left = seconds_between(Clock::now(), deadline);
         if (left <= 0) {
@@ -707,7 +708,17 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
             const size_t nl = buffer.find('\n');
             if (nl == std::string::npos) break;
             const size_t len = std::strtoull(buffer.c_str() + 1, nullptr, 10);
-            if (buffer.size() < nl + 1 + len) break;
+            if (buffer.size() < nl + 1 + len) {
+                buffer.reserve(nl + 1 + len);  // a prepared model can be hundreds of MB: grow once
+                break;
+            }
+            if (buffer[0] == 'R' && buffer.size() == nl + 1 + len) {
+                // The last frame, alone in the buffer (as a result is): taken without a copy.
+                buffer.erase(0, nl + 1);
+                o.result = std::move(buffer);
+                buffer.clear();
+                break;
+            }
             if (buffer[0] == 'S') o.stage = buffer.substr(nl + 1, len);
             else if (buffer[0] == 'R') o.result = buffer.substr(nl + 1, len);
             buffer.erase(0, nl + 1 + len);

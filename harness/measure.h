@@ -117,9 +117,11 @@ struct ChildOutcome {
 };
 
 // Runs `work` in a forked child with the deadline `timeout_s` and brings its return value
-// (any bytes) back through a pipe; the child reports each stage it begins. `work` must
-// not throw. The parent must not have started threads (fork copies one thread).
-ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s);
+// (any bytes) back through a pipe; the child reports each stage it begins, `first_stage`
+// until it reports one. `work` must not throw. The parent must not have started threads
+// (fork copies one thread).
+ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s,
+                          const std::string& first_stage = "start-up");
 
 // "exceeded the time limit (timeout_s = 2 s) during <stage>"
 std::string time_limit_message(double timeout_s, const std::string& stage);

@@ -18,97 +18,157 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// A config model as the run needs it: its sizes when known without loading, the loaded
-// model on first need, the reference's answers on first measurement. A model that does
-// not load is bad input: its combinations get no rows at all.
+// A config model as the run needs it: its sizes when known without loading, the prepared
+// model on first need. A model that does not load is bad input: its combinations get no
+// rows at all.
+//
+// Preparing a model is loading it (reading and checking the mesh, a derived model's
+// transform, procedural generation), making its ray sets and tracing the reference's
+// answers, once per model, before its first measurement. It runs in one child process under
+// the config's timeout_s, like each measurement (unless --in-process), and comes back to
+// the parent as bytes (loaded_model_bytes): a model whose preparation cannot finish in time
+// gets timeout rows naming the stage, never an unbounded wait in the parent. A robustness
+// case (a small generated scene that brings its own reference answers) is made in the parent.
 class ModelOnDemand {
 public:
-    ModelOnDemand(const ModelSpec& spec, const RunPlan& plan, bool reference_wanted, bool in_process)
-        : spec_(spec), plan_(plan), reference_wanted_(reference_wanted), in_process_(in_process) {
+    ModelOnDemand(const ModelSpec& spec, const RunPlan& plan, std::vector<const Combination*> combinations,
+                  bool reference_wanted, bool in_process)
+        : spec_(spec),
+          plan_(plan),
+          combinations_(std::move(combinations)),
+          reference_wanted_(reference_wanted),
+          in_process_(in_process) {
         triangles = known_triangles(spec, plan.registry);
         if (const ModelEntry* entry = spec.kind == ModelSpec::Kind::Registry ? plan.registry.find(spec.name) : nullptr)
             vertices = entry->vertices;
-        if (!triangles && load()) triangles = loaded_->scene.triangle_count(), vertices = loaded_->scene.vertex_count();
+        // The skip rules need the count: the model is prepared now.
+        if (!triangles) prepare();
     }
 
-    // The model, loaded if it was not; nullptr (and load_error) when it does not load.
-    const LoadedModel* load() {
-        if (!loaded_ && load_error.empty()) {
-            const auto t0 = Clock::now();
-            try {
-                loaded_ = load_model(spec_, plan_.registry, plan_.config.render);
-                std::fprintf(stderr, "accelbench run: loaded %s: %zu triangles, %zu vertices in %.2f s\n",
-                             spec_.label.c_str(), loaded_->scene.triangle_count(), loaded_->scene.vertex_count(),
-                             seconds_since(t0));
-            } catch (const std::exception& e) {
-                load_error = e.what();
-                std::fprintf(stderr, "accelbench run: cannot load %s: %s\n", spec_.label.c_str(), e.what());
-            }
-        }
-        return loaded_ ? &*loaded_ : nullptr;
-    }
-
-    // The reference's answers, once per model, before its first measurement (not for a
-    // robustness case, which brings its own). Traced in a child process under the
-    // config's timeout_s, like each measurement (unless --in-process). False (and
-    // reference_error, or reference_timeout) when the reference cannot trace the model.
-    bool add_reference() {
-        // Ray sets need the reference's answers to be made at all, `errors` or not.
-        const bool wanted = reference_wanted_ || plan_.config.ray_sets;
-        if (!wanted || loaded_->robustness_case || loaded_->reference || !reference_error.empty() ||
-            !reference_timeout.empty())
-            return reference_error.empty() && reference_timeout.empty();
-        try {
-            // Made here, in the parent process (single-threaded), outside anything timed.
-            if (plan_.config.ray_sets && !loaded_->ray_sets)
-                add_ray_sets(*loaded_, plan_.config.render, *plan_.config.ray_sets);
-            if (in_process_) add_reference_answers(*loaded_, plan_.config.render);
-            else trace_reference_in_child();
-        } catch (const std::exception& e) {
-            reference_error = e.what();
-        }
-        if (!reference_timeout.empty())
-            std::fprintf(stderr, "accelbench run: the reference pass of %s: %s\n", spec_.label.c_str(),
-                         reference_timeout.c_str());
+    // The prepared model, prepared if it was not; nullptr when it is not there: load_error
+    // (it does not load) or timeout (its preparation passed the deadline).
+    const LoadedModel* prepare() {
+        if (prepared_) return loaded_ ? &*loaded_ : nullptr;
+        prepared_ = true;
+        if (in_process_ || spec_.kind == ModelSpec::Kind::Case) take(prepare_here({}));
+        else prepare_in_child();
+        if (!timeout.empty())
+            std::fprintf(stderr, "accelbench run: preparing %s: %s\n", spec_.label.c_str(), timeout.c_str());
+        else if (!load_error.empty())
+            std::fprintf(stderr, "accelbench run: cannot load %s: %s\n", spec_.label.c_str(), load_error.c_str());
         else if (!reference_error.empty())
             std::fprintf(stderr, "accelbench run: the reference cannot trace %s: %s\n", spec_.label.c_str(),
                          reference_error.c_str());
-        else
+        else if (loaded_->reference)
             std::fprintf(stderr, "accelbench run: reference answers for %s: %zu primary rays in %.2f s\n",
                          spec_.label.c_str(), loaded_->reference->hits.size(), loaded_->reference->seconds);
-        return reference_error.empty() && reference_timeout.empty();
+        if (loaded_ && !triangles)
+            triangles = loaded_->scene.triangle_count(), vertices = loaded_->scene.vertex_count();
+        return loaded_ ? &*loaded_ : nullptr;
     }
 
     std::optional<uint64_t> triangles, vertices;
-    std::string load_error, reference_error, reference_timeout;
+    // Why the model has no rows; why the reference cannot trace it; which stage of its
+    // preparation passed the deadline.
+    std::string load_error, reference_error, timeout;
 
 private:
-    // The reference pass counts against timeout_s as a combination's measurement does:
-    // a model whose reference cannot finish in time gets timeout rows, not an unbounded wait.
-    void trace_reference_in_child() {
+    // The model, or why there is none, and why the reference cannot trace it.
+    struct Preparation {
+        std::optional<LoadedModel> model;
+        std::string load_error, reference_error;
+    };
+
+    static constexpr const char* reference_stage = "the reference pass (once per model, before its measurements)";
+
+    std::string loading_stage() const { return concat("loading ", spec_.label); }
+
+    // Every stage of preparing, in this process; `stage` hears each one begin.
+    Preparation prepare_here(const StageFn& stage) const {
+        Preparation p;
+        if (stage) stage(loading_stage());
+        const auto t0 = Clock::now();
+        try {
+            p.model = load_model(spec_, plan_.registry, plan_.config.render);
+        } catch (const std::exception& e) {
+            p.load_error = e.what();
+            return p;
+        }
+        std::fprintf(stderr, "accelbench run: loaded %s: %zu triangles, %zu vertices in %.2f s\n", spec_.label.c_str(),
+                     p.model->scene.triangle_count(), p.model->scene.vertex_count(), seconds_since(t0));
+        if (!reference_needed(*p.model)) return p;
+        try {
+            // Single-threaded, outside anything timed.
+            if (plan_.config.ray_sets) {
+                if (stage) stage("making the ray sets (once per model, before its measurements)");
+                add_ray_sets(*p.model, plan_.config.render, *plan_.config.ray_sets);
+            }
+            if (stage) stage(reference_stage);
+            add_reference_answers(*p.model, plan_.config.render);
+        } catch (const std::exception& e) {
+            p.reference_error = e.what();
+        }
+        return p;
+    }
+
+    // The reference's answers (and the ray sets, which need them to be made at all, `errors`
+    // or not) are made when a combination on the model will be measured: not for a
+    // robustness case, which brings its own, nor when the skip rules skip every one.
+    bool reference_needed(const LoadedModel& m) const {
+        if ((!reference_wanted_ && !plan_.config.ray_sets) || m.robustness_case) return false;
+        return std::any_of(combinations_.begin(), combinations_.end(), [&](const Combination* c) {
+            return !skip_reason(plan_.config, *c, m.scene.triangle_count());
+        });
+    }
+
+    void take(Preparation p) {
+        if (p.model) loaded_ = std::move(*p.model);
+        load_error = std::move(p.load_error);
+        reference_error = std::move(p.reference_error);
+    }
+
+    // The child's answer: 'L' and why the model does not load, or 'M', the length of why the
+    // reference cannot trace it (0: it can), a newline, that text and the model's bytes.
+    void prepare_in_child() {
         const double limit = plan_.config.timeout_s;
         const ChildOutcome o = run_in_child(
             [&](const StageFn& stage) -> std::string {
-                stage("the reference pass");
                 try {
-                    add_reference_answers(*loaded_, plan_.config.render);
-                    return concat("A", reference_bytes(*loaded_->reference));
-                } catch (const std::exception& e) {
-                    return concat("E", e.what());
+                    Preparation p = prepare_here(stage);
+                    if (!p.model) return concat("L", p.load_error);
+                    return concat("M", std::to_string(p.reference_error.size()), "\n", p.reference_error,
+                                  loaded_model_bytes(*p.model));
+                } catch (const std::exception& e) {  // the model does not fit into bytes (bad_alloc)
+                    return concat("L", "cannot bring the prepared model to the parent process: ", e.what());
                 }
             },
-            limit);
-        if (o.timed_out)
-            reference_timeout =
-                time_limit_message(limit, "the reference pass (once per model, before its measurements)");
-        else if (!o.result) reference_error = "the reference process " + o.failure;
-        else if (o.result->rfind("E", 0) == 0) reference_error = o.result->substr(1);
-        else loaded_->reference = reference_from_bytes(o.result->substr(1));
+            limit, loading_stage());
+        if (o.timed_out) {
+            timeout = time_limit_message(limit, o.stage);
+        } else if (!o.result) {
+            // A crash is a bug of ours, not bad input; while loading it still leaves no model.
+            const std::string why = concat("the process preparing the model ", o.failure, " during ", o.stage);
+            if (o.stage == loading_stage()) load_error = why;
+            else reference_error = why;
+        } else if ((*o.result)[0] == 'L') {
+            load_error = o.result->substr(1);
+        } else {
+            const size_t nl = o.result->find('\n');
+            const size_t n = std::stoull(o.result->substr(1, nl - 1));
+            reference_error = o.result->substr(nl + 1, n);
+            try {
+                loaded_ = loaded_model_from_bytes(std::string_view(*o.result).substr(nl + 1 + n), spec_);
+            } catch (const std::exception& e) {  // a bug of ours: no model, no rows
+                load_error = concat("the prepared model came back damaged from its process: ", e.what());
+            }
+        }
     }
 
     const ModelSpec& spec_;
     const RunPlan& plan_;
+    const std::vector<const Combination*> combinations_;
     const bool reference_wanted_, in_process_;
+    bool prepared_ = false;
     std::optional<LoadedModel> loaded_;
 };
 
@@ -116,21 +176,24 @@ class Runner {
 public:
     Runner(const RunPlan& plan, const RunOptions& options) : plan_(plan), options_(options) {}
 
-    // One combination: skipped by a rule, not run (its model did not load), an error
-    // without measuring (the reference cannot trace the model), or measured.
+    // One combination: skipped by a rule, a timeout (its model's preparation passed the
+    // deadline), not run (its model did not load), an error without measuring (the
+    // reference cannot trace the model), or measured.
     CombinationResult run_one(const Combination& c, ModelOnDemand& model) {
         const ModelSpec& spec = plan_.config.models[c.model];
         CombinationResult r{c, spec, model.triangles, model.vertices, utc_now("%Y-%m-%dT%H:%M:%SZ"), "", {}, {}};
         if (auto reason = model.triangles ? skip_reason(plan_.config, c, *model.triangles) : std::nullopt) {
             r.measurement.status = "skipped";
             r.measurement.message = *reason;
-        } else if (const LoadedModel* loaded = model.load(); !loaded) {
+        } else if (const LoadedModel* loaded = model.prepare(); !loaded && !model.timeout.empty()) {
+            r.measurement.status = "timeout";
+            r.measurement.message = model.timeout;
+        } else if (!loaded) {
             r.load_error = model.load_error;
-        } else if (!model.add_reference()) {
-            r.measurement.status = model.reference_timeout.empty() ? "error" : "timeout";
-            r.measurement.message = model.reference_timeout.empty()
-                ? "no error measurement: the reference cannot trace the model: " + model.reference_error
-                : model.reference_timeout;
+        } else if (!model.reference_error.empty()) {
+            r.measurement.status = "error";
+            r.measurement.message =
+                "no error measurement: the reference cannot trace the model: " + model.reference_error;
         } else {
             const auto t0 = Clock::now();
             r.measurement = measure_combination(c, *loaded);
@@ -188,7 +251,7 @@ int run_plan(const RunPlan& plan, const RunOptions& options, const std::vector<R
         std::copy_if(plan.to_do.begin(), plan.to_do.end(), std::back_inserter(mine),
                      [&](const Combination* c) { return c->model == mi; });
         if (mine.empty()) continue;
-        ModelOnDemand model(plan.config.models[mi], plan, reference_wanted, options.in_process);
+        ModelOnDemand model(plan.config.models[mi], plan, mine, reference_wanted, options.in_process);
         for (const Combination* c : mine) {
             for (RunSink* s : sinks) s->starting(*c);
             const CombinationResult result = runner.run_one(*c, model);

@@ -49,7 +49,8 @@ TEST(LoopSubdivide, FourTrianglesPerLevelAndStaysClosed) {
         const size_t expected = 20u << (2 * levels);
         EXPECT_EQ(s.triangle_count(), expected) << levels;
         EXPECT_EQ(info.triangles, expected);
-        EXPECT_EQ(info.refused_faces, 0u);
+        EXPECT_EQ(info.detached_faces, 0u);
+        EXPECT_EQ(info.degenerate_faces, 0u);
         // Euler: a closed genus-0 triangle mesh has V = F/2 + 2.
         EXPECT_EQ(s.vertex_count(), expected / 2 + 2) << levels;
         EXPECT_TRUE(is_closed(s)) << levels;
@@ -81,7 +82,8 @@ TEST(Decimate, ReachesTheTargetAndStaysClosed) {
         EXPECT_LE(s.triangle_count(), target);
         EXPECT_GE(s.triangle_count() + 2, target);
         EXPECT_EQ(info.source_triangles, 1280u);
-        EXPECT_EQ(info.refused_faces, 0u);
+        EXPECT_EQ(info.detached_faces, 0u);
+        EXPECT_EQ(info.degenerate_faces, 0u);
         EXPECT_TRUE(is_closed(s)) << target;
         EXPECT_EQ(s.vertex_count(), s.triangle_count() / 2 + 2) << target;
     }
@@ -99,19 +101,126 @@ TEST(Decimate, IsDeterministic) {
     }
 }
 
-TEST(Decimate, CountsNonManifoldFacesItRefuses) {
-    // The icosahedron plus a fin: a third face on the edge (0, 11) makes it non-manifold,
-    // which a half-edge mesh cannot hold.
+// Twice the area of triangle i.
+float double_area(const Scene& s, size_t i) {
+    const Vec3 a = s.vertex(uint32_t(i), 0), b = s.vertex(uint32_t(i), 1), c = s.vertex(uint32_t(i), 2);
+    const Vec3 n = cross(b - a, c - a);
+    return std::sqrt(dot(n, n));
+}
+
+// The triangles of `s` with a corner at `p`, and the rest as a scene of their own.
+size_t triangles_at(const Scene& s, Vec3 p) {
+    size_t n = 0;
+    for (size_t i = 0; i < s.triangle_count(); ++i)
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 v = s.vertex(uint32_t(i), k);
+            if (v.x == p.x && v.y == p.y && v.z == p.z) {
+                ++n;
+                break;
+            }
+        }
+    return n;
+}
+
+Scene without_triangles_at(const Scene& s, Vec3 p) {
+    Scene rest;
+    rest.vertices = s.vertices;
+    for (size_t i = 0; i < s.triangle_count(); ++i) {
+        bool at = false;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 v = s.vertex(uint32_t(i), k);
+            at |= v.x == p.x && v.y == p.y && v.z == p.z;
+        }
+        if (!at) rest.triangles.push_back(s.triangles[i]);
+    }
+    return rest;
+}
+
+// Three triangles on the edge (0, 1): a non-manifold fan, which a half-edge mesh cannot
+// hold as it is.
+Scene fan() {
+    Scene s;
+    s.name = "fan";
+    s.vertices = {{0, 0, 0}, {1, 0, 0}, {0.5f, 1, 0}, {0.5f, -1, 0}, {0.5f, 0, 1}};
+    s.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+    s.finalize();
+    return s;
+}
+
+TEST(LoopSubdivide, KeepsEveryFaceOfANonManifoldFan) {
+    for (int levels = 1; levels <= 3; ++levels) {
+        MeshTransformInfo info;
+        const Scene s = loop_subdivide(fan(), levels, &info);
+        const size_t expected = 3u << (2 * levels);
+        EXPECT_EQ(s.triangle_count(), expected) << levels;
+        EXPECT_EQ(info.triangles, expected);
+        EXPECT_EQ(info.source_triangles, 3u);
+        EXPECT_EQ(info.detached_faces, 1u);  // the third face on the edge
+        EXPECT_EQ(info.degenerate_faces, 0u);
+        // The detached face (in the plane y = 0, toward z) is subdivided in its own plane,
+        // into a quarter of the triangles.
+        size_t upright = 0;
+        for (size_t i = 0; i < s.triangle_count(); ++i) {
+            EXPECT_GT(double_area(s, i), 0.0f) << i;
+            bool in_plane = true;
+            for (int k = 0; k < 3; ++k) in_plane &= s.vertex(uint32_t(i), k).y == 0.0f;
+            upright += in_plane &&
+                (s.vertex(uint32_t(i), 0).z > 0 || s.vertex(uint32_t(i), 1).z > 0 || s.vertex(uint32_t(i), 2).z > 0);
+        }
+        EXPECT_EQ(upright, expected / 3) << levels;
+    }
+}
+
+TEST(LoopSubdivide, KeepsAFaceWithARepeatedCorner) {
+    // A face with a repeated corner is no half-edge face; with its own copies of its corners
+    // it is a zero-area face that subdivides into zero-area faces.
     Scene s = icosahedron();
-    s.vertices.push_back({-3, 3, 3});
-    s.triangles.push_back({0, 11, 12});
+    s.triangles.push_back({0, 0, 5});
     s.finalize();
     MeshTransformInfo info;
-    Scene d = decimate(s, 16, &info);
-    EXPECT_EQ(info.refused_faces, 1u);
-    EXPECT_EQ(info.source_triangles, 21u);
+    const Scene d = loop_subdivide(s, 2, &info);
+    EXPECT_EQ(d.triangle_count(), 21u * 16u);
+    EXPECT_EQ(info.degenerate_faces, 1u);
+    EXPECT_EQ(info.detached_faces, 0u);
+    // On the segment from vertex 0 to vertex 5 up to float rounding (the masks are computed
+    // in double); the icosahedron's faces have twice-areas of 3.46 before subdivision.
+    size_t zero = 0;
+    for (size_t i = 0; i < d.triangle_count(); ++i) zero += double_area(d, i) < 1e-5f;
+    EXPECT_EQ(zero, 16u);
+}
+
+TEST(Decimate, KeepsTheNonManifoldFaces) {
+    // The icosahedron plus a fin: a third face on the edge (0, 11) makes it non-manifold.
+    // The fin is detached (its own copies of its corners) and, a lone triangle, never
+    // collapsed: it is in the result, inside the target; the rest is decimated and closed.
+    Scene s = icosahedron();
+    const Vec3 apex{-3, 3, 3};
+    s.vertices.push_back(apex);
+    s.triangles.push_back({0, 11, 12});
+    s.triangles.push_back({5, 5, 1});  // and a face with a repeated corner
+    s.finalize();
+    MeshTransformInfo info;
+    const Scene d = decimate(s, 16, &info);
+    EXPECT_EQ(info.detached_faces, 1u);
+    EXPECT_EQ(info.degenerate_faces, 1u);
+    EXPECT_EQ(info.source_triangles, 22u);
+    EXPECT_EQ(info.triangles, d.triangle_count());
     EXPECT_LE(d.triangle_count(), 16u);
-    EXPECT_TRUE(is_closed(d));
+    EXPECT_EQ(triangles_at(d, apex), 1u);
+    size_t zero = 0;
+    for (size_t i = 0; i < d.triangle_count(); ++i) zero += double_area(d, i) == 0.0f;
+    EXPECT_EQ(zero, 1u);  // the face with a repeated corner, kept
+    Scene rest = without_triangles_at(d, apex);
+    rest.triangles.erase(std::remove_if(rest.triangles.begin(), rest.triangles.end(),
+                                        [&](const auto& t) {
+                                            const Vec3 a = rest.vertices[t[0]], b = rest.vertices[t[1]],
+                                                       c = rest.vertices[t[2]];
+                                            const Vec3 n = cross(b - a, c - a);
+                                            return dot(n, n) == 0.0f;
+                                        }),
+                         rest.triangles.end());
+    EXPECT_EQ(rest.triangle_count(), d.triangle_count() - 2);
+    EXPECT_TRUE(is_closed(rest));
 }
 
 TEST(MeshTransform, RejectsBadArguments) {

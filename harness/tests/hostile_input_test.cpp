@@ -235,27 +235,85 @@ accelerators: [{name: bvh}]
         load_config(write_file(dir.path(), "noerr.yaml", read_file(large) + "errors: false\n"), registry()));
 }
 
+// The status and message columns of every row of a results file.
+std::vector<std::pair<std::string, std::string>> statuses(const std::string& csv) {
+    const CsvData d = read_csv(csv);
+    const size_t status = size_t(std::find(d.header.begin(), d.header.end(), "status") - d.header.begin());
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const auto& r : d.rows) out.emplace_back(r[status], r[status + 1]);
+    return out;
+}
+
 TEST_F(HostileInputTest, TimeoutBoundsTheReferencePassToo) {
-    // The reference pass (once per model, in a child process like a measurement) gets the
-    // same limit: rows with status timeout naming it, not an unbounded wait in the parent.
+    // The reference pass (once per model, in the child process that prepares the model)
+    // gets the same limit: rows with status timeout naming it, not an unbounded wait in the
+    // parent. Large overlapping triangles make it slow (seconds); loading takes 0.02 s.
     const std::string slow = write_file(dir.path(), "slow.yaml", R"(name: slow
-timeout_s: 0.001
+timeout_s: 1
 render: {width: 320, height: 240}
-models: [{procedural: soup, triangles: 20000, seed: 1}]
+models: [{procedural: soup, triangles: 20000, seed: 1, size: 1.0}]
 accelerators: [{name: bvh}, {name: embree}]
 )");
     const Outcome o = run({slow, "--out", path("slow.csv")});
     EXPECT_EQ(o.code, 0) << o.err;  // timeouts are rows; the run goes on
-    const CsvData d = read_csv(path("slow.csv"));
-    ASSERT_EQ(d.rows.size(), 2u);
-    const size_t status = size_t(std::find(d.header.begin(), d.header.end(), "status") - d.header.begin());
-    for (const auto& r : d.rows) {
-        EXPECT_EQ(r[status], "timeout");
-        EXPECT_NE(r[status + 1].find("exceeded the time limit (timeout_s = 0.001 s) during the reference pass"),
-                  std::string::npos)
-            << r[status + 1];
+    const auto rows = statuses(path("slow.csv"));
+    ASSERT_EQ(rows.size(), 2u);
+    for (const auto& [status, message] : rows) {
+        EXPECT_EQ(status, "timeout");
+        EXPECT_EQ(message,
+                  "exceeded the time limit (timeout_s = 1 s) during the reference pass (once per model, before its "
+                  "measurements)");
     }
+    EXPECT_NE(o.err.find("loaded soup(triangles=20000,seed=1,size=1): 20000 triangles"), std::string::npos) << o.err;
     EXPECT_EQ(data_rows(repetitions_path(path("slow.csv"))), 0u);
+}
+
+TEST_F(HostileInputTest, TimeoutBoundsLoadingToo) {
+    // Generating a million triangles takes about 0.6 s, in the child process that prepares
+    // the model: under timeout_s: 0.05 every combination on the model is a timeout row
+    // naming the loading, whether or not the reference is wanted. The skip rule cannot be
+    // decided without the triangle count, so that combination is a timeout too.
+    for (const std::string errors : {"true", "false"}) {
+        const std::string big = write_file(dir.path(), "big.yaml", R"(name: big
+timeout_s: 0.05
+errors: )" + errors + R"(
+render: {width: 8, height: 8}
+models: [{procedural: soup, triangles: 1000000, seed: 1}]
+accelerators: [{name: bvh}, {name: brute_force}]
+skip: [{accel: brute_force, triangles_above: 100000, reason: too slow}]
+)");
+        const std::string csv = path("big-" + errors + ".csv");
+        const Outcome o = run({big, "--out", csv});
+        EXPECT_EQ(o.code, 0) << o.err;
+        const auto rows = statuses(csv);
+        ASSERT_EQ(rows.size(), 2u) << errors;
+        for (const auto& [status, message] : rows) {
+            EXPECT_EQ(status, "timeout");
+            EXPECT_EQ(message,
+                      "exceeded the time limit (timeout_s = 0.05 s) during loading soup(triangles=1000000,seed=1)");
+        }
+        EXPECT_NE(o.err.find("preparing soup(triangles=1000000,seed=1): exceeded the time limit"), std::string::npos)
+            << o.err;
+        EXPECT_EQ(o.err.find("loaded soup"), std::string::npos) << o.err;
+        EXPECT_EQ(data_rows(repetitions_path(csv)), 0u);
+    }
+}
+
+TEST_F(HostileInputTest, AModelThatDoesNotLoadInTheChildStillGetsNoRows) {
+    // Loading runs in the preparing child now; its refusal comes back as before: no rows,
+    // exit 2, the reader's message on stderr.
+    write_file(dir.path(), "cut.obj", "v 0 0 0\nv 1 0 0\nv 0 1\nf 1 2 3\n");
+    const std::string cfg = write_file(dir.path(), "cut.yaml", R"(name: cut
+models: [{path: cut.obj}, {path: tri.obj, rays: {file: tri.rays.csv}}]
+accelerators: [{name: bvh}]
+)");
+    const Outcome o = run({cfg, "--out", path("cut.csv")});
+    EXPECT_EQ(o.code, 2) << o.err;
+    EXPECT_NE(o.err.find("cannot load cut.obj: cannot load mesh '" + path("cut.obj") + "': line 3:"), std::string::npos)
+        << o.err;
+    const auto rows = statuses(path("cut.csv"));
+    ASSERT_EQ(rows.size(), 1u);  // tri.obj's row only
+    EXPECT_EQ(rows[0].first, "ok") << rows[0].second;
 }
 
 }  // namespace

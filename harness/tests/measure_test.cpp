@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <cstring>
 #include <thread>
 
 #include "accelbench/accel/baseline/brute_force.h"
@@ -171,6 +172,76 @@ TEST(MeasureTest, InProcessTimeLimitIsCheckedBetweenStages) {
     EXPECT_EQ(m.status, "timeout");
     EXPECT_NE(m.message.find("exceeded the time limit (timeout_s = 0.1 s) before build repetition"), std::string::npos)
         << m.message;
+}
+
+// Bit for bit: floats compared as bytes, so that -0.0, NaN payloads and rounding all count.
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+template <class T>
+bool same_bits(const T& a, const T& b) {
+    return std::memcmp(&a, &b, sizeof(T)) == 0;
+}
+
+// A prepared model crosses from the child that prepares it to the run's process as bytes
+// (runner.cpp): every field must arrive as it was made, the derived scene arrays included.
+TEST(PreparedModelTest, BytesBringBackEveryField) {
+    LoadedModel m = box_model();
+    for (size_t i = 0; i < m.scene.triangle_count(); ++i) m.albedo.push_back({0.1f * float(i), 0.5f, -0.0f});
+    RenderSettings image = tiny_render();
+    image.shading = true;
+    add_reference_answers(m, image);
+    RaySetsSpec sets;
+    sets.sets = {RaySetKind::Primary, RaySetKind::Shadow, RaySetKind::Ao, RaySetKind::Diffuse, RaySetKind::Random};
+    sets.params.random_rays = 50;
+    add_ray_sets(m, image, sets);
+    ASSERT_TRUE(m.reference->image);
+    ModelSpec spec;
+    spec.rays = std::make_shared<RaySet>();
+
+    const std::string bytes = loaded_model_bytes(m);
+    const LoadedModel back = loaded_model_from_bytes(bytes, spec);
+    EXPECT_EQ(back.scene.name, "box");
+    EXPECT_TRUE(same_bits(back.scene.vertices, m.scene.vertices));
+    EXPECT_EQ(back.scene.triangles, m.scene.triangles);
+    EXPECT_TRUE(same_bits(back.scene.prim_bounds, m.scene.prim_bounds));
+    EXPECT_TRUE(same_bits(back.scene.centroids, m.scene.centroids));
+    EXPECT_TRUE(same_bits(back.scene.bounds, m.scene.bounds));
+    EXPECT_TRUE(same_bits(back.camera, m.camera));
+    EXPECT_TRUE(same_bits(back.light, m.light));
+    EXPECT_TRUE(same_bits(back.albedo, m.albedo));
+    EXPECT_EQ(back.rays, spec.rays);  // the config's ray file, not sent
+    ASSERT_TRUE(back.reference);
+    EXPECT_EQ(back.reference->seconds, m.reference->seconds);
+    EXPECT_TRUE(same_bits(back.reference->hits, m.reference->hits));
+    ASSERT_TRUE(back.reference->image);
+    EXPECT_EQ(back.reference->image->width, 16);
+    EXPECT_EQ(back.reference->image->height, 12);
+    EXPECT_EQ(back.reference->image->rgb, m.reference->image->rgb);
+    ASSERT_TRUE(back.ray_sets);
+    ASSERT_EQ(back.ray_sets->size(), 5u);
+    for (size_t i = 0; i < 5; ++i) {
+        const GeneratedRaySet &a = (*back.ray_sets)[i], &b = (*m.ray_sets)[i];
+        EXPECT_EQ(a.kind, b.kind);
+        EXPECT_EQ(a.query, b.query);
+        EXPECT_TRUE(same_bits(a.rays, b.rays)) << i;
+        EXPECT_TRUE(same_bits(a.reference_hits, b.reference_hits)) << i;
+        EXPECT_EQ(a.reference_occluded, b.reference_occluded) << i;
+        EXPECT_EQ(a.bounce_begin, b.bounce_begin) << i;
+        EXPECT_EQ(a.hash, b.hash) << i;
+    }
+    EXPECT_FALSE((*back.ray_sets)[3].bounce_begin.empty());  // diffuse: something was compared
+
+    // Without reference or ray sets; and bytes cut short or with more after the model.
+    LoadedModel bare = box_model();
+    const LoadedModel bare_back = loaded_model_from_bytes(loaded_model_bytes(bare), ModelSpec{});
+    EXPECT_FALSE(bare_back.reference);
+    EXPECT_FALSE(bare_back.ray_sets);
+    EXPECT_FALSE(bare_back.rays);
+    for (size_t cut : {size_t(0), size_t(7), bytes.size() / 2, bytes.size() - 1})
+        EXPECT_THROW(loaded_model_from_bytes(bytes.substr(0, cut), spec), std::runtime_error) << cut;
+    EXPECT_THROW(loaded_model_from_bytes(bytes + "x", spec), std::runtime_error);
 }
 
 TEST(IsolationTest, ResultCrossesTheProcessBoundary) {

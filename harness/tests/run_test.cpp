@@ -326,13 +326,16 @@ accelerators: [{name: brute_force}]
 }
 
 TEST_F(RunTest, TimeoutsAreRowsAndTheRunGoesOn) {
-    // Far too short a limit for anything: the parent stops each child (or the child sees
-    // the limit passed at a stage boundary), records a timeout and goes on to the next.
+    // A limit the model's preparation fits (generating 20000 triangles: 0.02 s; no
+    // reference pass) and brute force's render cannot (76800 rays x 20000 triangles, seconds):
+    // the parent stops each measuring child (or the child sees the limit passed at a stage
+    // boundary), records a timeout and goes on to the next.
     const std::string cfg = write_file(dir.path(), "slow.yaml", R"(name: slow
 repetitions: 2
-timeout_s: 0.001
-render: {width: 24, height: 16}
-models: [{procedural: soup, triangles: 1000}]
+timeout_s: 0.5
+errors: false
+render: {width: 320, height: 240}
+models: [{procedural: soup, triangles: 20000}]
 accelerators:
   - {name: brute_force, params: {max_triangles: [20000, 30000]}}
 )");
@@ -342,12 +345,73 @@ accelerators:
     for (size_t i = 0; i < 2; ++i) {
         auto r = as_map(d, i);
         EXPECT_EQ(r["status"], "timeout");
-        EXPECT_NE(r["message"].find("exceeded the time limit (timeout_s = 0.001 s)"), std::string::npos)
-            << r["message"];
+        EXPECT_NE(r["message"].find("exceeded the time limit (timeout_s = 0.5 s)"), std::string::npos) << r["message"];
+        EXPECT_EQ(r["message"].find("loading"), std::string::npos) << r["message"];  // a measurement's stage
+        EXPECT_EQ(r["triangles"], "20000");
         EXPECT_EQ(r["render_s_median"], "");
         EXPECT_EQ(r["rays"], "");
     }
     EXPECT_EQ(read_csv(repetitions_path(out)).rows.size(), 0u);
+}
+
+// Every column that is a property of the model, the structure and the rays (no time, no
+// memory high-water mark, no clock), keyed by combo_id.
+std::map<std::string, std::map<std::string, std::string>> answers_and_counts(const std::string& csv) {
+    static const std::vector<std::string> deterministic = {
+        "model",         "triangles",   "vertices",   "ray_source",   "ray_set",    "ray_set_hash",    "accel",
+        "params",        "status",      "message",    "rays",         "hits",       "shadow_rays",     "shadow_hits",
+        "nodes",         "leaves",      "max_depth",  "memory_bytes", "sah_cost",   "avg_leaf_size",   "build_extra",
+        "prim_tests",    "node_visits", "box_tests",  "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50",
+        "t_err_ulp_max", "nan_results", "image_rmse", "hole_pixels"};
+    const CsvData d = read_csv(csv);
+    std::map<std::string, std::map<std::string, std::string>> out;
+    for (size_t i = 0; i < d.rows.size(); ++i) {
+        auto r = as_map(d, i);
+        for (const std::string& k : deterministic) out[r["combo_id"]][k] = r.at(k);
+    }
+    return out;
+}
+
+TEST_F(RunTest, APreparedModelComesBackFromItsChildProcessUnchanged) {
+    // Models are prepared (loaded, ray sets made, reference traced) in a child process and
+    // sent back as bytes; --in-process prepares them in the run's own process. Every answer
+    // and count must be the same: a procedural scene with colours in an image run (the
+    // reference's image), a mesh file with a ray file, and generated ray sets.
+    const std::string image = write_file(dir.path(), "image.yaml", R"(name: image
+repetitions: 1
+warmup: 0
+render: {width: 24, height: 16, shading: true, light: true}
+models:
+  - {procedural: forest, triangles: 3000, seed: 2}
+  - {path: tri.obj, rays: {file: tri.rays.csv}, label: tri-rays}
+accelerators: [{name: bvh}, {name: kdtree}]
+)");
+    const std::string sets = write_file(dir.path(), "sets.yaml", R"(name: sets
+repetitions: 1
+warmup: 0
+render: {width: 24, height: 16}
+ray_sets: {sets: [primary, shadow, ao, diffuse, random], random: {rays: 300}}
+models: [{procedural: soup, triangles: 800, seed: 5}]
+accelerators: [{name: bvh}, {name: lbvh}]
+)");
+    for (const auto& [cfg, rows] : {std::pair<std::string, size_t>{image, 4}, {sets, 10}}) {
+        const std::string child = (dir.path() / "child.csv").string(), here = (dir.path() / "here.csv").string();
+        for (const std::string& f : {child, here, repetitions_path(child), repetitions_path(here)})
+            std::filesystem::remove(f);
+        ASSERT_EQ(run({cfg, "--out", child}), 0) << cfg;
+        ASSERT_EQ(run({cfg, "--out", here, "--in-process"}), 0) << cfg;
+        const auto a = answers_and_counts(child), b = answers_and_counts(here);
+        ASSERT_EQ(a.size(), rows) << cfg;
+        EXPECT_EQ(a, b) << cfg;
+        for (const auto& [id, r] : a) {
+            EXPECT_EQ(r.at("status"), "ok") << id << ": " << r.at("message");
+            EXPECT_EQ(r.at("false_misses"), "0") << id;  // compared with the reference's answers
+            EXPECT_EQ(r.at("false_hits"), "0") << id;
+            if (r.at("model") == "tri-rays") EXPECT_EQ(r.at("ray_source"), "tri.rays.csv") << id;
+            else if (cfg == image) EXPECT_EQ(r.at("hole_pixels"), "0") << id;
+            else EXPECT_FALSE(r.at("ray_set_hash").empty()) << id;
+        }
+    }
 }
 
 TEST_F(RunTest, ErrorsAreRowsAndTheExitCodeSaysSo) {

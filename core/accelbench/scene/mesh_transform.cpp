@@ -5,6 +5,7 @@
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 #include <OpenMesh/Tools/Subdivider/Uniform/LoopT.hh>
 
+#include <array>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -21,8 +22,8 @@ struct TransformTraits : public OpenMesh::DefaultTraits {
 };
 using HalfEdgeMesh = OpenMesh::TriMesh_ArrayKernelT<TransformTraits>;
 
-// OpenMesh reports a refused face on its error log stream; refusals are counted and
-// reported by the caller instead, so the stream is muted while faces are added.
+// OpenMesh reports a refused face on its error log stream; such faces are detached and
+// counted instead (to_half_edge), so the stream is muted while faces are added.
 class MutedOpenMeshErrors {
 public:
     MutedOpenMeshErrors() : was_enabled_(omerr().is_enabled()) { omerr().disable(); }
@@ -34,22 +35,38 @@ private:
     bool was_enabled_;
 };
 
+// Every source face becomes a face of the half-edge mesh. One that would make an edge or a
+// vertex non-manifold is added again with its own copies of its corners, as OpenMesh's own
+// readers do (OpenMesh/Core/IO/importer/ImporterT.hh, add_face: "separate non-manifold
+// faces"): it is then a component of its own. A face with a repeated corner is given copies
+// straight away (never offered with its repeated vertex: a half-edge from a vertex to
+// itself is no edge), three corners at two or one position, a face of zero area that the
+// transforms carry along like any other.
 HalfEdgeMesh to_half_edge(const Scene& scene, MeshTransformInfo& info) {
+    using VertexHandle = HalfEdgeMesh::VertexHandle;
     HalfEdgeMesh mesh;
     mesh.reserve(scene.vertex_count(), 3 * scene.triangle_count(), scene.triangle_count());
     for (const Vec3& v : scene.vertices) mesh.add_vertex(HalfEdgeMesh::Point(v.x, v.y, v.z));
     info.source_triangles = scene.triangle_count();
     MutedOpenMeshErrors muted;
     for (const auto& t : scene.triangles) {
-        const auto face = mesh.add_face(HalfEdgeMesh::VertexHandle(int(t[0])), HalfEdgeMesh::VertexHandle(int(t[1])),
-                                        HalfEdgeMesh::VertexHandle(int(t[2])));
-        if (!face.is_valid()) ++info.refused_faces;
+        std::array<VertexHandle, 3> v = {VertexHandle(int(t[0])), VertexHandle(int(t[1])), VertexHandle(int(t[2]))};
+        const bool degenerate = t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+        if (!degenerate && mesh.add_face(v[0], v[1], v[2]).is_valid()) continue;
+        ++(degenerate ? info.degenerate_faces : info.detached_faces);
+        for (VertexHandle& h : v) {
+            const HalfEdgeMesh::Point p = mesh.point(h);  // a copy: add_vertex may move the points
+            h = mesh.add_vertex(p);
+        }
+        if (!mesh.add_face(v[0], v[1], v[2]).is_valid())
+            throw std::logic_error("mesh transform: a face of three new vertices was refused");
     }
     return mesh;
 }
 
 // Back to flat arrays in OpenMesh's (deterministic) order, keeping only vertices some face
-// uses: vertices of refused faces and vertices left isolated are not part of the model.
+// uses: vertices left isolated (a detached face's originals that no other face uses, or
+// removed by decimation) are not part of the model.
 Scene flatten(const HalfEdgeMesh& mesh, const std::string& name, MeshTransformInfo& info) {
     Scene out;
     out.name = name;

@@ -6,10 +6,13 @@
 // count changes between sizes — which is what a scaling plot needs.
 //
 // Both go through an OpenMesh half-edge TriMesh, which refuses faces that would make an
-// edge non-manifold ("complex edge") and faces with a repeated corner. Those faces cannot
-// be decimated or subdivided; they are dropped and counted in MeshTransformInfo, so a
-// caller can report how much of the source was lost rather than hide it. Both transforms
-// are deterministic: the same input gives the same output, vertex for vertex.
+// edge or vertex non-manifold ("complex edge") and faces with a repeated corner. No face
+// is lost: such a face is added with its own copies of its corners (as OpenMesh's readers
+// do), a component of its own, and counted in MeshTransformInfo. Subdivision divides it
+// like every face (a face with a repeated corner into zero-area faces); decimation never
+// collapses an edge of a lone triangle (OpenMesh's is_collapse_ok), so it stays as it is.
+// Both transforms are deterministic: the same input gives the same output, vertex for
+// vertex.
 #pragma once
 
 #include <cstddef>
@@ -21,9 +24,12 @@ namespace accelbench {
 
 struct MeshTransformInfo {
     uint64_t source_triangles = 0;
-    uint64_t refused_faces = 0;  // faces the half-edge mesh could not take (dropped)
-    uint64_t triangles = 0;      // of the result
-    uint64_t vertices = 0;       // of the result (only vertices some triangle uses)
+    // Faces the half-edge mesh refused on the source's vertices, added with their own copies
+    // of their corners (none is dropped): non-manifold ones, and ones with a repeated corner.
+    uint64_t detached_faces = 0;
+    uint64_t degenerate_faces = 0;
+    uint64_t triangles = 0;  // of the result
+    uint64_t vertices = 0;   // of the result (only vertices some triangle uses)
 };
 
 // Collapses edges in order of least quadric error until at most `target_triangles`
@@ -31,7 +37,8 @@ struct MeshTransformInfo {
 // 0 or not below the scene's triangle count. The result is finalized and keeps the name.
 Scene decimate(const Scene& scene, size_t target_triangles, MeshTransformInfo* info = nullptr);
 
-// `levels` rounds of Loop subdivision: each turns every triangle into four. Throws
+// `levels` rounds of Loop subdivision: each turns every triangle into four (so the result
+// has exactly 4^levels times the source's triangles). Throws
 // std::invalid_argument unless 1 <= levels <= 4. The result is finalized.
 Scene loop_subdivide(const Scene& scene, int levels, MeshTransformInfo* info = nullptr);
 
