@@ -494,6 +494,48 @@ TEST(KdTree, CountersAreConsistent) {
     }
 }
 
+// The mailbox (mailbox=true) tests a triangle once per ray: on every ray the same
+// closest hit (primitive, distance, barycentrics) and occlusion answer as without it, at
+// most as many triangle tests, the same traversal; and where triangles straddle split
+// planes (the soup, the bunny) strictly fewer tests in all. (The lattice's triangles lie
+// in or end on the integer planes its tree splits at: no reference is repeated there.)
+TEST(KdTree, MailboxKeepsEveryAnswerWithFewerTests) {
+    const Scene dense = soup(2500, 2, 0.05f);
+    const Scene grid = lattice(4);
+    const Scene bunny = test::stanford_bunny();
+    for (const Scene* scene : {&dense, &grid, &bunny}) {
+        const bool straddles = scene != &grid;
+        const auto rays = test::probe_rays(*scene, 3000, 17);
+        auto plain = build_kdtree(*scene, {});
+        auto boxed = build_kdtree(*scene, {{"mailbox", "true"}});
+        test::expect_agrees_with_embree(*scene, *boxed, rays, scene->name + " mailbox");
+        std::vector<Hit> a(rays.size()), b(rays.size());
+        std::vector<RayStats> sa(rays.size()), sb(rays.size());
+        plain->closest_hits(rays, a, sa);
+        boxed->closest_hits(rays, b, sb);
+        uint64_t tests_plain = 0, tests_boxed = 0;
+        for (size_t i = 0; i < rays.size(); ++i) {
+            EXPECT_EQ(a[i].prim, b[i].prim) << scene->name << " ray " << i;
+            EXPECT_EQ(a[i].t, b[i].t) << scene->name << " ray " << i;
+            EXPECT_EQ(a[i].u, b[i].u) << scene->name << " ray " << i;
+            EXPECT_EQ(sa[i].node_visits, sb[i].node_visits) << scene->name << " ray " << i;
+            EXPECT_LE(sb[i].prim_tests, sa[i].prim_tests) << scene->name << " ray " << i;
+            tests_plain += sa[i].prim_tests;
+            tests_boxed += sb[i].prim_tests;
+        }
+        if (straddles) {
+            EXPECT_LT(tests_boxed, tests_plain) << scene->name;
+        }
+        const std::vector<Ray> shadows = test::shadow_rays(*scene, rays, a);
+        std::vector<uint8_t> oa(shadows.size()), ob(shadows.size());
+        plain->any_hits(shadows, oa);
+        boxed->any_hits(shadows, ob);
+        EXPECT_EQ(oa, ob) << scene->name;
+        std::printf("[mailbox] %s: %llu -> %llu triangle tests on %zu rays\n", scene->name.c_str(),
+                    (unsigned long long)tests_plain, (unsigned long long)tests_boxed, rays.size());
+    }
+}
+
 // ---- the memory bound ------------------------------------------------------------------------
 
 // Long slivers along the three axes, crossing each other (a haystack): every split plane

@@ -63,6 +63,7 @@ struct Structure {
     std::string accel;  // registry name
     Params params;
     bool render = true;  // false: only another way to build a tree an earlier entry renders
+    bool build = true;   // false: only another way to trace a tree an earlier entry builds
 };
 
 // Every BVH-like structure with ordered (near child first) traversal; the kd-tree's
@@ -75,6 +76,7 @@ const std::vector<Structure>& structures() {
         {"lbvh", "lbvh", {{"threads", "1"}, {"traversal", "ordered"}}},
         {"kdtree_nlogn", "kdtree", {{"build", "nlogn"}}},
         {"kdtree_pbrt", "kdtree", {{"build", "pbrt"}}, false},
+        {"kdtree_mailbox", "kdtree", {{"mailbox", "true"}}, true, false},
         {"wbvh8", "wbvh", {{"width", "8"}}},
         {"wbvh4", "wbvh", {{"width", "4"}}},
     };
@@ -349,6 +351,7 @@ int main(int argc, char** argv) {
         for (Phase phase : {Phase::build, Phase::trace}) {
             for (const Structure& s : structures()) {
                 if (phase == Phase::trace && !s.render) continue;
+                if (phase == Phase::build && !s.build) continue;
                 const std::string name = std::string(phase_name(phase)) + "/" + m->name + "/" + s.label;
                 const Model* model = m.get();
                 const Structure* structure = &s;
