@@ -35,6 +35,28 @@
 // without entry distances (popped nodes beyond the closest hit would be entered and
 // counted). A 4-lane SSE form of intersect_box with identical decisions gave no fewer
 // instructions (the SSE2 blends and lane reductions cost what the loads saved).
+//
+// Session 4 measured the memory side (callgrind --cache-sim=yes with the simulated last
+// level set to this machine's 512 KiB L2; then accel_bench against Embree, interleaved,
+// under a load of 4-7 on the 2 cores), all with unchanged counts, and adopted none:
+//  - a sibling-pair node order (bvh v2's: both children of a node adjacent, each pair one
+//    64-byte-aligned line, the parent holding the first child's index): conference lbvh
+//    D1 read misses -41% (closest hit) / -24% (any hit), but L2 misses only -4%, against
+//    1234M + 1035M instructions, and trace / Embree moved by noise or worse (conference
+//    lbvh 3.6 -> 3.35, bvh sah 2.8 -> 2.85; dragon bvh sah 2.21 -> 2.4, lbvh 2.85 -> 3.05);
+//  - a 64-byte-aligned node array in today's order (malloc's 16-byte alignment splits
+//    every other node over two lines): no change beyond noise on the dragon or conference;
+//  - a branch-free child order with a conditional push (the both/one/none branch is a
+//    fifth of the program's simulated mispredictions): +12% instructions, not fewer
+//    mispredictions, conference trace / Embree 2.8 -> 3.2 (bvh sah), 3.6 -> 4.0 (lbvh).
+// What the profile shows instead: these coherent rays miss in L1 under twice each
+// (bunny: 0.6M misses for 0.36M rays of 600-3000 instructions), so the gap to Embree is
+// instructions and their dependency chain, not memory. Per ray on the bunny (bvh sah):
+// primary 610 instructions (Embree's rtcIntersect1 312), shadow 3070 (Embree's
+// rtcOccluded1 757); a shadow ray starts on the surface inside every box around its
+// origin, and a binary tree with one-triangle leaves has twice the levels and four times
+// the leaves of Embree's 4-wide tree with 4-triangle leaves there — a property of the
+// tree (node width, leaf size), which the report's rows must keep.
 #pragma once
 
 #include <cstdint>
