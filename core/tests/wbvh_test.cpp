@@ -411,6 +411,7 @@ TEST(Wbvh, ParametersAreValidated) {
     EXPECT_EQ(c.max_prims, 4u);
     EXPECT_EQ(c.kernel, Wbvh::Kernel::simd);
     EXPECT_EQ(c.reinsertion, 0u);
+    EXPECT_EQ(c.bins, 32u);
     EXPECT_THROW(make_accelerator("wbvh", {{"reinsertion", "-1"}}), ParamError);
 }
 
