@@ -183,6 +183,42 @@ TEST(Wbvh, StanfordBunnyAgreesWithEmbree) {
     }
 }
 
+// reinsertion=N optimises the binary tree before the collapse: a different tree over the same
+// leaves, so every answer must stay; on the bunny the binary tree's SAH cost must drop (the
+// optimizer lowers the inner-node term) and moves must have been applied.
+TEST(Wbvh, ReinsertionKeepsEveryAnswer) {
+    const Scene bunny = test::stanford_bunny();
+    const Scene soup = random_soup(3000, 3);
+    const auto bunny_rays = probe_rays(bunny, 20000, 11);
+    const auto soup_rays = probe_rays(soup, 4000, 3);
+    for (const char* width : {"4", "8"}) {
+        const Params plain = {{"width", width}};
+        const Params reinserted = {{"width", width}, {"reinsertion", "3"}};
+        auto a = built(bunny, plain);
+        auto b = built(bunny, reinserted);
+        expect_valid(*b, bunny, describe(reinserted) + " bunny");
+        const BuildStats sa = a->build_stats(), sb = b->build_stats();
+        EXPECT_GT(sb.extra.at("reinsertions"), 0) << describe(reinserted);
+        EXPECT_EQ(sa.extra.count("reinsertions"), 0u) << describe(plain);
+        EXPECT_LT(sb.extra.at("binary_sah_cost"), sa.extra.at("binary_sah_cost")) << describe(reinserted);
+        EXPECT_EQ(sb.leaves, sa.leaves) << "reinsertion moves subtrees, it keeps the leaves";
+        std::printf("[bunny] %s: binary sah %.3f -> %.3f, wide sah %.3f -> %.3f, %g reinsertions\n",
+                    describe(reinserted).c_str(), sa.extra.at("binary_sah_cost"), sb.extra.at("binary_sah_cost"),
+                    sa.sah_cost.value(), sb.sah_cost.value(), sb.extra.at("reinsertions"));
+        expect_agrees_with_embree(bunny, *b, bunny_rays, describe(reinserted) + " bunny");
+        expect_kernels_identical(bunny, reinserted, bunny_rays, describe(reinserted) + " bunny");
+        auto c = built(soup, reinserted);
+        expect_valid(*c, soup, describe(reinserted) + " soup");
+        expect_agrees_with_embree(soup, *c, soup_rays, describe(reinserted) + " soup");
+        for (const auto& info : procedural_registry()) {
+            const Scene scene = make_procedural(info.name, {});
+            auto w = built(scene, reinserted);
+            expect_valid(*w, scene, describe(reinserted) + " " + info.name);
+            expect_agrees_with_embree(scene, *w, probe_rays(scene, 6000, 13), describe(reinserted) + " " + info.name);
+        }
+    }
+}
+
 // ---- the vector kernels equal the scalar ones ---------------------------------------------
 
 TEST(Wbvh, SimdAndScalarKernelsGiveIdenticalHits) {
@@ -209,13 +245,14 @@ TEST(Wbvh, SimdAndScalarKernelsGiveIdenticalHits) {
 // ---- the extreme-case catalogue ------------------------------------------------------------
 
 // robustness_test runs every registered structure at its defaults (width 8, max_prims 4);
-// here the other width and leaf sizes, and the scalar kernel.
+// here the other width and leaf sizes, the scalar kernel and the reinsertion option.
 TEST(Wbvh, PassesTheExtremeCaseCatalogue) {
     const std::vector<Params> settings = {{{"width", "4"}},
                                           {{"width", "8"}, {"max_prims", "1"}},
                                           {{"width", "4"}, {"max_prims", "16"}},
                                           {{"width", "8"}, {"kernel", "scalar"}},
-                                          {{"width", "8"}, {"max_depth", "1"}}};
+                                          {{"width", "8"}, {"max_depth", "1"}},
+                                          {{"width", "8"}, {"reinsertion", "3"}}};
     for (const RobustnessCase& c : robustness_catalogue())
         for (const Params& p : settings) {
             const CaseVerdict v = judge_case(c, "wbvh", p);
@@ -373,6 +410,9 @@ TEST(Wbvh, ParametersAreValidated) {
     EXPECT_EQ(c.width, 8u);
     EXPECT_EQ(c.max_prims, 4u);
     EXPECT_EQ(c.kernel, Wbvh::Kernel::simd);
+    EXPECT_EQ(c.reinsertion, 0u);
+    EXPECT_EQ(c.bins, 32u);
+    EXPECT_THROW(make_accelerator("wbvh", {{"reinsertion", "-1"}}), ParamError);
 }
 
 }  // namespace

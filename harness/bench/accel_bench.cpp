@@ -79,6 +79,9 @@ const std::vector<Structure>& structures() {
         {"kdtree_mailbox", "kdtree", {{"mailbox", "true"}}, true, false},
         {"wbvh8", "wbvh", {{"width", "8"}}},
         {"wbvh4", "wbvh", {{"width", "4"}}},
+        // The wide BVH over a reinsertion-optimised binary tree: the trace / build trade-off
+        // that wbvh's default (reinsertion off) does not make.
+        {"wbvh8_reinsert", "wbvh", {{"width", "8"}, {"reinsertion", "3"}}},
     };
     return list;
 }

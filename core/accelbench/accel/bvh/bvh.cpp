@@ -1,6 +1,7 @@
 #include "accelbench/accel/bvh/bvh.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <optional>
 #include <span>
@@ -208,7 +209,8 @@ public:
           bin_bounds_(bins),
           bin_counts_(bins),
           right_area_(bins),
-          right_count_(bins) {}
+          right_count_(bins),
+          used_((size_t(bins) + 63) / 64) {}
 
     std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) {
         const int axis = r.axis;
@@ -226,43 +228,53 @@ public:
                 const uint32_t b = bin_of(ref, a);
                 bin_bounds_[b].extend(ref);
                 ++bin_counts_[b];
+                used_[b >> 6] |= uint64_t(1) << (b & 63);
             }
         });
-        // Right sweep: box area and count of bins [i, K). An empty bin adds nothing, and
-        // a small range leaves most bins empty: skip them.
+        // The sweeps visit the non-empty bins only (`used_`, a bit per bin): most of a small
+        // range's bins are empty, and looping over all of them was a fifth of the build's
+        // instructions at 32 bins. The planes, sums and their order are those of a sweep
+        // over every bin, so the tree is the same.
+        //
+        // Right sweep: for plane i = b + 1 after a non-empty bin b (the only planes the left
+        // sweep evaluates), the box area and count of bins [i, K).
         BvhBoxAccumulator acc;
         uint32_t count = 0;
-        for (uint32_t i = last; i > 0; --i) {
-            if (bin_counts_[i] != 0) {
-                acc.extend(bin_bounds_[i]);
-                count += bin_counts_[i];
+        for (size_t w = used_.size(); w-- > 0;)
+            for (uint64_t bits = used_[w]; bits; bits &= ~(uint64_t(1) << (63 - std::countl_zero(bits)))) {
+                const uint32_t b = uint32_t(w * 64 + size_t(63 - std::countl_zero(bits)));
+                if (b + 1 < bins_) {
+                    right_area_[b + 1] = acc.area();
+                    right_count_[b + 1] = count;
+                }
+                acc.extend(bin_bounds_[b]);
+                count += bin_counts_[b];
             }
-            right_area_[i] = acc.area();
-            right_count_[i] = count;
-        }
-        // Left sweep: plane i separates bins [0, i) from [i, K). After an empty bin the
-        // partition equals the previous plane's, so it cannot cost strictly less: skip.
+        // Left sweep: plane i = b + 1 separates bins [0, i) from [i, K). After an empty bin
+        // the partition equals the previous plane's, so it cannot cost strictly less: only
+        // planes after a non-empty bin.
         const float node_area = r.bounds.area();
         float best_cost = kInfinity;
         uint32_t best_plane = 0;
         acc = BvhBoxAccumulator{};
         count = 0;
-        for (uint32_t i = 1; i < bins_; ++i) {
-            if (bin_counts_[i - 1] == 0) continue;
-            acc.extend(bin_bounds_[i - 1]);
-            count += bin_counts_[i - 1];
-            if (right_count_[i] == 0) continue;
-            const float cost = traversal_cost_ * node_area +
-                isect_cost_ * (acc.area() * float(count) + right_area_[i] * float(right_count_[i]));
-            if (cost < best_cost) {
-                best_cost = cost;
-                best_plane = i;
+        for (size_t w = 0; w < used_.size(); ++w) {
+            for (uint64_t bits = used_[w]; bits; bits &= bits - 1) {
+                const uint32_t b = uint32_t(w * 64 + size_t(std::countr_zero(bits)));
+                acc.extend(bin_bounds_[b]);
+                count += bin_counts_[b];
+                bin_counts_[b] = 0;  // the bins are left empty for the next range
+                bin_bounds_[b] = BvhBoxAccumulator{};
+                const uint32_t i = b + 1;
+                if (i >= bins_ || right_count_[i] == 0) continue;
+                const float cost = traversal_cost_ * node_area +
+                    isect_cost_ * (acc.area() * float(count) + right_area_[i] * float(right_count_[i]));
+                if (cost < best_cost) {
+                    best_cost = cost;
+                    best_plane = i;
+                }
             }
-        }
-        for (uint32_t i = 0; i < bins_; ++i) {
-            if (bin_counts_[i] == 0) continue;
-            bin_counts_[i] = 0;
-            bin_bounds_[i] = BvhBoxAccumulator{};
+            used_[w] = 0;
         }
         if (best_plane == 0) return std::nullopt;
         if (r.leaf_allowed && isect_cost_ * float(refs.size()) * node_area <= best_cost) return std::nullopt;
@@ -281,6 +293,7 @@ private:
     std::vector<uint32_t> bin_counts_;
     std::vector<float> right_area_;
     std::vector<uint32_t> right_count_;
+    std::vector<uint64_t> used_;  // bit b: bin b is not empty
 };
 
 }  // namespace

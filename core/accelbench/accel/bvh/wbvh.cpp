@@ -39,7 +39,13 @@ AcceleratorInfo Wbvh::info() {
                  0,
                  1000,
                  "binary build: nodes at this depth become leaves whatever their size"},
-                {"bins", ParamType::Int, "16", {}, 2, 1024, "binned SAH bins along the split axis"},
+                // 32, not the binary BVH's 16 (Embree's binned builder uses 32 too): finer planes
+                // near the root. Measured (width 8, accel_bench, 3 reps, idle machine): the
+                // conference's primary rays 2.85M -> 2.24M node visits, 22.0M -> 17.3M box
+                // tests, trace / Embree 1.44 -> 1.22 (width 4: 1.84 -> 1.68); bunny, igea, dragon
+                // within 1% of the counts and of the time; build / Embree +0.08-0.16 (dragon
+                // 1.05 -> 1.13, conference 0.90 -> 1.06, bunny 0.80 -> 0.96). 64: no better.
+                {"bins", ParamType::Int, "32", {}, 2, 1024, "binned SAH bins along the split axis"},
                 // 3, not the binary BVH's 1: a wide node's slab test covers several binary
                 // nodes and a packet test 4 triangles, so fuller leaves pay. Measured on the
                 // bunny in one accel_bench run (trace / Embree, width 8): 1 -> 1.52x, 2 -> 1.44x,
@@ -52,6 +58,16 @@ AcceleratorInfo Wbvh::info() {
                  1e6,
                  "SAH cost of visiting a binary node, relative to isect_cost (binary build)"},
                 {"isect_cost", ParamType::Float, "1", {}, 1e-6, 1e6, "SAH cost of one triangle test"},
+                // Off by default for the build goal (<= 1.2x Embree): 3 passes cost the binary
+                // bvh 0.5-1.2x Embree's build time more (bvh_sah_reinsert in make bench).
+                {"reinsertion",
+                 ParamType::Int,
+                 "0",
+                 {},
+                 0,
+                 100,
+                 "passes of the reinsertion optimizer on the binary tree before the collapse (Meister & Bittner "
+                 "2018; 0 = off): lower SAH cost for a longer build, the same answers"},
                 {"kernel",
                  ParamType::Enum,
                  "simd",
@@ -72,13 +88,16 @@ Wbvh::Config Wbvh::Config::from(const ParamSet& params) {
     c.bins = uint32_t(params.get_int("bins"));
     c.traversal_cost = params.get_float("traversal_cost");
     c.isect_cost = params.get_float("isect_cost");
+    c.reinsertion = uint32_t(params.get_int("reinsertion"));
     c.kernel = params.get_enum("kernel") == "scalar" ? Kernel::scalar : Kernel::simd;
     return c;
 }
 
 namespace {
 
-// The binary BVH's parameters: split=sah and the build parameters wbvh shares with it.
+// The binary BVH's parameters: split=sah and the build parameters wbvh shares with it
+// (reinsertion included: the optimizer runs on the binary tree, which the collapse then
+// reads as it reads any binary tree — same leaves, boxes refitted).
 ParamSet binary_params(const Wbvh::Config& c) {
     const std::map<std::string, std::string> given = {
         {"split", "sah"},
@@ -87,6 +106,7 @@ ParamSet binary_params(const Wbvh::Config& c) {
         {"bins", std::to_string(c.bins)},
         {"traversal_cost", format_param(c.traversal_cost)},
         {"isect_cost", format_param(c.isect_cost)},
+        {"reinsertion", std::to_string(c.reinsertion)},
     };
     return resolve_params("bvh", Bvh::info().params, given);
 }
@@ -252,7 +272,7 @@ BuildStats Wbvh::build_stats() const {
     const BuildStats binary = binary_.build_stats();
     s.extra["binary_nodes"] = double(binary.nodes.value_or(0));
     if (binary.sah_cost) s.extra["binary_sah_cost"] = *binary.sah_cost;
-    for (const char* key : {"degenerate_splits", "forced_leaves"}) {
+    for (const char* key : {"degenerate_splits", "forced_leaves", "reinsertions"}) {
         const auto it = binary.extra.find(key);
         if (it != binary.extra.end()) s.extra[key] = it->second;
     }

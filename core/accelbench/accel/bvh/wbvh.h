@@ -12,6 +12,11 @@
 // likely to enter (the SAH's probability), so opening it removes the most expected node
 // visits. (Ylitie et al.'s optimal collapse by dynamic programming over the SAH is not
 // done.) Each binary leaf becomes one leaf child: its triangles in ceil(n / 4) packets.
+// With reinsertion=N the binary tree is first optimised by N passes of the reinsertion
+// optimizer (bvh_reinsertion.h, Meister & Bittner 2018): a binary tree of lower SAH cost,
+// whose collapse has fewer wide nodes on a ray's path (the conference's primary rays: 40%
+// fewer node visits and box tests with N = 3), for a longer build. Off by default: it costs
+// the build goal (<= 1.2x Embree) on every model.
 //
 // Traversal (closest hit): an explicit stack of (child, entry distance); at a node all
 // children are tested at once, the children hit are sorted by entry distance, the nearest
@@ -77,6 +82,7 @@ public:
         uint32_t bins = 0;          // binned SAH bins
         double traversal_cost = 0;  // SAH constants of the binary build
         double isect_cost = 0;
+        uint32_t reinsertion = 0;   // reinsertion passes on the binary tree before the collapse
         Kernel kernel = Kernel::simd;  // vector tests, or the scalar ones they must equal
 
         static Config from(const ParamSet& params);
