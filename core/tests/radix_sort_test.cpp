@@ -1,9 +1,11 @@
-#include "accelbench/accel/bvh/radix_sort.h"
+#include "accelbench/base/radix_sort.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <random>
+#include <span>
+#include <vector>
 
 using namespace accelbench;
 
@@ -109,9 +111,50 @@ TEST(RadixSort, OddDigitWidthsAndNarrowKeys) {
     expect_matches_stable_sort(three, 3, 8);
 }
 
+TEST(RadixSort, GeneralFormSortsByTheKeyItIsGivenStably) {
+    // Plain 64-bit items sorted by their upper 34 bits only (the kd-tree's root events):
+    // the result must be std::stable_sort's by the same key, whether an odd number of
+    // passes ran (the items are copied back from scratch) or an even one.
+    std::mt19937_64 rng(7);
+    const auto key_of = [](uint64_t x) { return x >> 30; };
+    for (int digit_bits : {8, 11, 12, 16}) {
+        for (size_t n : {0, 1, 2, 5000}) {
+            std::vector<uint64_t> items(n);
+            // Few distinct keys, so that stability decides much of the order.
+            for (auto& x : items) x = ((rng() % 64) << 50) | (rng() & ((uint64_t(1) << 50) - 1));
+            auto expected = items;
+            std::stable_sort(expected.begin(), expected.end(),
+                             [&](uint64_t a, uint64_t b) { return key_of(a) < key_of(b); });
+            std::vector<uint64_t> scratch(n);
+            const RadixSortStats s =
+                radix_sort(std::span<uint64_t>(items), std::span<uint64_t>(scratch), 34, digit_bits, key_of);
+            EXPECT_EQ(s.passes, (34 + digit_bits - 1) / digit_bits);
+            EXPECT_EQ(items, expected) << "digit_bits " << digit_bits << ", n " << n;
+        }
+    }
+}
+
+TEST(RadixSort, UpperBitsOfIndexOrderedItemsGiveTheWholeKeysOrder) {
+    // What the kd-tree relies on: items whose low bits are their index in the input
+    // (ascending), sorted stably by the upper bits alone, come out in the order of the
+    // whole 64-bit value.
+    std::mt19937_64 rng(8);
+    std::vector<uint64_t> items(20000);
+    for (size_t i = 0; i < items.size(); ++i) items[i] = ((rng() % 300) << 30) | i;
+    auto expected = items;
+    std::sort(expected.begin(), expected.end());
+    std::vector<uint64_t> scratch(items.size());
+    radix_sort(std::span<uint64_t>(items), std::span<uint64_t>(scratch), 34, 12, [](uint64_t x) { return x >> 30; });
+    EXPECT_EQ(items, expected);
+}
+
 TEST(RadixSort, RejectsBadWidths) {
     std::vector<KeyValue<uint32_t>> items(3), scratch;
     EXPECT_THROW(radix_sort(items, scratch, 30, 0), std::invalid_argument);
     EXPECT_THROW(radix_sort(items, scratch, 30, 17), std::invalid_argument);
     EXPECT_THROW(radix_sort(items, scratch, 33, 8), std::invalid_argument);
+    std::vector<uint64_t> plain(3), short_scratch(2);
+    EXPECT_THROW(radix_sort(std::span<uint64_t>(plain), std::span<uint64_t>(short_scratch), 34, 8,
+                            [](uint64_t x) { return x; }),
+                 std::invalid_argument);
 }

@@ -10,7 +10,7 @@
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
 #include "accelbench/accel/bvh/morton_code.h"
-#include "accelbench/accel/bvh/radix_sort.h"
+#include "accelbench/base/radix_sort.h"
 
 namespace accelbench {
 

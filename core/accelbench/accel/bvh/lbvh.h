@@ -29,7 +29,7 @@
 #include "accelbench/accel/accelerator.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
 #include "accelbench/accel/bvh/flat_bvh.h"
-#include "accelbench/accel/bvh/radix_sort.h"
+#include "accelbench/base/radix_sort.h"
 
 namespace accelbench {
 

@@ -1,6 +1,8 @@
 // Least-significant-digit radix sort of (key, value) pairs: the sort the LBVH build is
 // made of (report section 3.1: "we can use a sorting algorithm as a Radix sort",
-// Karras 2012). Keys are Morton codes, values primitive indices.
+// Karras 2012). Keys are Morton codes, values primitive indices. The general form sorts
+// any items by an unsigned key taken from each (the kd-tree sorts its root events, 64-bit
+// integers, by their upper bits), which is why it lives in base/ for every structure.
 //
 // LSD radix sort makes one counting pass per digit, lowest digit first. Each pass is a
 // stable counting sort, so after the pass on digit d the items are ordered by digits
@@ -18,6 +20,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -39,14 +42,13 @@ struct RadixSortStats {
 constexpr int kRadixMinDigitBits = 1;
 constexpr int kRadixMaxDigitBits = 16;
 
-// Sorts `items` by key (stable), `digit_bits` per pass. Every key must be below
-// 2^key_bits: only the passes that width needs are made (30-bit Morton codes: 4 passes of
-// 8 bits or 3 of 11), which is the point of passing it. `scratch` is resized to items.size() and used as the other
-// buffer of the ping-pong; passing the same scratch vector again avoids reallocating.
-// On return the sorted items are in `items` (the vectors may have been swapped).
-template <class Key>
-RadixSortStats radix_sort(std::vector<KeyValue<Key>>& items, std::vector<KeyValue<Key>>& scratch, int key_bits,
-                          int digit_bits = 8) {
+namespace radix_sort_detail {
+
+// The passes, ping-ponging between the buffers `in` and `out` of n items each; on return
+// `in` points at the buffer holding the sorted items (the pointers are swapped per pass).
+template <class Item, class KeyOf>
+RadixSortStats sort_passes(Item*& in, Item*& out, size_t n, int key_bits, int digit_bits, KeyOf key_of) {
+    using Key = std::invoke_result_t<KeyOf, const Item&>;
     static_assert(std::is_unsigned_v<Key>);
     if (digit_bits < kRadixMinDigitBits || digit_bits > kRadixMaxDigitBits)
         throw std::invalid_argument("radix_sort: digit_bits " + std::to_string(digit_bits) + " is outside [" +
@@ -56,7 +58,6 @@ RadixSortStats radix_sort(std::vector<KeyValue<Key>>& items, std::vector<KeyValu
         throw std::invalid_argument("radix_sort: key_bits " + std::to_string(key_bits) + " does not fit the key type");
 
     RadixSortStats stats;
-    const size_t n = items.size();
     if (n > UINT32_MAX) throw std::invalid_argument("radix_sort: more than 2^32 - 1 items");
     stats.passes = (key_bits + digit_bits - 1) / digit_bits;
     if (n <= 1 || stats.passes == 0) return stats;
@@ -64,14 +65,13 @@ RadixSortStats radix_sort(std::vector<KeyValue<Key>>& items, std::vector<KeyValu
     const size_t buckets = size_t(1) << digit_bits;
     const Key mask = Key(buckets - 1);
     // Every pass's histogram, counted in one read (see the file comment). uint32_t counts
-    // suffice: item values are uint32_t indices, so n fits.
+    // suffice: n < 2^32 is checked above.
     std::vector<uint32_t> counts(size_t(stats.passes) * buckets, 0);
-    for (const auto& item : items) {
-        Key k = item.key;
+    for (size_t i = 0; i < n; ++i) {
+        Key k = key_of(in[i]);
         for (int p = 0; p < stats.passes; ++p, k >>= digit_bits) ++counts[size_t(p) * buckets + size_t(k & mask)];
     }
 
-    scratch.resize(n);
     for (int p = 0; p < stats.passes; ++p) {
         uint32_t* offsets = counts.data() + size_t(p) * buckets;
         const int shift = p * digit_bits;
@@ -89,11 +89,41 @@ RadixSortStats radix_sort(std::vector<KeyValue<Key>>& items, std::vector<KeyValu
             offsets[b] = sum;
             sum += c;
         }
-        const KeyValue<Key>* in = items.data();
-        KeyValue<Key>* out = scratch.data();
-        for (size_t i = 0; i < n; ++i) out[offsets[size_t((in[i].key >> shift) & mask)]++] = in[i];
-        items.swap(scratch);
+        for (size_t i = 0; i < n; ++i) out[offsets[size_t((key_of(in[i]) >> shift) & mask)]++] = in[i];
+        std::swap(in, out);
     }
+    return stats;
+}
+
+}  // namespace radix_sort_detail
+
+// Sorts `items` by key (stable), `digit_bits` per pass. Every key must be below
+// 2^key_bits: only the passes that width needs are made (30-bit Morton codes: 4 passes of
+// 8 bits or 3 of 11), which is the point of passing it. `scratch` is resized to items.size() and used as the other
+// buffer of the ping-pong; passing the same scratch vector again avoids reallocating.
+// On return the sorted items are in `items` (the vectors may have been swapped).
+template <class Key>
+RadixSortStats radix_sort(std::vector<KeyValue<Key>>& items, std::vector<KeyValue<Key>>& scratch, int key_bits,
+                          int digit_bits = 8) {
+    scratch.resize(items.size());
+    KeyValue<Key>* in = items.data();
+    KeyValue<Key>* out = scratch.data();
+    const RadixSortStats stats = radix_sort_detail::sort_passes(in, out, items.size(), key_bits, digit_bits,
+                                                                [](const KeyValue<Key>& item) { return item.key; });
+    if (in != items.data()) items.swap(scratch);
+    return stats;
+}
+
+// The general form: sorts `items` stably by the unsigned key `key_of(item)`, which must
+// be below 2^key_bits, using `scratch` (at least items.size() long) as the other buffer.
+// The sorted items end in `items` (copied back once when an odd number of passes ran).
+template <class Item, class KeyOf>
+RadixSortStats radix_sort(std::span<Item> items, std::span<Item> scratch, int key_bits, int digit_bits, KeyOf key_of) {
+    if (scratch.size() < items.size()) throw std::invalid_argument("radix_sort: scratch is shorter than the items");
+    Item* in = items.data();
+    Item* out = scratch.data();
+    const RadixSortStats stats = radix_sort_detail::sort_passes(in, out, items.size(), key_bits, digit_bits, key_of);
+    if (in != items.data()) std::copy(in, in + items.size(), items.data());
     return stats;
 }
 
