@@ -691,13 +691,16 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
     o.stage = first_stage;
     for (;;) {
         const double left = seconds_between(Clock::now(), deadline);
-        if (left <= 0) {
+        // Past the deadline, what the child already sent is still read (without waiting), so
+        // a stage it reported before the limit names the stage it was stopped in — under load
+        // the parent can wake after the deadline with the child's last frames unread.
+        pollfd p{fds[0], POLLIN, 0};
+        const int r = poll(&p, 1, left <= 0 ? 0 : int(std::min(left * 1000.0 + 1.0, 3.6e6)));
+        if (r < 0 && errno == EINTR) continue;
+        if (r == 0 && left <= 0) {
             o.timed_out = true;
             break;
         }
-        pollfd p{fds[0], POLLIN, 0};
-        const int r = poll(&p, 1, int(std::min(left * 1000.0 + 1.0, 3.6e6)));
-        if (r < 0 && errno == EINTR) continue;
         if (r == 0) continue;  // the loop head decides whether time is up
         char chunk[65536];
         const ssize_t n = ::read(fds[0], chunk, sizeof chunk);
