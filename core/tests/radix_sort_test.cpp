@@ -154,7 +154,7 @@ TEST(RadixSort, RejectsBadWidths) {
     EXPECT_THROW(radix_sort(items, scratch, 30, 17), std::invalid_argument);
     EXPECT_THROW(radix_sort(items, scratch, 33, 8), std::invalid_argument);
     std::vector<uint64_t> plain(3), short_scratch(2);
-    EXPECT_THROW(radix_sort(std::span<uint64_t>(plain), std::span<uint64_t>(short_scratch), 34, 8,
-                            [](uint64_t x) { return x; }),
-                 std::invalid_argument);
+    EXPECT_THROW(
+        radix_sort(std::span<uint64_t>(plain), std::span<uint64_t>(short_scratch), 34, 8, [](uint64_t x) { return x; }),
+        std::invalid_argument);
 }

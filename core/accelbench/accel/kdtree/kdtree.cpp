@@ -449,8 +449,8 @@ private:
             const uint8_t keep = uint8_t((splits(below.prims) ? kBelow : 0) | (splits(above.prims) ? kAbove : 0));
             if (keep)
                 for (int axis = 0; axis < 3; ++axis)
-                    std::tie(below.events[axis], above.events[axis]) =
-                        split_list(events_[axis], lists.events[axis], [](EventKey e) { return prim_of(e); }, keep);
+                    std::tie(below.events[axis], above.events[axis]) = split_list(
+                        events_[axis], lists.events[axis], [](EventKey e) { return prim_of(e); }, keep);
         }
         live_refs_ += below.prims.size() + above.prims.size() - n;
         check_limit(leaf_refs_ + live_refs_, ref_budget_, "primitive references");
