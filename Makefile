@@ -83,7 +83,7 @@ test: test-cpp test-python
 # once) over our C++ and ruff (analysis/ruff.toml) over the analysis; both only check.
 # To fix: clang-format -i FILES, .venv/bin/ruff format analysis.
 .PHONY: lint
-lint: venv
+lint: deps venv
 	clang-format --dry-run --Werror $$(git ls-files '*.cpp' '*.h')
 	cd analysis && ../$(VENV)/bin/ruff check . && ../$(VENV)/bin/ruff format --check .
 

@@ -82,7 +82,7 @@ public:
         uint32_t bins = 0;          // binned SAH bins
         double traversal_cost = 0;  // SAH constants of the binary build
         double isect_cost = 0;
-        uint32_t reinsertion = 0;   // reinsertion passes on the binary tree before the collapse
+        uint32_t reinsertion = 0;      // reinsertion passes on the binary tree before the collapse
         Kernel kernel = Kernel::simd;  // vector tests, or the scalar ones they must equal
 
         static Config from(const ParamSet& params);
