@@ -144,7 +144,9 @@ public:
         const uint64_t n = take<uint64_t>();
         if (n > (in_.size() - at_) / sizeof(T)) truncated();
         std::vector<T> v(n);
-        std::memcpy(v.data(), next(n * sizeof(T)), n * sizeof(T));
+        // An empty vector's data() may be null, and memcpy from or to null is undefined
+        // even for 0 bytes (UBSan's nonnull-attribute check).
+        if (n > 0) std::memcpy(v.data(), next(n * sizeof(T)), n * sizeof(T));
         return v;
     }
     std::string take_string() {

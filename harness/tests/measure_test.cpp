@@ -177,7 +177,8 @@ TEST(MeasureTest, InProcessTimeLimitIsCheckedBetweenStages) {
 // Bit for bit: floats compared as bytes, so that -0.0, NaN payloads and rounding all count.
 template <class T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+    // memcmp of an empty vector's (possibly null) data() is undefined even for 0 bytes.
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
 }
 template <class T>
 bool same_bits(const T& a, const T& b) {
