@@ -1,6 +1,9 @@
 #include "derived_model.h"
 
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -22,6 +25,23 @@ constexpr int transform_version = 2;
 std::vector<std::string> cache_comments(const ModelEntry& entry, const ModelTransformSpec& t) {
     return {"accelbench derived model " + entry.name + "@" + t.text(), "source_sha256 " + entry.sha256,
             "transform_version " + std::to_string(transform_version)};
+}
+
+// Removes `path`.part<pid> files left by a process that died while writing (killed at the
+// time limit, say): a part file of a live process is its writer's, left alone.
+void remove_stale_parts(const std::string& path) {
+    const fs::path dir = fs::path(path).parent_path();
+    const std::string prefix = fs::path(path).filename().string() + ".part";
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+        const std::string name = e.path().filename().string();
+        if (name.rfind(prefix, 0) != 0) continue;
+        const std::string digits = name.substr(prefix.size());
+        if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9)
+            continue;
+        const pid_t pid = pid_t(std::stol(digits));
+        if (::kill(pid, 0) != 0 && errno == ESRCH) fs::remove(e.path(), ec);
+    }
 }
 
 }  // namespace
@@ -49,6 +69,7 @@ Scene load_derived_scene(const ModelRegistry& registry, const ModelEntry& entry,
                                                                : loop_subdivide(source, int(t.amount), &info);
     scene.name = name;
     fs::create_directories(fs::path(path).parent_path());
+    remove_stale_parts(path);
     const std::string partial = path + ".part" + std::to_string(::getpid());
     write_ply(scene, partial, comments);
     fs::rename(partial, path);

@@ -2,6 +2,9 @@
 // models/derived/ identically, and rebuilt when the source model changes.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstdlib>
 #include <filesystem>
 
@@ -80,6 +83,31 @@ TEST_F(DerivedModelTest, DecimatesToTheTarget) {
     const Scene d = load_derived_scene(r, r.entries()[0], {ModelTransformSpec::Kind::Decimate, 4});
     EXPECT_EQ(d.triangle_count(), 4u);
     EXPECT_EQ(d.name, "octa@decimate=4");
+}
+
+TEST_F(DerivedModelTest, PartFilesOfDeadWritersAreRemovedOthersKept) {
+    // A writer killed mid-write (at the time limit) leaves <path>.part<pid>: the next maker of
+    // that model removes it; the part file of a live process (our parent) is left alone.
+    const ModelRegistry r = registry_with(1);
+    const ModelTransformSpec t{ModelTransformSpec::Kind::Subdivide, 1};
+    const std::string path = derived_model_path(r, r.entries()[0], t);
+    fs::create_directories(fs::path(path).parent_path());
+    const pid_t child = fork();
+    if (child == 0) _exit(0);
+    ASSERT_GT(child, 0);
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);  // reaped: no process has that pid now
+    const std::string dead = path + ".part" + std::to_string(child);
+    // This process's own part file is the one the maker writes and renames; the parent is live.
+    const std::string live = path + ".part" + std::to_string(getppid());
+    const std::string other = path + ".partial-notes";
+    for (const auto& f : {dead, live, other})
+        write_file(fs::path(f).parent_path(), fs::path(f).filename().string(), "x");
+    load_derived_scene(r, r.entries()[0], t);
+    EXPECT_FALSE(fs::exists(dead));
+    EXPECT_TRUE(fs::exists(live));
+    EXPECT_TRUE(fs::exists(other));
+    EXPECT_TRUE(fs::exists(path));
 }
 
 }  // namespace
