@@ -420,12 +420,16 @@ private:
         return {{r.begin, r.begin + n_below}, {above_begin, above_begin + n_above}};
     }
 
+    // A node of n primitives at `depth` is a leaf whatever the SAH says: few enough
+    // primitives, or the depth limit (pbrt's first termination test).
+    bool leaf_by_limits(size_t n, int depth) const { return n <= max_prims_ || depth >= max_depth_; }
+
     void build_node(const Bounds3& node, const Lists& lists, int depth, int bad_refines) {
         check_limit(nodes_.size() + 1, KdNode::kMaxIndex, "nodes");
         const uint32_t index = uint32_t(nodes_.size());
         nodes_.emplace_back();
         const uint32_t n = uint32_t(lists.prims.size());
-        if (n <= max_prims_ || depth == max_depth_) return make_leaf(index, lists.prims, depth);
+        if (leaf_by_limits(n, depth)) return make_leaf(index, lists.prims, depth);
 
         const float leaf_cost = sah_.isect * float(n);
         const Split split = choose_split(node, lists, leaf_cost);
@@ -445,7 +449,7 @@ private:
         if (presorted_) {
             // Only a child that will be split needs its sorted events (a leaf reads its
             // primitive list alone); at the last level neither does.
-            const auto splits = [&](Range r) { return r.size() > max_prims_ && depth + 1 < max_depth_; };
+            const auto splits = [&](Range r) { return !leaf_by_limits(r.size(), depth + 1); };
             const uint8_t keep = uint8_t((splits(below.prims) ? kBelow : 0) | (splits(above.prims) ? kAbove : 0));
             if (keep)
                 for (int axis = 0; axis < 3; ++axis)
