@@ -33,6 +33,13 @@ namespace fs = std::filesystem;
 using testing_util::registry;
 using testing_util::write_file;
 
+// Each fuzz test runs at least a fixed number of inputs (the same ones for a seed, whatever
+// the machine's load: a time budget alone ran 38 config inputs in a sanitized build under a
+// load of 9, and a "more than N inputs" check then failed on the load, not on the loader),
+// then more until the time budget is spent.
+constexpr uint64_t kMinMeshInputs = 100;
+constexpr uint64_t kMinConfigInputs = 50;
+
 double budget_seconds() {
     const char* s = std::getenv("ACCELBENCH_FUZZ_SECONDS");
     return s && *s ? std::atof(s) : 1.5;
@@ -239,7 +246,7 @@ TEST(InputFuzz, MeshReadersRefuseOrLoadConsistently) {
     TempDir dir("input_fuzz_test-");
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(budget_seconds());
     uint64_t runs = 0, loaded = 0, gz_runs = 0;
-    while (std::chrono::steady_clock::now() < deadline) {
+    while (runs < kMinMeshInputs || std::chrono::steady_clock::now() < deadline) {
         const Seed& seed = seeds[runs % seeds.size()];
         const std::string input = mutator.mutate(seed.bytes);
         const std::string name = "fuzz." + seed.format;
@@ -277,7 +284,6 @@ TEST(InputFuzz, MeshReadersRefuseOrLoadConsistently) {
     }
     std::printf("mesh fuzzing: %llu inputs (%llu through gzip files), %llu loaded, the rest refused\n",
                 (unsigned long long)runs, (unsigned long long)gz_runs, (unsigned long long)loaded);
-    EXPECT_GT(runs, 100u);
     EXPECT_GT(loaded, 0u);  // some mutations (a comment, a digit) keep the file valid
 }
 
@@ -298,7 +304,7 @@ TEST(InputFuzz, ConfigLoaderRefusesOrLoadsConsistently) {
     Mutator mutator(seed() + 1);
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(budget_seconds());
     uint64_t runs = 0, loaded = 0;
-    while (std::chrono::steady_clock::now() < deadline) {
+    while (runs < kMinConfigInputs || std::chrono::steady_clock::now() < deadline) {
         const std::string input = mutator.mutate(seeds[runs % seeds.size()]);
         ++runs;
         const std::string path = write_file(dir.path(), "fuzz.yaml", input);
@@ -320,7 +326,6 @@ TEST(InputFuzz, ConfigLoaderRefusesOrLoadsConsistently) {
     }
     std::printf("config fuzzing: %llu inputs, %llu loaded, the rest refused\n", (unsigned long long)runs,
                 (unsigned long long)loaded);
-    EXPECT_GT(runs, 50u);
 }
 
 }  // namespace
