@@ -191,7 +191,7 @@ struct BvhStrategyRef {
     using type = BvhPrimRef;
 };
 template <class S>
-    requires requires { typename S::Ref; }
+requires requires { typename S::Ref; }
 struct BvhStrategyRef<S> {
     using type = typename S::Ref;
 };
@@ -388,7 +388,7 @@ private:
         return split;
     }
 
-    static constexpr uint32_t kMaxBins = 256;  // a bin index fits a byte
+    static constexpr uint32_t kMaxBins = 256;                        // a bin index fits a byte
     static constexpr bool kBoxes = std::is_same_v<Ref, BvhPrimRef>;  // BvhCentroidRef: centroid boxes only
     BvhBoxAccumulator boxes_[kBoxes ? kMaxBins : 1], centroids_[kMaxBins];
     uint32_t counts_[kMaxBins] = {};
@@ -438,8 +438,8 @@ FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& setting
 
     struct Range {
         uint32_t begin, end, depth;
-        uint32_t parent;      // node whose second child this range becomes (kInvalidId: none)
-        uint32_t buffer;      // index into buffers
+        uint32_t parent;  // node whose second child this range becomes (kInvalidId: none)
+        uint32_t buffer;  // index into buffers
         Bounds3 bounds, centroid_bounds;
     };
     std::vector<Range> pending;  // second children still to build; at most one per level
@@ -495,8 +495,8 @@ FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& setting
         } else {
             detail::fit(std::span<const Ref>(buffers[buffer] + first.begin, first.end - first.begin), first.bounds,
                         first.centroid_bounds);
-            detail::fit(std::span<const Ref>(buffers[buffer] + second.begin, second.end - second.begin),
-                        second.bounds, second.centroid_bounds);
+            detail::fit(std::span<const Ref>(buffers[buffer] + second.begin, second.end - second.begin), second.bounds,
+                        second.centroid_bounds);
         }
         pending.push_back(second);
         range = first;
