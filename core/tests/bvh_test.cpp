@@ -4,12 +4,16 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <map>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
+#include "accelbench/accel/bvh/bvh_top_down.h"
 #include "agreement.h"
 #include "bvh_check.h"
 #include "test_scenes.h"
@@ -382,5 +386,126 @@ TEST(Bvh, StanfordBunnyAgreesWithEmbree) {
                     (unsigned long long)s.nodes.value(), (unsigned long long)s.max_depth.value(), s.sah_cost.value(),
                     s.extra.at("degenerate_splits"), s.extra.at("forced_leaves"));
         expect_agrees_with_embree(scene, *bvh, rays, describe(p) + " bunny");
+    }
+}
+
+// ---- the median build is the same tree as session 4's ---------------------------------
+//
+// The median build (split=median, the report's default) was rewritten for speed in
+// session 5 with the promise of the same tree: the same nodes, leaves and primitive order,
+// byte for byte. The reference below is the session-4 algorithm (main 42f25d3) frozen here
+// as the specification, written recursively: the equal-count split (bins, a three-way
+// scatter, std::nth_element inside the median's bin) on 28-byte references moved in place,
+// then a separate fit of each child. std::nth_element's tie-breaking among equal centroids
+// depends on the exact order of its input, so any change to the order in which the new
+// build moves references shows up here as a different tree.
+
+namespace {
+
+struct ReferenceRef {
+    Bounds3 bounds;
+    uint32_t id;
+    float centroid(int axis) const { return 0.5f * (bounds.lower[axis] + bounds.upper[axis]); }
+};
+
+void reference_equal_counts(std::span<ReferenceRef> refs, std::vector<ReferenceRef>& scratch, int axis, float lo,
+                            float hi) {
+    const size_t n = refs.size(), mid = n / 2;
+    auto by_centroid = [axis](const ReferenceRef& x, const ReferenceRef& y) {
+        return x.centroid(axis) < y.centroid(axis);
+    };
+    if (n <= 3) {
+        auto order = [&](size_t i, size_t j) {
+            if (by_centroid(refs[j], refs[i])) std::swap(refs[i], refs[j]);
+        };
+        if (n >= 2) order(0, 1);
+        if (n == 3) {
+            order(1, 2);
+            order(0, 1);
+        }
+        return;
+    }
+    if (n < 16 || !(hi > lo)) {
+        std::nth_element(refs.begin(), refs.begin() + ptrdiff_t(mid), refs.end(), by_centroid);
+        return;
+    }
+    const uint32_t bins = uint32_t(std::min<size_t>(256, n / 4));
+    const float scale = float(bins) * (1.0f - 1e-6f) / (hi - lo);
+    auto bin_of = [&](const ReferenceRef& r) {
+        return uint32_t(std::min(float(bins - 1), std::max(0.0f, (r.centroid(axis) - lo) * scale)));
+    };
+    std::vector<uint32_t> counts(bins, 0);
+    for (const ReferenceRef& r : refs) ++counts[bin_of(r)];
+    uint32_t median_bin = 0, below = 0;
+    while (below + counts[median_bin] <= mid) below += counts[median_bin++];
+    size_t next[3] = {0, below, below + counts[median_bin]};
+    scratch.resize(n);
+    for (const ReferenceRef& r : refs) {
+        const uint32_t b = bin_of(r);
+        scratch[next[int(b >= median_bin) + int(b > median_bin)]++] = r;
+    }
+    std::copy(scratch.begin(), scratch.begin() + ptrdiff_t(n), refs.begin());
+    std::nth_element(refs.begin() + ptrdiff_t(below), refs.begin() + ptrdiff_t(mid),
+                     refs.begin() + ptrdiff_t(below + counts[median_bin]), by_centroid);
+}
+
+// Builds the subtree of refs[begin, end) in depth-first order; returns its root's index.
+uint32_t reference_median_node(std::vector<ReferenceRef>& refs, std::vector<ReferenceRef>& scratch, uint32_t begin,
+                               uint32_t end, uint32_t depth, const BvhTopDownSettings& s, FlatBvh& out) {
+    Bounds3 box, centroids;
+    for (uint32_t i = begin; i < end; ++i) {
+        box.extend(refs[i].bounds);
+        centroids.extend(refs[i].bounds.center());
+    }
+    const uint32_t index = uint32_t(out.nodes.size());
+    const uint32_t count = end - begin;
+    out.nodes.push_back(BvhNode::leaf(box, begin, count));
+    out.depth = std::max(out.depth, depth);
+    if (count <= 1 || depth >= s.max_depth || count <= s.max_prims) return index;
+    const Vec3 extent = centroids.diagonal();
+    int axis = s.axis == BvhAxisRule::longest ? max_axis(extent) : int(depth % 3);
+    if (!(extent[axis] > 0.0f)) axis = max_axis(extent);  // the degenerate fallback: the longest axis
+    reference_equal_counts(std::span(refs).subspan(begin, count), scratch, axis, centroids.lower[axis],
+                           centroids.upper[axis]);
+    const uint32_t mid = begin + count / 2;
+    out.nodes[index] = BvhNode::inner(box, 0, axis);
+    reference_median_node(refs, scratch, begin, mid, depth + 1, s, out);
+    const uint32_t second = reference_median_node(refs, scratch, mid, end, depth + 1, s, out);
+    out.nodes[index].index = second;
+    return index;
+}
+
+FlatBvh reference_median_bvh(const Scene& scene, const BvhTopDownSettings& s) {
+    std::vector<ReferenceRef> refs(scene.triangle_count()), scratch;
+    for (uint32_t i = 0; i < refs.size(); ++i) refs[i] = {scene.prim_bounds[i], i};
+    FlatBvh out;
+    if (!refs.empty()) reference_median_node(refs, scratch, 0, uint32_t(refs.size()), 0, s, out);
+    for (const ReferenceRef& r : refs) out.prim_ids.push_back(r.id);
+    return out;
+}
+
+void expect_same_tree_as_reference(const Scene& scene, const std::map<std::string, std::string>& params,
+                                   const BvhTopDownSettings& s) {
+    const std::string what = scene.name + " " + describe(params);
+    auto bvh = built(scene, params);
+    const FlatBvh want = reference_median_bvh(scene, s);
+    const FlatBvh& got = bvh->tree();
+    ASSERT_EQ(got.nodes.size(), want.nodes.size()) << what;
+    EXPECT_EQ(std::memcmp(got.nodes.data(), want.nodes.data(), want.nodes.size() * sizeof(BvhNode)), 0) << what;
+    EXPECT_EQ(got.prim_ids, want.prim_ids) << what;
+    EXPECT_EQ(got.depth, want.depth) << what;
+}
+
+}  // namespace
+
+TEST(Bvh, MedianBuildIsSessionFourTreeByteForByte) {
+    const std::vector<Scene> scenes = {test::stanford_bunny(), closed_grid(), random_soup(3000, 17),
+                                       common_centroid_scene(200), triangles_along_x({0, 0, 0, 1, 1, 2, 5, 5, 5, 5})};
+    for (const Scene& scene : scenes) {
+        expect_same_tree_as_reference(scene, {{"split", "median"}}, {});
+        expect_same_tree_as_reference(scene, {{"split", "median"}, {"axis", "round_robin"}},
+                                      {1, 50, BvhAxisRule::round_robin});
+        expect_same_tree_as_reference(scene, {{"split", "median"}, {"max_prims", "3"}, {"max_depth", "9"}},
+                                      {3, 9, BvhAxisRule::longest});
     }
 }

@@ -123,10 +123,11 @@ std::optional<BvhSplit> partition_at(std::span<BvhPrimRef> refs, int axis, float
 // Object median (report 2.2.1): half the primitives on each side, by centroid order.
 // Balanced by construction, blind to the primitives' sizes and to empty space.
 struct MedianSplit {
-    std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) const {
-        return detail::split_equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis],
-                                          r.centroid_bounds.upper[r.axis]);
+    using Ref = BvhCentroidRef;  // the median looks at centroids only
+    std::optional<BvhSplit> operator()(std::span<Ref> refs, const BvhRangeRequest<Ref>& r) {
+        return equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis], r.centroid_bounds.upper[r.axis]);
     }
+    detail::EqualCountSplitter<Ref> equal_counts;
 };
 
 // The report's centroid method (equation 1): cut the node's centroid box in half. Adapts

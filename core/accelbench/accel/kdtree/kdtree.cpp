@@ -248,15 +248,16 @@ public:
     T* data() { return data_.get(); }
     const T* data() const { return data_.get(); }
     T* grow(size_t n) {  // n more elements at the top
-        if (size_ + n > capacity_) {
-            const size_t cap = std::max(size_ + n, 2 * capacity_);
-            auto bigger = std::make_unique_for_overwrite<T[]>(cap);
-            std::copy(data_.get(), data_.get() + size_, bigger.get());
-            data_ = std::move(bigger);
-            capacity_ = cap;
-        }
+        if (size_ + n > capacity_) reserve(std::max(size_ + n, 2 * capacity_));
         size_ += n;
         return data_.get() + size_ - n;
+    }
+    void reserve(size_t cap) {
+        if (cap <= capacity_) return;
+        auto bigger = std::make_unique_for_overwrite<T[]>(cap);
+        std::copy(data_.get(), data_.get() + size_, bigger.get());
+        data_ = std::move(bigger);
+        capacity_ = cap;
     }
     void truncate(size_t n) { size_ = n; }
 
@@ -290,6 +291,15 @@ public:
     void run(const Bounds3& root) {
         const uint32_t n = uint32_t(bounds_.size());
         Lists lists;
+        // The stacks start at the size they reach (the bunny's and the conference's lists
+        // peak at 4x the root's): memory not yet used is not touched, so reserving it costs
+        // no page faults, and each regrowth it saves copied the stack into fresh pages.
+        // Measured (session 5): callgrind, the bunny's build 940M -> 931M instructions (the
+        // copies); getrusage over 10 builds: minor faults per build bunny 3089 -> 205,
+        // conference 13685 -> 10437, dragon 51124 -> 34263; system time bunny 9.3 -> 0 ms,
+        // conference 54 -> 39 ms, dragon 191 -> 130 ms (dragon user + system 1457 -> 1371 ms).
+        prims_.reserve(4 * size_t(n));
+        for (ListStack<EventKey>& events : events_) events.reserve(8 * size_t(n));
         uint32_t* prims = prims_.grow(n);
         for (uint32_t i = 0; i < n; ++i) prims[i] = i;
         lists.prims = {0, n};
