@@ -281,32 +281,42 @@ BuildStats Wbvh::build_stats() const {
 
 namespace {
 
-// A child reference on the traversal stack: what WbvhNode stores of it, and its entry
-// distance (a popped entry beyond the closest hit is skipped).
+// A child as WbvhNode stores it: count 0, inner node `child`; else a leaf of `count`
+// triangles at packet `child`. The any-hit traversal's stack entry: its tmax does not
+// shrink before it returns, so the test that skips a popped entry beyond tmax (an entry
+// distance in (tmax, tmax + slack], which the widened box test accepts) is made when the
+// child is pushed instead, and the entry keeps no distance.
+struct ChildRef {
+    uint32_t child, count;
+};
+
+// The closest-hit traversal's stack entry: the child and its entry distance (a popped
+// entry beyond the closest hit is skipped).
 struct StackEntry {
-    uint32_t child, count;  // count 0: inner node `child`; else a leaf of `count` triangles at packet `child`
+    ChildRef ref;
     float tnear;
 };
 
 // Entries for any tree: each node pushes at most W - 1 of its children and descends into
 // one, so (W - 1) * depth + 1 entries suffice. Shallow trees (all balanced ones) use the
 // inline array; deeper ones allocate once per ray.
+template <class Entry>
 class Stack {
 public:
     Stack(uint32_t width, uint32_t depth) {
         const size_t need = size_t(width - 1) * (size_t(depth) + 1) + 1;
         if (need > kInline) {
-            heap_ = std::make_unique<StackEntry[]>(need);
+            heap_ = std::make_unique<Entry[]>(need);
             data_ = heap_.get();
         }
     }
-    StackEntry* bottom() { return data_; }
+    Entry* bottom() { return data_; }
 
 private:
     static constexpr size_t kInline = 256;
-    StackEntry inline_[kInline];
-    std::unique_ptr<StackEntry[]> heap_;
-    StackEntry* data_ = inline_;
+    Entry inline_[kInline];
+    std::unique_ptr<Entry[]> heap_;
+    Entry* data_ = inline_;
 };
 
 // A sort key that orders children by entry distance: the distance's bits made to compare
@@ -319,43 +329,35 @@ inline uint32_t order_key(float t, int slot) {
     return (ordered & ~7u) | uint32_t(slot);
 }
 
-template <int W, bool kVector, bool kAnyHit, class C>
-ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& hit, C& c) {
-    if (tree.empty() || !is_valid_ray(ray)) return false;
-    const RayPrecomp rp(ray);
-    const WbvhRayPlanes rows(rp);
-    const WatertightRay wr(ray);
+template <int W>
+inline ChildRef child_ref(const WbvhNode<W>& node, int k) {
+    return {node.child[k], node.count[k]};
+}
+
+// Closest hit.
+template <int W, bool kVector, class C>
+ACCELBENCH_BVH_HOT bool traverse_closest(const WbvhTree<W>& tree, const Ray& ray, Hit& hit, C& c) {
+    if (tree.empty()) return false;
+    const WbvhRay<W, kVector> r(ray);
+    if (!r.valid) return false;
     const float tmin = ray.tmin;
     float tmax = ray.tmax;
-    Stack storage(W, tree.depth);
+    Stack<StackEntry> storage(W, tree.depth);
     StackEntry* const bottom = storage.bottom();
     StackEntry* top = bottom;
-    uint32_t child = 0, count = 0;  // the root
+    ChildRef cur{0, 0};  // the root
     for (;;) {
-        while (count == 0) {  // an inner node
+        while (cur.count == 0) {  // an inner node
             c.node();
-            const WbvhNode<W>& node = tree.nodes[child];
+            const WbvhNode<W>& node = tree.nodes[cur.child];
             c.box(node.child_count());
             float tnear[W];
-            uint32_t mask = wbvh_slab_test<kVector>(node, rp, rows, tmin, tmax, tnear);
+            uint32_t mask = wbvh_slab_test(node, r, tmin, tmax, tnear);
             if (mask == 0) goto pop;
             const int first = std::countr_zero(mask);
             mask &= mask - 1;
             if (mask == 0) {  // one child hit: no ordering
-                child = node.child[first];
-                count = node.count[first];
-                continue;
-            }
-            if constexpr (kAnyHit) {
-                // Any hit: any occluder ends the search, so the order is not worth sorting for
-                // (Embree's any-hit traverser, traverseAnyHit, does not sort either; measured
-                // here: sorting made the bunny's shadow rays ~15% slower in all).
-                for (; mask; mask &= mask - 1) {
-                    const int k = std::countr_zero(mask);
-                    *top++ = {node.child[k], node.count[k], tnear[k]};
-                }
-                child = node.child[first];
-                count = node.count[first];
+                cur = child_ref(node, first);
                 continue;
             }
             // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
@@ -381,48 +383,90 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
             }
             for (int i = n - 1; i > 0; --i) {
                 const int k = int(keys[i] & 7u);
-                *top++ = {node.child[k], node.count[k], tnear[k]};
+                *top++ = {child_ref(node, k), tnear[k]};
             }
-            const int k = int(keys[0] & 7u);
-            child = node.child[k];
-            count = node.count[k];
+            cur = child_ref(node, int(keys[0] & 7u));
         }
         // A leaf: its packets in turn.
-        for (uint32_t done = 0; done < count; done += WbvhTriPacket::kLanes) {
-            const WbvhTriPacket& p = tree.packets[child + done / WbvhTriPacket::kLanes];
-            const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, count - done));
+        for (uint32_t done = 0; done < cur.count; done += WbvhTriPacket::kLanes) {
+            const WbvhTriPacket& p = tree.packets[cur.child + done / WbvhTriPacket::kLanes];
+            const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, cur.count - done));
             c.prim(uint64_t(lanes));
-            const WbvhPacketHits h = wbvh_packet_test<kVector>(p, lanes, wr, tmin, tmax);
+            const WbvhPacketHits h = wbvh_packet_test(p, lanes, r, tmin, tmax);
             if (h.mask == 0) continue;
-            if constexpr (kAnyHit) {
-                return true;
-            } else {
-                const int k = h.nearest();
-                tmax = h.t[k];
-                hit = {p.prim[k], h.t[k], h.u[k], h.v[k]};
-            }
+            const int k = h.nearest();
+            tmax = h.t[k];
+            hit = {p.prim[k], h.t[k], h.u[k], h.v[k]};
         }
     pop:
         for (;;) {
             if (top == bottom) return hit.found();
-            const StackEntry e = *--top;
-            if (e.tnear <= tmax) {
-                child = e.child;
-                count = e.count;
+            --top;
+            if (top->tnear <= tmax) {
+                cur = top->ref;
                 break;
             }
         }
     }
 }
 
+// Any hit: the same without sorting (the children hit are pushed in slot order, as
+// Embree's any-hit traverser does), returning at the first triangle hit.
+template <int W, bool kVector, class C>
+ACCELBENCH_BVH_HOT bool traverse_any(const WbvhTree<W>& tree, const Ray& ray, C& c) {
+    if (tree.empty()) return false;
+    const WbvhRay<W, kVector> r(ray);
+    if (!r.valid) return false;
+    const float tmin = ray.tmin, tmax = ray.tmax;
+    Stack<ChildRef> storage(W, tree.depth);
+    ChildRef* const bottom = storage.bottom();
+    ChildRef* top = bottom;
+    ChildRef cur{0, 0};  // the root
+    for (;;) {
+        while (cur.count == 0) {
+            c.node();
+            const WbvhNode<W>& node = tree.nodes[cur.child];
+            c.box(node.child_count());
+            float tnear[W];
+            uint32_t mask = wbvh_slab_test(node, r, tmin, tmax, tnear);
+            if (mask == 0) goto pop;
+            const int first = std::countr_zero(mask);
+            // Any occluder ends the search, so the order is not worth sorting for (Embree's
+            // any-hit traverser, traverseAnyHit, does not sort either; measured here: sorting
+            // made the bunny's shadow rays ~15% slower in all).
+            for (mask &= mask - 1; mask; mask &= mask - 1) {
+                const int k = std::countr_zero(mask);
+                if (tnear[k] <= tmax) *top++ = child_ref(node, k);
+            }
+            cur = child_ref(node, first);
+        }
+        for (uint32_t done = 0; done < cur.count; done += WbvhTriPacket::kLanes) {
+            const WbvhTriPacket& p = tree.packets[cur.child + done / WbvhTriPacket::kLanes];
+            const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, cur.count - done));
+            c.prim(uint64_t(lanes));
+            if (wbvh_packet_test(p, lanes, r, tmin, tmax).mask) return true;
+        }
+    pop:
+        if (top == bottom) return false;
+        cur = *--top;
+    }
+}
+
 template <bool kAnyHit, class C>
 bool dispatch(const Wbvh& w, const Ray& ray, Hit& hit, C& c) {
     const bool vector = w.config().kernel == Wbvh::Kernel::simd;
-    if (w.config().width == 8)
-        return vector ? traverse<8, true, kAnyHit>(w.tree8(), ray, hit, c)
-                      : traverse<8, false, kAnyHit>(w.tree8(), ray, hit, c);
-    return vector ? traverse<4, true, kAnyHit>(w.tree4(), ray, hit, c)
-                  : traverse<4, false, kAnyHit>(w.tree4(), ray, hit, c);
+    if constexpr (kAnyHit) {
+        (void)hit;
+        if (w.config().width == 8)
+            return vector ? traverse_any<8, true>(w.tree8(), ray, c) : traverse_any<8, false>(w.tree8(), ray, c);
+        return vector ? traverse_any<4, true>(w.tree4(), ray, c) : traverse_any<4, false>(w.tree4(), ray, c);
+    } else {
+        if (w.config().width == 8)
+            return vector ? traverse_closest<8, true>(w.tree8(), ray, hit, c)
+                          : traverse_closest<8, false>(w.tree8(), ray, hit, c);
+        return vector ? traverse_closest<4, true>(w.tree4(), ray, hit, c)
+                      : traverse_closest<4, false>(w.tree4(), ray, hit, c);
+    }
 }
 
 }  // namespace
