@@ -287,6 +287,28 @@ inline uint32_t wbvh_slab_test(const WbvhNode<W>& node, const WbvhScalarRay& r, 
 #if defined(ACCELBENCH_WBVH_SSE)
 namespace detail {
 
+// The hit mask of the widened test (tn <= tf + kBoxSlack |tf|), returned as the mask of
+// the unwidened one (tn <= tf) whenever both are equal — nearly always: they differ only
+// for a box the ray grazes within the slack (or tf = -inf). The unwidened mask is ready
+// 7 cycles sooner (no abs, multiply, add), and the traversal's next node address depends
+// on it: the comparison of the two is a branch the processor predicts, so the slack's
+// latency leaves the node-to-node dependency chain while the answer stays the widened
+// test's, bit for bit. The empty asm hides from GCC that no difference means equal masks
+// (it would otherwise use `wide` for `fast` there, and the chain would wait for it again).
+// Measured (trace/<model>/wbvh8): the masks differed at 10 of the bunny's 688,342
+// closest-hit node tests; +4% instructions (166.2M -> 172.8M on the bunny) for a small,
+// consistent gain in time, interleaved A/B under load ~8: dragon 1.37x/1.38x -> 1.34x/1.37x
+// Embree, conference 1.10x/1.17x -> 1.07x/1.13x.
+inline uint32_t widened_mask(uint32_t fast, uint32_t wide) {
+    uint32_t differ = fast ^ wide;
+    asm("" : "+r"(differ));
+    if (differ != 0) [[unlikely]] {
+        asm volatile("" : "+r"(wide));  // a branch, not a cmov (which would wait for `wide`)
+        return wide;
+    }
+    return fast;
+}
+
 // The 4 lanes planes[.][offset, offset + 4) of intersect_box, in SSE. Returns the hit mask.
 template <int W>
 inline uint32_t slab_test_sse(const WbvhNode<W>& node, int offset, const WbvhVectorRay<W>& r, float tmin, float tmax,
@@ -303,7 +325,8 @@ inline uint32_t slab_test_sse(const WbvhNode<W>& node, int offset, const WbvhVec
     const __m128 abs_tf = _mm_andnot_ps(_mm_set1_ps(-0.0f), tf);
     const __m128 tf_wide = _mm_add_ps(tf, _mm_mul_ps(_mm_set1_ps(kBoxSlack), abs_tf));  // Ize 2013
     _mm_storeu_ps(tnear, tn);
-    return uint32_t(_mm_movemask_ps(_mm_cmple_ps(tn, tf_wide)));
+    return widened_mask(uint32_t(_mm_movemask_ps(_mm_cmple_ps(tn, tf))),
+                        uint32_t(_mm_movemask_ps(_mm_cmple_ps(tn, tf_wide))));
 }
 
 }  // namespace detail
@@ -325,7 +348,8 @@ inline uint32_t wbvh_slab_test(const WbvhNode<W>& node, const WbvhVectorRay<W>& 
         const __m256 abs_tf = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), tf);
         const __m256 tf_wide = _mm256_add_ps(tf, _mm256_mul_ps(_mm256_set1_ps(kBoxSlack), abs_tf));
         _mm256_storeu_ps(tnear, tn);
-        return uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf_wide, _CMP_LE_OQ)));
+        return detail::widened_mask(uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf, _CMP_LE_OQ))),
+                                    uint32_t(_mm256_movemask_ps(_mm256_cmp_ps(tn, tf_wide, _CMP_LE_OQ))));
     } else
 #endif
     {
