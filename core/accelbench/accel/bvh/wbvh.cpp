@@ -334,17 +334,20 @@ inline ChildRef child_ref(const WbvhNode<W>& node, int k) {
     return {node.child[k], node.count[k]};
 }
 
-// Closest hit.
-template <int W, bool kVector, class C>
-ACCELBENCH_BVH_HOT bool traverse_closest(const WbvhTree<W>& tree, const Ray& ray, Hit& hit, C& c) {
+// Closest hit (kAnyHit false): `hit` must come in empty and receives the closest hit; the
+// interval shrinks to it. Any hit: the children hit are pushed in slot order, as Embree's
+// any-hit traverser does, and it returns at the first triangle hit.
+template <int W, bool kVector, bool kAnyHit, class C>
+ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& hit, C& c) {
     if (tree.empty()) return false;
     const WbvhRay<W, kVector> r(ray);
     if (!r.valid) return false;
     const float tmin = ray.tmin;
     float tmax = ray.tmax;
-    Stack<StackEntry> storage(W, tree.depth);
-    StackEntry* const bottom = storage.bottom();
-    StackEntry* top = bottom;
+    using Entry = std::conditional_t<kAnyHit, ChildRef, StackEntry>;
+    Stack<Entry> storage(W, tree.depth);
+    Entry* const bottom = storage.bottom();
+    Entry* top = bottom;
     ChildRef cur{0, 0};  // the root
     for (;;) {
         while (cur.count == 0) {  // an inner node
@@ -356,53 +359,72 @@ ACCELBENCH_BVH_HOT bool traverse_closest(const WbvhTree<W>& tree, const Ray& ray
             if (mask == 0) goto pop;
             const int first = std::countr_zero(mask);
             mask &= mask - 1;
-            if (mask == 0) {  // one child hit: no ordering
+            if constexpr (kAnyHit) {
+                // Any occluder ends the search, so the order is not worth sorting for (Embree's
+                // any-hit traverser, traverseAnyHit, does not sort either; measured here: sorting
+                // made the bunny's shadow rays ~15% slower in all). An entry beyond tmax, which
+                // the closest-hit pop skips, is not pushed: tmax does not shrink here.
+                for (; mask; mask &= mask - 1) {
+                    const int k = std::countr_zero(mask);
+                    if (tnear[k] <= tmax) *top++ = child_ref(node, k);
+                }
                 cur = child_ref(node, first);
-                continue;
+            } else {
+                if (mask == 0) {  // one child hit: no ordering
+                    cur = child_ref(node, first);
+                    continue;
+                }
+                // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
+                // Tried and measured (issue 12, width 8): a branch-free order instead — two hit
+                // children by one key compare, more by writing each straight to its stack slot by its
+                // rank among the hit keys (one AVX2 compare of signed order keys per child), the same
+                // visit order and counters. It ran 9-10% fewer closest-hit traversal instructions
+                // (callgrind, trace/<model>/wbvh8: bunny 147.2M -> 134.5M, conference 910.4M ->
+                // 816.2M) and 13% fewer simulated conditional mispredicts (bunny 433K -> 378K), but no
+                // time: interleaved, load ~1.5-3, ratio to Embree bunny 1.15-1.22x before vs 1.19-1.22x
+                // after, conference 1.25-1.32x vs 1.24-1.32x. Few nodes have 2+ hit children (bunny:
+                // 77% of nodes with a hit have one, 15% two, 8% more); the rest of the mispredicts are
+                // the inner/leaf, none/one/several-hit and pop branches, which it leaves as they are.
+                uint32_t keys[W];
+                int n = 0;
+                keys[n++] = order_key(tnear[first], first);
+                for (; mask; mask &= mask - 1) {
+                    const int k = std::countr_zero(mask);
+                    const uint32_t key = order_key(tnear[k], k);
+                    int i = n++;
+                    for (; i > 0 && keys[i - 1] > key; --i) keys[i] = keys[i - 1];
+                    keys[i] = key;
+                }
+                for (int i = n - 1; i > 0; --i) {
+                    const int k = int(keys[i] & 7u);
+                    *top++ = {child_ref(node, k), tnear[k]};
+                }
+                cur = child_ref(node, int(keys[0] & 7u));
             }
-            // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
-            // Tried and measured (issue 12, width 8): a branch-free order instead — two hit
-            // children by one key compare, more by writing each straight to its stack slot by its
-            // rank among the hit keys (one AVX2 compare of signed order keys per child), the same
-            // visit order and counters. It ran 9-10% fewer closest-hit traversal instructions
-            // (callgrind, trace/<model>/wbvh8: bunny 147.2M -> 134.5M, conference 910.4M ->
-            // 816.2M) and 13% fewer simulated conditional mispredicts (bunny 433K -> 378K), but no
-            // time: interleaved, load ~1.5-3, ratio to Embree bunny 1.15-1.22x before vs 1.19-1.22x
-            // after, conference 1.25-1.32x vs 1.24-1.32x. Few nodes have 2+ hit children (bunny:
-            // 77% of nodes with a hit have one, 15% two, 8% more); the rest of the mispredicts are
-            // the inner/leaf, none/one/several-hit and pop branches, which it leaves as they are.
-            uint32_t keys[W];
-            int n = 0;
-            keys[n++] = order_key(tnear[first], first);
-            for (; mask; mask &= mask - 1) {
-                const int k = std::countr_zero(mask);
-                const uint32_t key = order_key(tnear[k], k);
-                int i = n++;
-                for (; i > 0 && keys[i - 1] > key; --i) keys[i] = keys[i - 1];
-                keys[i] = key;
-            }
-            for (int i = n - 1; i > 0; --i) {
-                const int k = int(keys[i] & 7u);
-                *top++ = {child_ref(node, k), tnear[k]};
-            }
-            cur = child_ref(node, int(keys[0] & 7u));
         }
-        // A leaf: its packets in turn.
+        // A leaf: its packets in turn, each against the interval shrunk by those before it.
         for (uint32_t done = 0; done < cur.count; done += WbvhTriPacket::kLanes) {
             const WbvhTriPacket& p = tree.packets[cur.child + done / WbvhTriPacket::kLanes];
             const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, cur.count - done));
             c.prim(uint64_t(lanes));
             const WbvhPacketHits h = wbvh_packet_test(p, lanes, r, tmin, tmax);
             if (h.mask == 0) continue;
-            const int k = h.nearest();
-            tmax = h.t[k];
-            hit = {p.prim[k], h.t[k], h.u[k], h.v[k]};
+            if constexpr (kAnyHit) {
+                return true;
+            } else {
+                const int k = h.nearest();
+                tmax = h.t[k];
+                hit = {p.prim[k], h.t[k], h.u[k], h.v[k]};
+            }
         }
     pop:
         for (;;) {
             if (top == bottom) return hit.found();
             --top;
-            if (top->tnear <= tmax) {
+            if constexpr (kAnyHit) {
+                cur = *top;
+                break;
+            } else if (top->tnear <= tmax) {
                 cur = top->ref;
                 break;
             }
@@ -410,63 +432,14 @@ ACCELBENCH_BVH_HOT bool traverse_closest(const WbvhTree<W>& tree, const Ray& ray
     }
 }
 
-// Any hit: the same without sorting (the children hit are pushed in slot order, as
-// Embree's any-hit traverser does), returning at the first triangle hit.
-template <int W, bool kVector, class C>
-ACCELBENCH_BVH_HOT bool traverse_any(const WbvhTree<W>& tree, const Ray& ray, C& c) {
-    if (tree.empty()) return false;
-    const WbvhRay<W, kVector> r(ray);
-    if (!r.valid) return false;
-    const float tmin = ray.tmin, tmax = ray.tmax;
-    Stack<ChildRef> storage(W, tree.depth);
-    ChildRef* const bottom = storage.bottom();
-    ChildRef* top = bottom;
-    ChildRef cur{0, 0};  // the root
-    for (;;) {
-        while (cur.count == 0) {
-            c.node();
-            const WbvhNode<W>& node = tree.nodes[cur.child];
-            c.box(node.child_count());
-            float tnear[W];
-            uint32_t mask = wbvh_slab_test(node, r, tmin, tmax, tnear);
-            if (mask == 0) goto pop;
-            const int first = std::countr_zero(mask);
-            // Any occluder ends the search, so the order is not worth sorting for (Embree's
-            // any-hit traverser, traverseAnyHit, does not sort either; measured here: sorting
-            // made the bunny's shadow rays ~15% slower in all).
-            for (mask &= mask - 1; mask; mask &= mask - 1) {
-                const int k = std::countr_zero(mask);
-                if (tnear[k] <= tmax) *top++ = child_ref(node, k);
-            }
-            cur = child_ref(node, first);
-        }
-        for (uint32_t done = 0; done < cur.count; done += WbvhTriPacket::kLanes) {
-            const WbvhTriPacket& p = tree.packets[cur.child + done / WbvhTriPacket::kLanes];
-            const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, cur.count - done));
-            c.prim(uint64_t(lanes));
-            if (wbvh_packet_test(p, lanes, r, tmin, tmax).mask) return true;
-        }
-    pop:
-        if (top == bottom) return false;
-        cur = *--top;
-    }
-}
-
 template <bool kAnyHit, class C>
 bool dispatch(const Wbvh& w, const Ray& ray, Hit& hit, C& c) {
     const bool vector = w.config().kernel == Wbvh::Kernel::simd;
-    if constexpr (kAnyHit) {
-        (void)hit;
-        if (w.config().width == 8)
-            return vector ? traverse_any<8, true>(w.tree8(), ray, c) : traverse_any<8, false>(w.tree8(), ray, c);
-        return vector ? traverse_any<4, true>(w.tree4(), ray, c) : traverse_any<4, false>(w.tree4(), ray, c);
-    } else {
-        if (w.config().width == 8)
-            return vector ? traverse_closest<8, true>(w.tree8(), ray, hit, c)
-                          : traverse_closest<8, false>(w.tree8(), ray, hit, c);
-        return vector ? traverse_closest<4, true>(w.tree4(), ray, hit, c)
-                      : traverse_closest<4, false>(w.tree4(), ray, hit, c);
-    }
+    if (w.config().width == 8)
+        return vector ? traverse<8, true, kAnyHit>(w.tree8(), ray, hit, c)
+                      : traverse<8, false, kAnyHit>(w.tree8(), ray, hit, c);
+    return vector ? traverse<4, true, kAnyHit>(w.tree4(), ray, hit, c)
+                  : traverse<4, false, kAnyHit>(w.tree4(), ray, hit, c);
 }
 
 }  // namespace
