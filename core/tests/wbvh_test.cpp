@@ -7,7 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <random>
 #include <map>
 #include <string>
 #include <vector>
@@ -241,6 +244,69 @@ TEST(Wbvh, SimdAndScalarKernelsGiveIdenticalHits) {
         }
     for (const Params& p : variants()) expect_kernels_identical(grid, p, exact, describe(p) + " grid vertices");
 }
+
+#if defined(ACCELBENCH_WBVH_SSE)
+// The vector kernels' per-ray constants (WbvhVectorRay) against the project's scalar ones
+// (is_valid_ray, RayPrecomp, WatertightRay), bit for bit, on rays with zero, negative-zero,
+// denormal, tied and extreme direction components and on invalid rays.
+template <int W>
+void expect_vector_ray_matches(const Ray& ray, const std::string& what) {
+    const WbvhVectorRay<W> v(ray);
+    ASSERT_EQ(v.valid, is_valid_ray(ray)) << what;
+    if (!v.valid) return;
+    const RayPrecomp rp(ray);
+    const WatertightRay wr(ray);
+    auto bits = [](float f) { return std::bit_cast<uint32_t>(f); };
+    auto lanes_equal = [&](auto vec, float expected) {
+        constexpr int n = int(sizeof(vec) / sizeof(float));
+        alignas(32) float out[8];
+        std::memcpy(out, &vec, sizeof(vec));
+        for (int i = 0; i < n; ++i)
+            if (bits(out[i]) != bits(expected)) return false;
+        return true;
+    };
+    for (int a = 0; a < 3; ++a) {
+        EXPECT_TRUE(lanes_equal(v.org[a], rp.org[a])) << what << " org " << a;
+        EXPECT_TRUE(lanes_equal(v.inv_dir[a], rp.inv_dir[a])) << what << " inv_dir " << a;
+        EXPECT_EQ(v.plane_offset[a], rp.near_plane[a] * W * sizeof(float)) << what << " near plane " << a;
+        EXPECT_EQ(v.plane_offset[3 + a], rp.far_plane[a] * W * sizeof(float)) << what << " far plane " << a;
+    }
+    EXPECT_EQ(v.kx, wr.kx) << what;
+    EXPECT_EQ(v.ky, wr.ky) << what;
+    EXPECT_EQ(v.kz, wr.kz) << what;
+    EXPECT_TRUE(lanes_equal(v.shear[0], wr.sx)) << what << " sx";
+    EXPECT_TRUE(lanes_equal(v.shear[1], wr.sy)) << what << " sy";
+    EXPECT_TRUE(lanes_equal(v.shear[2], wr.sz)) << what << " sz";
+    const int k[3] = {wr.kx, wr.ky, wr.kz};
+    for (int i = 0; i < 3; ++i) {
+        EXPECT_TRUE(lanes_equal(v.org_k[i], wr.org[k[i]])) << what << " org_k " << i;
+        EXPECT_EQ(v.row_offset[i], size_t(k[i]) * 4 * sizeof(float)) << what << " row " << i;
+    }
+}
+
+TEST(Wbvh, VectorRayConstantsEqualTheScalarOnes) {
+    const float specials[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -2.0f, 1e-40f, -1e-40f, 1e-30f, 3e17f,
+                              -3e17f, 1.8e18f, 2e18f, kInfinity, -kInfinity, std::nanf("")};
+    std::vector<Ray> rays;
+    for (float dx : specials)
+        for (float dy : specials)
+            for (float dz : specials) {
+                rays.push_back({{0.25f, -3.0f, 7.0f}, 0.0f, {dx, dy, dz}, kInfinity});
+                rays.push_back({{dx, dy, dz}, 0.0f, {1.0f, -1.0f, 0.5f}, 10.0f});
+            }
+    for (float t : specials) {
+        rays.push_back({{1, 2, 3}, t, {1, 1, 1}, kInfinity});
+        rays.push_back({{1, 2, 3}, 0.0f, {-1, 1, -1}, t});
+    }
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (int i = 0; i < 20000; ++i) rays.push_back({{u(rng), u(rng), u(rng)}, 0.0f, {u(rng), u(rng), u(rng)}, u(rng)});
+    for (size_t i = 0; i < rays.size(); ++i) {
+        expect_vector_ray_matches<4>(rays[i], "ray " + std::to_string(i) + " width 4");
+        expect_vector_ray_matches<8>(rays[i], "ray " + std::to_string(i) + " width 8");
+    }
+}
+#endif
 
 // ---- the extreme-case catalogue ------------------------------------------------------------
 

@@ -281,32 +281,42 @@ BuildStats Wbvh::build_stats() const {
 
 namespace {
 
-// A child reference on the traversal stack: what WbvhNode stores of it, and its entry
-// distance (a popped entry beyond the closest hit is skipped).
+// A child as WbvhNode stores it: count 0, inner node `child`; else a leaf of `count`
+// triangles at packet `child`. The any-hit traversal's stack entry: its tmax does not
+// shrink before it returns, so the test that skips a popped entry beyond tmax (an entry
+// distance in (tmax, tmax + slack], which the widened box test accepts) is made when the
+// child is pushed instead, and the entry keeps no distance.
+struct ChildRef {
+    uint32_t child, count;
+};
+
+// The closest-hit traversal's stack entry: the child and its entry distance (a popped
+// entry beyond the closest hit is skipped).
 struct StackEntry {
-    uint32_t child, count;  // count 0: inner node `child`; else a leaf of `count` triangles at packet `child`
+    ChildRef ref;
     float tnear;
 };
 
 // Entries for any tree: each node pushes at most W - 1 of its children and descends into
 // one, so (W - 1) * depth + 1 entries suffice. Shallow trees (all balanced ones) use the
 // inline array; deeper ones allocate once per ray.
+template <class Entry>
 class Stack {
 public:
     Stack(uint32_t width, uint32_t depth) {
         const size_t need = size_t(width - 1) * (size_t(depth) + 1) + 1;
         if (need > kInline) {
-            heap_ = std::make_unique<StackEntry[]>(need);
+            heap_ = std::make_unique<Entry[]>(need);
             data_ = heap_.get();
         }
     }
-    StackEntry* bottom() { return data_; }
+    Entry* bottom() { return data_; }
 
 private:
     static constexpr size_t kInline = 256;
-    StackEntry inline_[kInline];
-    std::unique_ptr<StackEntry[]> heap_;
-    StackEntry* data_ = inline_;
+    Entry inline_[kInline];
+    std::unique_ptr<Entry[]> heap_;
+    Entry* data_ = inline_;
 };
 
 // A sort key that orders children by entry distance: the distance's bits made to compare
@@ -319,80 +329,85 @@ inline uint32_t order_key(float t, int slot) {
     return (ordered & ~7u) | uint32_t(slot);
 }
 
+template <int W>
+inline ChildRef child_ref(const WbvhNode<W>& node, int k) {
+    return {node.child[k], node.count[k]};
+}
+
+// Closest hit (kAnyHit false): `hit` must come in empty and receives the closest hit; the
+// interval shrinks to it. Any hit: the children hit are pushed in slot order, as Embree's
+// any-hit traverser does, and it returns at the first triangle hit.
 template <int W, bool kVector, bool kAnyHit, class C>
 ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& hit, C& c) {
-    if (tree.empty() || !is_valid_ray(ray)) return false;
-    const RayPrecomp rp(ray);
-    const WbvhRayPlanes rows(rp);
-    const WatertightRay wr(ray);
+    if (tree.empty()) return false;
+    const WbvhRay<W, kVector> r(ray);
+    if (!r.valid) return false;
     const float tmin = ray.tmin;
     float tmax = ray.tmax;
-    Stack storage(W, tree.depth);
-    StackEntry* const bottom = storage.bottom();
-    StackEntry* top = bottom;
-    uint32_t child = 0, count = 0;  // the root
+    using Entry = std::conditional_t<kAnyHit, ChildRef, StackEntry>;
+    Stack<Entry> storage(W, tree.depth);
+    Entry* const bottom = storage.bottom();
+    Entry* top = bottom;
+    ChildRef cur{0, 0};  // the root
     for (;;) {
-        while (count == 0) {  // an inner node
+        while (cur.count == 0) {  // an inner node
             c.node();
-            const WbvhNode<W>& node = tree.nodes[child];
+            const WbvhNode<W>& node = tree.nodes[cur.child];
             c.box(node.child_count());
             float tnear[W];
-            uint32_t mask = wbvh_slab_test<kVector>(node, rp, rows, tmin, tmax, tnear);
+            uint32_t mask = wbvh_slab_test(node, r, tmin, tmax, tnear);
             if (mask == 0) goto pop;
             const int first = std::countr_zero(mask);
             mask &= mask - 1;
-            if (mask == 0) {  // one child hit: no ordering
-                child = node.child[first];
-                count = node.count[first];
-                continue;
-            }
             if constexpr (kAnyHit) {
-                // Any hit: any occluder ends the search, so the order is not worth sorting for
-                // (Embree's any-hit traverser, traverseAnyHit, does not sort either; measured
-                // here: sorting made the bunny's shadow rays ~15% slower in all).
+                // Any occluder ends the search, so the order is not worth sorting for (Embree's
+                // any-hit traverser, traverseAnyHit, does not sort either; measured here: sorting
+                // made the bunny's shadow rays ~15% slower in all). An entry beyond tmax, which
+                // the closest-hit pop skips, is not pushed: tmax does not shrink here.
                 for (; mask; mask &= mask - 1) {
                     const int k = std::countr_zero(mask);
-                    *top++ = {node.child[k], node.count[k], tnear[k]};
+                    if (tnear[k] <= tmax) *top++ = child_ref(node, k);
                 }
-                child = node.child[first];
-                count = node.count[first];
-                continue;
+                cur = child_ref(node, first);
+            } else {
+                if (mask == 0) {  // one child hit: no ordering
+                    cur = child_ref(node, first);
+                    continue;
+                }
+                // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
+                // Tried and measured (issue 12, width 8): a branch-free order instead — two hit
+                // children by one key compare, more by writing each straight to its stack slot by its
+                // rank among the hit keys (one AVX2 compare of signed order keys per child), the same
+                // visit order and counters. It ran 9-10% fewer closest-hit traversal instructions
+                // (callgrind, trace/<model>/wbvh8: bunny 147.2M -> 134.5M, conference 910.4M ->
+                // 816.2M) and 13% fewer simulated conditional mispredicts (bunny 433K -> 378K), but no
+                // time: interleaved, load ~1.5-3, ratio to Embree bunny 1.15-1.22x before vs 1.19-1.22x
+                // after, conference 1.25-1.32x vs 1.24-1.32x. Few nodes have 2+ hit children (bunny:
+                // 77% of nodes with a hit have one, 15% two, 8% more); the rest of the mispredicts are
+                // the inner/leaf, none/one/several-hit and pop branches, which it leaves as they are.
+                uint32_t keys[W];
+                int n = 0;
+                keys[n++] = order_key(tnear[first], first);
+                for (; mask; mask &= mask - 1) {
+                    const int k = std::countr_zero(mask);
+                    const uint32_t key = order_key(tnear[k], k);
+                    int i = n++;
+                    for (; i > 0 && keys[i - 1] > key; --i) keys[i] = keys[i - 1];
+                    keys[i] = key;
+                }
+                for (int i = n - 1; i > 0; --i) {
+                    const int k = int(keys[i] & 7u);
+                    *top++ = {child_ref(node, k), tnear[k]};
+                }
+                cur = child_ref(node, int(keys[0] & 7u));
             }
-            // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
-            // Tried and measured (issue 12, width 8): a branch-free order instead — two hit
-            // children by one key compare, more by writing each straight to its stack slot by its
-            // rank among the hit keys (one AVX2 compare of signed order keys per child), the same
-            // visit order and counters. It ran 9-10% fewer closest-hit traversal instructions
-            // (callgrind, trace/<model>/wbvh8: bunny 147.2M -> 134.5M, conference 910.4M ->
-            // 816.2M) and 13% fewer simulated conditional mispredicts (bunny 433K -> 378K), but no
-            // time: interleaved, load ~1.5-3, ratio to Embree bunny 1.15-1.22x before vs 1.19-1.22x
-            // after, conference 1.25-1.32x vs 1.24-1.32x. Few nodes have 2+ hit children (bunny:
-            // 77% of nodes with a hit have one, 15% two, 8% more); the rest of the mispredicts are
-            // the inner/leaf, none/one/several-hit and pop branches, which it leaves as they are.
-            uint32_t keys[W];
-            int n = 0;
-            keys[n++] = order_key(tnear[first], first);
-            for (; mask; mask &= mask - 1) {
-                const int k = std::countr_zero(mask);
-                const uint32_t key = order_key(tnear[k], k);
-                int i = n++;
-                for (; i > 0 && keys[i - 1] > key; --i) keys[i] = keys[i - 1];
-                keys[i] = key;
-            }
-            for (int i = n - 1; i > 0; --i) {
-                const int k = int(keys[i] & 7u);
-                *top++ = {node.child[k], node.count[k], tnear[k]};
-            }
-            const int k = int(keys[0] & 7u);
-            child = node.child[k];
-            count = node.count[k];
         }
-        // A leaf: its packets in turn.
-        for (uint32_t done = 0; done < count; done += WbvhTriPacket::kLanes) {
-            const WbvhTriPacket& p = tree.packets[child + done / WbvhTriPacket::kLanes];
-            const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, count - done));
+        // A leaf: its packets in turn, each against the interval shrunk by those before it.
+        for (uint32_t done = 0; done < cur.count; done += WbvhTriPacket::kLanes) {
+            const WbvhTriPacket& p = tree.packets[cur.child + done / WbvhTriPacket::kLanes];
+            const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, cur.count - done));
             c.prim(uint64_t(lanes));
-            const WbvhPacketHits h = wbvh_packet_test<kVector>(p, lanes, wr, tmin, tmax);
+            const WbvhPacketHits h = wbvh_packet_test(p, lanes, r, tmin, tmax);
             if (h.mask == 0) continue;
             if constexpr (kAnyHit) {
                 return true;
@@ -405,10 +420,12 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
     pop:
         for (;;) {
             if (top == bottom) return hit.found();
-            const StackEntry e = *--top;
-            if (e.tnear <= tmax) {
-                child = e.child;
-                count = e.count;
+            --top;
+            if constexpr (kAnyHit) {
+                cur = *top;
+                break;
+            } else if (top->tnear <= tmax) {
+                cur = top->ref;
                 break;
             }
         }
