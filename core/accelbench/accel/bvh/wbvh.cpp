@@ -25,11 +25,12 @@ AcceleratorInfo Wbvh::info() {
                  0,
                  "children per node: 4 (one SSE slab test) or 8 (one AVX slab test)"},
                 // 8: two packets. With collapse=sah the binary build's leaves are small
-                // (traversal_cost 1) and the collapse merges a subtree into one leaf only where
+                // (traversal_cost 2) and the collapse merges a subtree into one leaf only where
                 // its packets are cheaper than a node, so the cap only bounds what it may merge.
                 // Measured (width 8, traversal_cost 1, callgrind instructions of closest-hit
                 // plus any-hit traversal, the 640x480 primary + shadow rays): max_prims 4 ->
-                // 8 -> 16: conference 701.8M -> 684.8M -> 684.8M, bunny 209.2M all three.
+                // 8 -> 16: conference 701.8M -> 684.8M -> 684.8M, bunny 209.2M all three (before
+                // the slots were put in area order).
                 {"max_prims",
                  ParamType::Int,
                  "8",
@@ -51,19 +52,20 @@ AcceleratorInfo Wbvh::info() {
                 // within 1% of the counts and of the time; build / Embree +0.08-0.16 (dragon
                 // 1.05 -> 1.13, conference 0.90 -> 1.06, bunny 0.80 -> 0.96). 64: no better.
                 {"bins", ParamType::Int, "32", {}, 2, 1024, "binned SAH bins along the split axis"},
-                // 1 with collapse=sah: a finer binary tree, whose leaves the SAH collapse
+                // 2 with collapse=sah: a finer binary tree, whose leaves the SAH collapse
                 // merges into packets as the wide cost model says (the binary SAH charges per
                 // triangle, not per packet). Measured (width 8, max_prims 8, packet_cost 2,
-                // traversal instructions as above): traversal_cost 0.5 / 1 / 2: conference
-                // 685.2M / 684.8M / 692.5M, bunny 209.2M / 209.2M / 209.7M; its price is the
-                // binary build (igea: 433M -> 506M instructions from 3 to 1).
-                // collapse=greedy keeps each binary leaf, and there 3 pays, not 1 (a slab test
-                // covers several binary nodes and a packet 4 triangles, so fuller leaves pay;
-                // the bunny, trace / Embree, width 8: 1 -> 1.52x, 2 -> 1.44x, 3 -> 1.36x; build
+                // traversal instructions as above): traversal_cost 1 / 2 / 3: conference
+                // 677.5M / 685.0M / 711.5M, bunny 206.7M / 207.1M / 217.5M, dragon 228.9M /
+                // 231.6M / -; 2, not 1, for the build: igea 615M (1) / 540M (2) instructions,
+                // greedy's 472M (the finer binary tree is most of the difference).
+                // collapse=greedy keeps each binary leaf, and there 3 pays (a slab test covers
+                // several binary nodes and a packet 4 triangles, so fuller leaves pay; the
+                // bunny, trace / Embree, width 8: 1 -> 1.52x, 2 -> 1.44x, 3 -> 1.36x; build
                 // 1.00x -> 0.80x Embree, leaves of 3.4 triangles, not 1.8): set it with greedy.
                 {"traversal_cost",
                  ParamType::Float,
-                 "1",
+                 "2",
                  {},
                  0,
                  1e6,
@@ -82,15 +84,17 @@ AcceleratorInfo Wbvh::info() {
                 // sah, not greedy: measured (callgrind instructions of closest-hit plus any-hit
                 // traversal over the 640x480 primary + shadow rays; greedy with its own best
                 // binary leaves, max_prims 4 and traversal_cost 3, against sah with max_prims 8,
-                // traversal_cost 1, packet_cost 2), width 8: bunny 208.6M -> 209.2M, igea
-                // 226.4M -> 222.3M, conference 719.4M -> 684.8M, dragon 234.2M -> 232.7M; width
-                // 4: 219.4M -> 218.6M, 235.0M -> 232.8M, 836.7M -> 793.5M, 248.6M -> 246.9M.
-                // Wide nodes 24-48% fewer (igea width 8: 30,918 -> 15,964; greedy leaves most
-                // nodes near the leaves part-empty, since it cannot open a leaf), node visits
-                // per ray 1-4% fewer (conference 6.40 -> 6.17), any-hit traversal 13% fewer
-                // instructions on the conference. The price is the build: igea width 8 472M ->
-                // 606M instructions (the finer binary tree 73M, the dynamic program and the
-                // gathering of leaves 61M); build / Embree stays within the goal (make bench).
+                // traversal_cost 2, packet_cost 2; both with slots in area order), width 8:
+                // bunny 207.9M -> 207.1M, igea 220.2M -> 219.7M, conference 709.1M -> 685.0M,
+                // dragon 232.1M -> 231.6M; width 4: 216.6M -> 214.8M, 230.1M -> 231.8M,
+                // 832.4M -> 799.7M, 246.3M -> 246.6M. Wide nodes 16-51% fewer (igea width 8:
+                // 30,918 -> 15,249; greedy leaves the nodes near the leaves part-empty, as it
+                // cannot open a leaf), node visits per ray 1-5% fewer (conference 6.40 ->
+                // 6.11). Timed (accel_bench, 3 repetitions, load 6-9), trace / Embree width 8,
+                // greedy -> sah: dragon 1.53 -> 1.42 and 1.63 -> 1.41 (a smaller tree: 22.8 ->
+                // 14.1 MB of nodes), igea 1.29 -> 1.26, bunny 1.21 -> 1.22, conference 1.20 ->
+                // 1.22 (noise). The price is the build: igea width 8 472M -> 540M instructions;
+                // build / Embree dragon 1.10 (width 8) and 0.97 (width 4), igea 0.91 / 0.86.
                 {"collapse",
                  ParamType::Enum,
                  "sah",
@@ -288,7 +292,7 @@ public:
 private:
     struct Plan {
         float cost[W];      // cost(n, i + 1)
-        uint8_t split[W];   // i > 0: k of distribute(n, i + 1), 0 when cost(n, i) is as low
+        uint8_t split[W] = {};  // i > 0: k of distribute(n, i + 1), 0 when cost(n, i) is as low
         uint8_t node_split = 1;  // k of distribute(n, W): the wide node over n
         bool leaf = false;       // cost(n, 1) is a leaf child
     };

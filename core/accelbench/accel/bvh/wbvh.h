@@ -11,7 +11,7 @@
 // SahCollapse), where a wide node costs one slab test of all its children and a leaf
 // packet_cost per 4-triangle packet — which also decides the leaves: a binary subtree of up
 // to max_prims triangles becomes one leaf when its packets cost less than a wide node over
-// it, so the binary build runs finer (traversal_cost 1) and the collapse merges its leaves.
+// it, so the binary build runs finer (traversal_cost 2) and the collapse merges its leaves.
 // collapse=greedy, as Embree's BVH4/8 builders do: a wide node starts with its binary
 // node's two children and, while it has fewer than W, replaces the child of largest surface
 // area that is not a leaf by that child's two children (the largest box is the one a ray is
