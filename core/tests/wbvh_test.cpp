@@ -40,11 +40,13 @@ std::string describe(const Params& params) {
     return s;
 }
 
-// Both widths at leaf caps of one triangle, one packet, two packets and more.
+// Both widths and both collapses at leaf caps of one triangle, one packet, two packets and more.
 std::vector<Params> variants() {
     std::vector<Params> out;
-    for (const char* width : {"4", "8"})
-        for (const char* max_prims : {"1", "4", "8", "16"}) out.push_back({{"width", width}, {"max_prims", max_prims}});
+    for (const char* collapse : {"greedy", "sah"})
+        for (const char* width : {"4", "8"})
+            for (const char* max_prims : {"1", "4", "8", "16"})
+                out.push_back({{"collapse", collapse}, {"width", width}, {"max_prims", max_prims}});
     return out;
 }
 
@@ -194,9 +196,10 @@ TEST(Wbvh, ReinsertionKeepsEveryAnswer) {
     const Scene soup = random_soup(3000, 3);
     const auto bunny_rays = probe_rays(bunny, 20000, 11);
     const auto soup_rays = probe_rays(soup, 4000, 3);
+    for (const char* collapse : {"greedy", "sah"})
     for (const char* width : {"4", "8"}) {
-        const Params plain = {{"width", width}};
-        const Params reinserted = {{"width", width}, {"reinsertion", "3"}};
+        const Params plain = {{"collapse", collapse}, {"width", width}};
+        const Params reinserted = {{"collapse", collapse}, {"width", width}, {"reinsertion", "3"}};
         auto a = built(bunny, plain);
         auto b = built(bunny, reinserted);
         expect_valid(*b, bunny, describe(reinserted) + " bunny");
@@ -204,7 +207,11 @@ TEST(Wbvh, ReinsertionKeepsEveryAnswer) {
         EXPECT_GT(sb.extra.at("reinsertions"), 0) << describe(reinserted);
         EXPECT_EQ(sa.extra.count("reinsertions"), 0u) << describe(plain);
         EXPECT_LT(sb.extra.at("binary_sah_cost"), sa.extra.at("binary_sah_cost")) << describe(reinserted);
-        EXPECT_EQ(sb.leaves, sa.leaves) << "reinsertion moves subtrees, it keeps the leaves";
+        // The greedy collapse keeps the binary leaves as they are; the SAH collapse may merge
+        // them differently over a different tree.
+        if (std::string(collapse) == "greedy") {
+            EXPECT_EQ(sb.leaves, sa.leaves) << "reinsertion moves subtrees, it keeps the leaves";
+        }
         std::printf("[bunny] %s: binary sah %.3f -> %.3f, wide sah %.3f -> %.3f, %g reinsertions\n",
                     describe(reinserted).c_str(), sa.extra.at("binary_sah_cost"), sb.extra.at("binary_sah_cost"),
                     sa.sah_cost.value(), sb.sah_cost.value(), sb.extra.at("reinsertions"));
@@ -318,7 +325,9 @@ TEST(Wbvh, PassesTheExtremeCaseCatalogue) {
                                           {{"width", "4"}, {"max_prims", "16"}},
                                           {{"width", "8"}, {"kernel", "scalar"}},
                                           {{"width", "8"}, {"max_depth", "1"}},
-                                          {{"width", "8"}, {"reinsertion", "3"}}};
+                                          {{"width", "8"}, {"reinsertion", "3"}},
+                                          {{"width", "8"}, {"collapse", "greedy"}, {"max_prims", "4"}},
+                                          {{"width", "4"}, {"collapse", "sah"}, {"traversal_cost", "0"}}};
     for (const RobustnessCase& c : robustness_catalogue())
         for (const Params& p : settings) {
             const CaseVerdict v = judge_case(c, "wbvh", p);
@@ -331,64 +340,122 @@ TEST(Wbvh, PassesTheExtremeCaseCatalogue) {
 // ---- exact trees and counts on hand-made scenes --------------------------------------------
 
 // Eight triangles along x, one per leaf: the binary tree is the balanced one (bvh_test).
-// Width 8 opens it completely: one node with 8 leaf children. Width 4: the root takes the
-// two 4-triangle subtrees, opens both (the largest first), and each of its 4 children is a
-// node of 2 leaves: 5 nodes.
+// collapse=greedy, width 8 opens it completely: one node with 8 leaf children. Width 4:
+// the root takes the two 4-triangle subtrees, opens both (the largest first), and each of
+// its 4 children is a node of 2 leaves: 5 nodes.
+// collapse=sah by hand: triangle i's box is [i, i + 0.5] x [0, 0.5] x {0}, so a box over m
+// neighbours has area 2 * (m - 0.5) * 0.5 = m - 0.5; a leaf (one triangle, max_prims 1)
+// costs 0.5 * packet_cost 2 = 1, a wide node its area. Pairs P (area 1.5, no leaf of 2):
+// cost(P, 1) = 1.5 + 1 + 1 = 3.5, cost(P, 2) = 2. Quads Q (3.5): cost(Q, 1) = 3.5 + 2 + 2
+// = 7.5, cost(Q, 2) = 7 (two P nodes), cost(Q, 3) = 3.5 + 2 = 5.5, cost(Q, 4) = 4.
+// Width 8: the root's 8 slots hold the 8 leaves, cost(Q, 4) twice — one node, as greedy.
+// Width 4: the root (7.5) distributes its 4 slots as 1 + 3 (7.5 + 5.5 = 13; 2 + 2 gives
+// 7 + 7 = 14): a node over one Q (4 leaves), a node over one P (2 leaves) and 2 leaves —
+// 3 nodes, 10 children, cost 20.5 where greedy's 5 nodes cost 7.5 + 4 * 1.5 + 8 = 21.5.
 TEST(Wbvh, EightSeparatedTriangles) {
     const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
-    auto w8 = built(scene, {{"width", "8"}, {"max_prims", "1"}});
-    expect_valid(*w8, scene, "w8");
-    BuildStats s = w8->build_stats();
-    EXPECT_EQ(s.nodes.value(), 1u);
-    EXPECT_EQ(s.leaves.value(), 8u);
-    EXPECT_EQ(s.max_depth.value(), 1u);
-    EXPECT_EQ(s.extra.at("packets"), 8);
-    EXPECT_EQ(s.extra.at("binary_nodes"), 15);
-    auto w4 = built(scene, {{"width", "4"}, {"max_prims", "1"}});
-    expect_valid(*w4, scene, "w4");
-    s = w4->build_stats();
-    EXPECT_EQ(s.nodes.value(), 5u);
-    EXPECT_EQ(s.leaves.value(), 8u);
-    EXPECT_EQ(s.max_depth.value(), 2u);
-    EXPECT_EQ(s.extra.at("avg_children"), 12.0 / 5.0);  // 4 at the root, 2 at each of the 4 others
+    for (const char* collapse : {"greedy", "sah"}) {
+        auto w8 = built(scene, {{"collapse", collapse}, {"width", "8"}, {"max_prims", "1"}});
+        expect_valid(*w8, scene, "w8");
+        BuildStats s = w8->build_stats();
+        EXPECT_EQ(s.nodes.value(), 1u) << collapse;
+        EXPECT_EQ(s.leaves.value(), 8u) << collapse;
+        EXPECT_EQ(s.max_depth.value(), 1u) << collapse;
+        EXPECT_EQ(s.extra.at("packets"), 8) << collapse;
+        EXPECT_EQ(s.extra.at("binary_nodes"), 15) << collapse;
+        auto w4 = built(scene, {{"collapse", collapse}, {"width", "4"}, {"max_prims", "1"}});
+        expect_valid(*w4, scene, "w4");
+        s = w4->build_stats();
+        const bool greedy = std::string(collapse) == "greedy";
+        EXPECT_EQ(s.nodes.value(), greedy ? 5u : 3u) << collapse;
+        EXPECT_EQ(s.leaves.value(), 8u) << collapse;
+        EXPECT_EQ(s.max_depth.value(), 2u) << collapse;
+        // greedy: 4 at the root, 2 at each of the 4 others; sah: 4 + 4 + 2
+        EXPECT_EQ(s.extra.at("avg_children"), greedy ? 12.0 / 5.0 : 10.0 / 3.0) << collapse;
+    }
 }
 
 // 64 triangles, one per leaf, a balanced binary tree of 6 levels: width 8 takes 3 levels per
-// node (1 + 8 nodes), width 4 two (1 + 4 + 16).
+// node (1 + 8 nodes), width 4 two (1 + 4 + 16). Both collapses: greedy opens level by level;
+// for sah (areas and costs as above), 64 leaves in nodes of 8 need 8 nodes over them, and
+// those of least area are 8 runs of 8 neighbours (7.5 each), which the root's 8 slots then
+// hold; width 4 the same with runs of 4 (16 nodes of 3.5) under runs of 16 (4 of 15.5).
 TEST(Wbvh, SixtyFourSeparatedTriangles) {
     std::vector<float> xs;
     for (int i = 0; i < 64; ++i) xs.push_back(float(i));
     const Scene scene = triangles_along_x(xs);
-    auto w8 = built(scene, {{"width", "8"}, {"max_prims", "1"}});
-    expect_valid(*w8, scene, "w8");
-    EXPECT_EQ(w8->build_stats().nodes.value(), 9u);
-    EXPECT_EQ(w8->build_stats().max_depth.value(), 2u);
-    auto w4 = built(scene, {{"width", "4"}, {"max_prims", "1"}});
-    expect_valid(*w4, scene, "w4");
-    EXPECT_EQ(w4->build_stats().nodes.value(), 21u);
-    EXPECT_EQ(w4->build_stats().max_depth.value(), 3u);
+    for (const char* collapse : {"greedy", "sah"}) {
+        auto w8 = built(scene, {{"collapse", collapse}, {"width", "8"}, {"max_prims", "1"}});
+        expect_valid(*w8, scene, "w8");
+        EXPECT_EQ(w8->build_stats().nodes.value(), 9u) << collapse;
+        EXPECT_EQ(w8->build_stats().max_depth.value(), 2u) << collapse;
+        auto w4 = built(scene, {{"collapse", collapse}, {"width", "4"}, {"max_prims", "1"}});
+        expect_valid(*w4, scene, "w4");
+        EXPECT_EQ(w4->build_stats().nodes.value(), 21u) << collapse;
+        EXPECT_EQ(w4->build_stats().max_depth.value(), 3u) << collapse;
 
-    // A ray straight down onto triangle 0 enters the root (8 boxes tested, one hit: the
-    // subtree of triangles 0..7) and that node (8 boxes, one hit: triangle 0's leaf), and
-    // tests one triangle. Width 4: root, 16-triangle node, 4-triangle node, 4 boxes each.
+        // A ray straight down onto triangle 0 enters the root (8 boxes tested, one hit: the
+        // subtree of triangles 0..7) and that node (8 boxes, one hit: triangle 0's leaf), and
+        // tests one triangle. Width 4: root, 16-triangle node, 4-triangle node, 4 boxes each.
+        const Ray ray{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity};
+        for (const char* kernel : {"simd", "scalar"}) {
+            auto a = built(scene, {{"collapse", collapse}, {"width", "8"}, {"max_prims", "1"}, {"kernel", kernel}});
+            std::vector<Hit> hit(1);
+            std::vector<RayStats> st(1);
+            a->closest_hits({&ray, 1}, hit, st);
+            EXPECT_EQ(hit[0].prim, 0u);
+            EXPECT_FLOAT_EQ(hit[0].t, 1.0f);
+            EXPECT_EQ(st[0].node_visits, 2u) << kernel << " " << collapse;
+            EXPECT_EQ(st[0].box_tests, 16u) << kernel << " " << collapse;
+            EXPECT_EQ(st[0].prim_tests, 1u) << kernel << " " << collapse;
+            auto b = built(scene, {{"collapse", collapse}, {"width", "4"}, {"max_prims", "1"}, {"kernel", kernel}});
+            std::vector<RayStats> st4(1);
+            b->closest_hits({&ray, 1}, hit, st4);
+            EXPECT_EQ(hit[0].prim, 0u);
+            EXPECT_EQ(st4[0].node_visits, 3u) << kernel << " " << collapse;
+            EXPECT_EQ(st4[0].box_tests, 12u) << kernel << " " << collapse;
+            EXPECT_EQ(st4[0].prim_tests, 1u) << kernel << " " << collapse;
+        }
+    }
+}
+
+// collapse=sah merges binary leaves into packets when a wide node over them costs more.
+// Four clusters of 4 triangles (x = 0..3, 100..103, 200..203, 300..303), traversal_cost 0:
+// the binary build splits down to single triangles. By hand (areas as above, packet_cost 2,
+// max_prims 4): a cluster C (area 3.5) as one leaf costs 3.5 * 2 = 7, as a node 3.5 + 4 * 1
+// = 7.5; a pair of clusters (area 103.5) as a node costs more than two cluster leaves (14),
+// so the width-4 root holds the 4 clusters as leaves of one packet each: 1 node, 4 leaves.
+// Greedy keeps the single-triangle leaves: the root opens down to the 4 clusters, each a
+// node of 4 leaves: 5 nodes, 16 leaves. A ray onto triangle 0: sah enters the root (4
+// boxes) and tests the packet of cluster 0 (4 triangles); greedy enters the root and
+// cluster 0's node (4 + 4 boxes) and tests triangle 0 alone.
+TEST(Wbvh, SahCollapseMergesLeavesIntoPackets) {
+    const Scene scene = triangles_along_x({0, 1, 2, 3, 100, 101, 102, 103, 200, 201, 202, 203, 300, 301, 302, 303});
     const Ray ray{{0.1f, 0.1f, 1}, 0, {0, 0, -1}, kInfinity};
-    for (const char* kernel : {"simd", "scalar"}) {
-        auto a = built(scene, {{"width", "8"}, {"max_prims", "1"}, {"kernel", kernel}});
-        std::vector<Hit> hit(1);
-        std::vector<RayStats> st(1);
-        a->closest_hits({&ray, 1}, hit, st);
-        EXPECT_EQ(hit[0].prim, 0u);
-        EXPECT_FLOAT_EQ(hit[0].t, 1.0f);
-        EXPECT_EQ(st[0].node_visits, 2u) << kernel;
-        EXPECT_EQ(st[0].box_tests, 16u) << kernel;
-        EXPECT_EQ(st[0].prim_tests, 1u) << kernel;
-        auto b = built(scene, {{"width", "4"}, {"max_prims", "1"}, {"kernel", kernel}});
-        std::vector<RayStats> st4(1);
-        b->closest_hits({&ray, 1}, hit, st4);
-        EXPECT_EQ(hit[0].prim, 0u);
-        EXPECT_EQ(st4[0].node_visits, 3u) << kernel;
-        EXPECT_EQ(st4[0].box_tests, 12u) << kernel;
-        EXPECT_EQ(st4[0].prim_tests, 1u) << kernel;
+    for (const char* collapse : {"greedy", "sah"}) {
+        const bool greedy = std::string(collapse) == "greedy";
+        for (const char* kernel : {"simd", "scalar"}) {
+            auto w = built(scene, {{"collapse", collapse},
+                                   {"width", "4"},
+                                   {"max_prims", "4"},
+                                   {"traversal_cost", "0"},
+                                   {"packet_cost", "2"},
+                                   {"kernel", kernel}});
+            expect_valid(*w, scene, collapse);
+            const BuildStats s = w->build_stats();
+            EXPECT_EQ(s.extra.at("binary_nodes"), 31) << collapse;  // 16 single-triangle leaves
+            EXPECT_EQ(s.nodes.value(), greedy ? 5u : 1u) << collapse;
+            EXPECT_EQ(s.leaves.value(), greedy ? 16u : 4u) << collapse;
+            EXPECT_EQ(s.extra.at("packets"), greedy ? 16 : 4) << collapse;
+            std::vector<Hit> hit(1);
+            std::vector<RayStats> st(1);
+            w->closest_hits({&ray, 1}, hit, st);
+            EXPECT_EQ(hit[0].prim, 0u) << collapse;
+            EXPECT_FLOAT_EQ(hit[0].t, 1.0f);
+            EXPECT_EQ(st[0].node_visits, greedy ? 2u : 1u) << collapse << " " << kernel;
+            EXPECT_EQ(st[0].box_tests, greedy ? 8u : 4u) << collapse << " " << kernel;
+            EXPECT_EQ(st[0].prim_tests, greedy ? 1u : 4u) << collapse << " " << kernel;
+        }
     }
 }
 
@@ -474,11 +541,16 @@ TEST(Wbvh, ParametersAreValidated) {
     make_accelerator("wbvh", {}, &resolved);
     const Wbvh::Config c = Wbvh::Config::from(resolved);
     EXPECT_EQ(c.width, 8u);
-    EXPECT_EQ(c.max_prims, 4u);
+    EXPECT_EQ(c.max_prims, 8u);
+    EXPECT_EQ(c.traversal_cost, 2.0);
+    EXPECT_EQ(c.collapse, Wbvh::Collapse::sah);
+    EXPECT_EQ(c.packet_cost, 2.0);
     EXPECT_EQ(c.kernel, Wbvh::Kernel::simd);
     EXPECT_EQ(c.reinsertion, 0u);
     EXPECT_EQ(c.bins, 32u);
     EXPECT_THROW(make_accelerator("wbvh", {{"reinsertion", "-1"}}), ParamError);
+    EXPECT_THROW(make_accelerator("wbvh", {{"collapse", "optimal"}}), ParamError);
+    EXPECT_THROW(make_accelerator("wbvh", {{"packet_cost", "0"}}), ParamError);
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 #include <bit>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -23,11 +24,16 @@ AcceleratorInfo Wbvh::info() {
                  0,
                  0,
                  "children per node: 4 (one SSE slab test) or 8 (one AVX slab test)"},
-                // 4: one packet per leaf. The binary SAH stops splitting earlier when a leaf is
-                // cheaper, so most leaves hold fewer.
+                // 8: two packets. With collapse=sah the binary build's leaves are small
+                // (traversal_cost 2) and the collapse merges a subtree into one leaf only where
+                // its packets are cheaper than a node, so the cap only bounds what it may merge.
+                // Measured (width 8, traversal_cost 1, callgrind instructions of closest-hit
+                // plus any-hit traversal, the 640x480 primary + shadow rays): max_prims 4 ->
+                // 8 -> 16: conference 701.8M -> 684.8M -> 684.8M, bunny 209.2M all three (before
+                // the slots were put in area order).
                 {"max_prims",
                  ParamType::Int,
-                 "4",
+                 "8",
                  {},
                  1,
                  BvhNode::kMaxLeafPrims,
@@ -46,13 +52,20 @@ AcceleratorInfo Wbvh::info() {
                 // within 1% of the counts and of the time; build / Embree +0.08-0.16 (dragon
                 // 1.05 -> 1.13, conference 0.90 -> 1.06, bunny 0.80 -> 0.96). 64: no better.
                 {"bins", ParamType::Int, "32", {}, 2, 1024, "binned SAH bins along the split axis"},
-                // 3, not the binary BVH's 1: a wide node's slab test covers several binary
-                // nodes and a packet test 4 triangles, so fuller leaves pay. Measured on the
-                // bunny in one accel_bench run (trace / Embree, width 8): 1 -> 1.52x, 2 -> 1.44x,
-                // 3 -> 1.36x; build 1.00x -> 0.80x Embree (leaves of 3.4 triangles, not 1.8).
+                // 2 with collapse=sah: a finer binary tree, whose leaves the SAH collapse
+                // merges into packets as the wide cost model says (the binary SAH charges per
+                // triangle, not per packet). Measured (width 8, max_prims 8, packet_cost 2,
+                // traversal instructions as above): traversal_cost 1 / 2 / 3: conference
+                // 677.5M / 685.0M / 711.5M, bunny 206.7M / 207.1M / 217.5M, dragon 228.9M /
+                // 231.6M / -; 2, not 1, for the build: igea 615M (1) / 540M (2) instructions,
+                // greedy's 472M (the finer binary tree is most of the difference).
+                // collapse=greedy keeps each binary leaf, and there 3 pays (a slab test covers
+                // several binary nodes and a packet 4 triangles, so fuller leaves pay; the
+                // bunny, trace / Embree, width 8: 1 -> 1.52x, 2 -> 1.44x, 3 -> 1.36x; build
+                // 1.00x -> 0.80x Embree, leaves of 3.4 triangles, not 1.8): set it with greedy.
                 {"traversal_cost",
                  ParamType::Float,
-                 "3",
+                 "2",
                  {},
                  0,
                  1e6,
@@ -68,6 +81,41 @@ AcceleratorInfo Wbvh::info() {
                  100,
                  "passes of the reinsertion optimizer on the binary tree before the collapse (Meister & Bittner "
                  "2018; 0 = off): lower SAH cost for a longer build, the same answers"},
+                // sah, not greedy: measured (callgrind instructions of closest-hit plus any-hit
+                // traversal over the 640x480 primary + shadow rays; greedy with its own best
+                // binary leaves, max_prims 4 and traversal_cost 3, against sah with max_prims 8,
+                // traversal_cost 2, packet_cost 2; both with slots in area order), width 8:
+                // bunny 207.9M -> 207.1M, igea 220.2M -> 219.7M, conference 709.1M -> 685.0M,
+                // dragon 232.1M -> 231.6M; width 4: 216.6M -> 214.8M, 230.1M -> 231.8M,
+                // 832.4M -> 799.7M, 246.3M -> 246.6M. Wide nodes 16-51% fewer (igea width 8:
+                // 30,918 -> 15,249; greedy leaves the nodes near the leaves part-empty, as it
+                // cannot open a leaf), node visits per ray 1-5% fewer (conference 6.40 ->
+                // 6.11). Timed (accel_bench, 3 repetitions, load 6-9), trace / Embree width 8,
+                // greedy -> sah: dragon 1.53 -> 1.42 and 1.63 -> 1.41 (a smaller tree: 22.8 ->
+                // 14.1 MB of nodes), igea 1.29 -> 1.26, bunny 1.21 -> 1.22, conference 1.20 ->
+                // 1.22 (noise). The price is the build: igea width 8 472M -> 540M instructions;
+                // build / Embree dragon 1.10 (width 8) and 0.97 (width 4), igea 0.91 / 0.86.
+                {"collapse",
+                 ParamType::Enum,
+                 "sah",
+                 {"greedy", "sah"},
+                 0,
+                 0,
+                 "how the binary tree becomes wide nodes: greedy (Embree: open the largest child until W; each binary "
+                 "leaf a leaf; best with max_prims=4 traversal_cost=3) or sah (Ylitie et al. 2017: the least wide SAH "
+                 "cost by dynamic programming, which also merges binary subtrees into leaves of up to max_prims)"},
+                // 2, the middle of the flat range: measured (width 8,
+                // max_prims 8, traversal_cost 1, traversal instructions as above) 0.5 / 1.5 / 2
+                // / 3 / 4: conference 689.9M / 685.0M / 684.8M / 684.9M / 684.9M, bunny 214.0M /
+                // 209.3M / 209.2M / 209.1M / 209.2M — flat from 1.5 on.
+                {"packet_cost",
+                 ParamType::Float,
+                 "2",
+                 {},
+                 1e-6,
+                 1e6,
+                 "collapse=sah: cost of one 4-triangle packet test relative to one wide node (one slab test of all "
+                 "its children)"},
                 {"kernel",
                  ParamType::Enum,
                  "simd",
@@ -89,6 +137,8 @@ Wbvh::Config Wbvh::Config::from(const ParamSet& params) {
     c.traversal_cost = params.get_float("traversal_cost");
     c.isect_cost = params.get_float("isect_cost");
     c.reinsertion = uint32_t(params.get_int("reinsertion"));
+    c.collapse = params.get_enum("collapse") == "greedy" ? Collapse::greedy : Collapse::sah;
+    c.packet_cost = params.get_float("packet_cost");
     c.kernel = params.get_enum("kernel") == "scalar" ? Kernel::scalar : Kernel::simd;
     return c;
 }
@@ -115,6 +165,193 @@ ParamSet binary_params(const Wbvh::Config& c) {
 
 Wbvh::Wbvh(const ParamSet& params) : config_(Config::from(params)), binary_(binary_params(config_)) {}
 
+namespace {
+
+// A child slot of a wide node as a collapse chooses it: the binary node whose subtree it
+// covers, and whether that subtree becomes one leaf child (its triangles in packets) or an
+// inner child (a wide node of its own, chosen the same way).
+struct CollapseChild {
+    uint32_t binary;
+    bool leaf;
+};
+
+// collapse=greedy (Embree's BVH4/8 builders): the binary node's two children, then the
+// inner child of largest surface area opened until W. Leaf children are the binary leaves.
+template <int W>
+int greedy_children(const FlatBvh& binary, uint32_t node, CollapseChild out[W]) {
+    int n = 0;
+    const BvhNode& b = binary.nodes[node];
+    if (b.is_leaf()) {
+        out[n++] = {node, true};  // the whole tree is one leaf: a root with one leaf child
+        return n;
+    }
+    out[n++] = {node + 1, false};
+    out[n++] = {b.second_child(), false};
+    while (n < W) {
+        int open = -1;
+        float open_area = -1.0f;
+        for (int k = 0; k < n; ++k) {
+            const BvhNode& c = binary.nodes[out[k].binary];
+            if (c.is_leaf()) continue;
+            const float area = c.bounds.area();
+            if (area > open_area) {
+                open = k;
+                open_area = area;
+            }
+        }
+        if (open < 0) break;
+        const uint32_t opened = out[open].binary;
+        out[open].binary = opened + 1;
+        out[n++] = {binary.nodes[opened].second_child(), false};
+    }
+    for (int k = 0; k < n; ++k) out[k].leaf = binary.nodes[out[k].binary].is_leaf();
+    return n;
+}
+
+// collapse=sah: the collapse of least SAH cost in wide terms, by dynamic programming over
+// the binary tree (Ylitie, Karras, Laine 2017, section 3.1). For a binary node n and
+// i = 1..W, cost(n, i) is the least cost of covering n's subtree by at most i child slots
+// of the wide node above it:
+//   cost(n, 1)  = min(leaf(n), A(n) * 1 + distribute(n, W))  a leaf child, or a wide node
+//   cost(n, i)  = min(cost(n, i - 1), distribute(n, i))
+//   distribute(n, j) = min over 1 <= k < j of cost(left, k) + cost(right, j - k)
+//   leaf(n)     = A(n) * packet_cost * ceil(triangles / 4)   (max_prims triangles at most)
+// with A the surface area (the probability of a ray entering the box, up to the root's
+// area, which is the same for all collapses), a wide node costing 1 — one slab test of all
+// its children — and a leaf its packet tests. A binary leaf is always a leaf; an inner node
+// becomes one when its triangles in packets cost less than a wide node over them, so the
+// collapse also merges small binary leaves into fuller packets. O(N * W^2) for N binary nodes.
+template <int W>
+class SahCollapse {
+public:
+    SahCollapse(const FlatBvh& binary, uint32_t max_prims, double packet_cost)
+        : binary_(binary), plan_(binary.nodes.size()) {
+        std::vector<uint32_t> prims(binary.nodes.size());
+        float root_distribute = kInfinity;  // distribute(root, W)
+        const auto leaf_cost = [&](float area, uint32_t n) {
+            return area * float(packet_cost) * float((n + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes);
+        };
+        // Children are stored after their parent (depth-first): one pass from the back.
+        for (size_t m = binary.nodes.size(); m-- > 0;) {
+            const BvhNode& b = binary.nodes[m];
+            Plan& p = plan_[m];
+            const float area = b.bounds.area();
+            if (b.is_leaf()) {
+                prims[m] = b.prim_count();
+                for (int i = 0; i < W; ++i) p.cost[i] = leaf_cost(area, prims[m]);
+                p.leaf = true;
+                continue;
+            }
+            const uint32_t l = uint32_t(m) + 1, r = b.second_child();
+            prims[m] = prims[l] + prims[r];
+            const Plan &pl = plan_[l], &pr = plan_[r];
+            float dist[W + 1];
+            uint8_t split[W + 1];
+            for (int j = 2; j <= W; ++j) {
+                dist[j] = kInfinity;
+                split[j] = 1;
+                for (int k = 1; k < j; ++k) {  // branch-free (minss and cmov): the outcome is data, not a pattern
+                    const float c = pl.cost[k - 1] + pr.cost[j - k - 1];
+                    const bool lower = c < dist[j];
+                    dist[j] = lower ? c : dist[j];
+                    split[j] = lower ? uint8_t(k) : split[j];
+                }
+            }
+            p.node_split = split[W];
+            if (m == 0) root_distribute = dist[W];
+            const float node = area + dist[W];
+            const float leaf = prims[m] <= max_prims ? leaf_cost(area, prims[m]) : kInfinity;
+            p.leaf = prims[m] <= max_prims && leaf <= node;  // a tie: the leaf, one node fewer
+            p.cost[0] = p.leaf ? leaf : node;
+            p.split[0] = 0;
+            for (int i = 2; i <= W; ++i) {
+                const bool fewer = !(dist[i] < p.cost[i - 2]);  // fewer slots are as cheap (or NaN)
+                p.cost[i - 1] = fewer ? p.cost[i - 2] : dist[i];
+                p.split[i - 1] = fewer ? 0 : split[i];
+            }
+        }
+        // The root is a wide node whatever its cost: one leaf child under it when that is
+        // cheaper than distributing the tree over its W slots.
+        root_is_leaf_ = binary.nodes[0].is_leaf() ||
+                        (prims[0] <= max_prims && leaf_cost(binary.nodes[0].bounds.area(), prims[0]) <= root_distribute);
+    }
+
+    // The children of the wide node over binary node `node` (the root or an inner child).
+    int children(uint32_t node, CollapseChild out[W]) const {
+        int n = 0;
+        if (node == 0 && root_is_leaf_) {
+            out[n++] = {0, true};
+            return n;
+        }
+        const uint32_t k = plan_[node].node_split;
+        gather(node + 1, k, out, n);
+        gather(binary_.nodes[node].second_child(), W - k, out, n);
+        return n;
+    }
+
+private:
+    struct Plan {
+        float cost[W];      // cost(n, i + 1)
+        uint8_t split[W] = {};  // i > 0: k of distribute(n, i + 1), 0 when cost(n, i) is as low
+        uint8_t node_split = 1;  // k of distribute(n, W): the wide node over n
+        bool leaf = false;       // cost(n, 1) is a leaf child
+    };
+
+    // The children of at most `slots` slots covering binary node m's subtree.
+    void gather(uint32_t m, uint32_t slots, CollapseChild out[W], int& n) const {
+        const Plan& p = plan_[m];
+        while (slots > 1 && p.split[slots - 1] == 0) --slots;
+        if (slots == 1) {
+            out[n++] = {m, p.leaf};
+            return;
+        }
+        const uint32_t k = p.split[slots - 1];
+        gather(m + 1, k, out, n);
+        gather(binary_.nodes[m].second_child(), slots - k, out, n);
+    }
+
+    const FlatBvh& binary_;
+    std::vector<Plan> plan_;
+    bool root_is_leaf_ = false;
+};
+
+// A leaf child over binary node m: the triangles of its subtree's leaves, left to right, in
+// ceil(n / 4) packets. Returns the number of triangles.
+uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, std::vector<WbvhTriPacket>& packets,
+                   std::vector<uint32_t>& slots, std::vector<uint32_t>& stack) {
+    slots.clear();
+    stack.assign(1, m);
+    while (!stack.empty()) {
+        const uint32_t i = stack.back();
+        stack.pop_back();
+        const BvhNode& b = binary.nodes[i];
+        if (b.is_leaf()) {
+            for (uint32_t s = 0; s < b.prim_count(); ++s) slots.push_back(b.first_prim() + s);
+        } else {
+            stack.push_back(b.second_child());
+            stack.push_back(i + 1);
+        }
+    }
+    const uint32_t count = uint32_t(slots.size());
+    for (uint32_t first = 0; first < count; first += WbvhTriPacket::kLanes) {
+        WbvhTriPacket p{};
+        for (int lane = 0; lane < WbvhTriPacket::kLanes; ++lane) {
+            p.prim[lane] = kInvalidId;
+            if (first + uint32_t(lane) >= count) continue;
+            const uint32_t slot = slots[first + uint32_t(lane)];
+            const LeafTriangle& tri = binary.triangles[slot];
+            const Vec3 v[3] = {tri.p0, tri.p1, tri.p2};
+            for (int i = 0; i < 3; ++i)
+                for (int a = 0; a < 3; ++a) p.v[i][a][lane] = v[i][a];
+            p.prim[lane] = binary.prim_ids[slot];
+        }
+        packets.push_back(p);
+    }
+    return count;
+}
+
+}  // namespace
+
 // The collapse (see wbvh.h). Nodes are emitted depth-first: a node's inner children are
 // allocated together when it is written, then built in turn.
 template <int W>
@@ -126,45 +363,42 @@ void Wbvh::collapse(const FlatBvh& binary, WbvhTree<W>& out) {
     if (binary.empty()) return;
     out.nodes.reserve(binary.nodes.size() / 2 + 1);  // each wide node replaces at least one binary inner node
     out.packets.reserve(binary.prim_ids.size() / 2 + 1);
+    std::optional<SahCollapse<W>> sah;
+    if (config_.collapse == Collapse::sah) sah.emplace(binary, config_.max_prims, config_.packet_cost);
 
     struct Todo {
-        uint32_t binary_node;  // inner binary node whose subtree the wide node covers (or a lone leaf root)
+        uint32_t binary_node;  // binary node whose subtree the wide node covers
         uint32_t wide_node;
         uint32_t depth;
     };
     std::vector<Todo> todo;
+    std::vector<uint32_t> slots, stack;
     out.nodes.emplace_back();
     todo.push_back({0, 0, 0});
     while (!todo.empty()) {
         const Todo t = todo.back();
         todo.pop_back();
         out.depth = std::max(out.depth, t.depth);
-        // The children: the binary node's two, then the largest inner child opened until W.
-        uint32_t kids[W];
-        int n = 0;
-        const BvhNode& b = binary.nodes[t.binary_node];
-        if (b.is_leaf()) {
-            kids[n++] = t.binary_node;  // the whole tree is one leaf: a root with one leaf child
-        } else {
-            kids[n++] = t.binary_node + 1;
-            kids[n++] = b.second_child();
-        }
-        while (n < W) {
-            int open = -1;
-            float open_area = -1.0f;
-            for (int k = 0; k < n; ++k) {
-                const BvhNode& c = binary.nodes[kids[k]];
-                if (c.is_leaf()) continue;
-                const float area = c.bounds.area();
-                if (area > open_area) {
-                    open = k;
-                    open_area = area;
-                }
+        CollapseChild kids[W];
+        const int n = sah ? sah->children(t.binary_node, kids) : greedy_children<W>(binary, t.binary_node, kids);
+        // Slots by decreasing surface area. The closest-hit traversal orders hit children by
+        // distance, whatever their slots; the any-hit one enters the first hit slot, so there
+        // the likeliest box to hold an occluder goes first. Measured (sah collapse, counts
+        // over the 640x480 primary + shadow rays, width 8): prim tests per ray bunny 1.91 ->
+        // 1.84, conference 5.20 -> 5.07, igea 2.06 -> 1.96, dragon 2.02 -> 1.93, node visits
+        // 0.3-1% fewer. Leaves first, or inner children first, then by area: no better.
+        // (Insertion sort, stable: std::stable_sort's buffer cost 35M instructions on igea.)
+        float area[W];
+        for (int k = 0; k < n; ++k) {
+            const CollapseChild c = kids[k];
+            const float a = binary.nodes[c.binary].bounds.area();
+            int i = k;
+            for (; i > 0 && area[i - 1] < a; --i) {
+                kids[i] = kids[i - 1];
+                area[i] = area[i - 1];
             }
-            if (open < 0) break;
-            const uint32_t opened = kids[open];
-            kids[open] = opened + 1;
-            kids[n++] = binary.nodes[opened].second_child();
+            kids[i] = c;
+            area[i] = a;
         }
         WbvhNode<W> node;
         for (int a = 0; a < 3; ++a)
@@ -177,33 +411,19 @@ void Wbvh::collapse(const FlatBvh& binary, WbvhTree<W>& out) {
             node.count[k] = 0;
         }
         for (int k = 0; k < n; ++k) {
-            const BvhNode& c = binary.nodes[kids[k]];
+            const BvhNode& c = binary.nodes[kids[k].binary];
             for (int a = 0; a < 3; ++a) {
                 node.planes[a][k] = c.bounds.lower[a];
                 node.planes[3 + a][k] = c.bounds.upper[a];
             }
-            if (c.is_leaf()) {
+            if (kids[k].leaf) {
                 ++out.leaves;
                 node.child[k] = uint32_t(out.packets.size());
-                node.count[k] = c.prim_count();
-                for (uint32_t first = 0; first < c.prim_count(); first += WbvhTriPacket::kLanes) {
-                    WbvhTriPacket p{};
-                    for (int lane = 0; lane < WbvhTriPacket::kLanes; ++lane) {
-                        p.prim[lane] = kInvalidId;
-                        if (first + uint32_t(lane) >= c.prim_count()) continue;
-                        const uint32_t slot = c.first_prim() + first + uint32_t(lane);
-                        const LeafTriangle& tri = binary.triangles[slot];
-                        const Vec3 v[3] = {tri.p0, tri.p1, tri.p2};
-                        for (int i = 0; i < 3; ++i)
-                            for (int a = 0; a < 3; ++a) p.v[i][a][lane] = v[i][a];
-                        p.prim[lane] = binary.prim_ids[slot];
-                    }
-                    out.packets.push_back(p);
-                }
+                node.count[k] = emit_leaf(binary, kids[k].binary, out.packets, slots, stack);
             } else {
                 node.child[k] = uint32_t(out.nodes.size());
                 out.nodes.emplace_back();
-                todo.push_back({kids[k], node.child[k], t.depth + 1});
+                todo.push_back({kids[k].binary, node.child[k], t.depth + 1});
             }
         }
         out.nodes[t.wide_node] = node;

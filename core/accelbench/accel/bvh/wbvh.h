@@ -6,12 +6,17 @@
 //
 // Build: the binned-SAH binary BVH (bvh.h with split=sah, the top-down builder of
 // bvh_top_down.h, leaves of up to max_prims triangles) collapsed into a W-wide tree from the
-// root down, as Embree's BVH4/8 builders do: a wide node starts with its binary node's two
-// children and, while it has fewer than W, replaces the child of largest surface area that
-// is not a leaf by that child's two children. The largest box is the one a ray is most
-// likely to enter (the SAH's probability), so opening it removes the most expected node
-// visits. (Ylitie et al.'s optimal collapse by dynamic programming over the SAH is not
-// done.) Each binary leaf becomes one leaf child: its triangles in ceil(n / 4) packets.
+// root down. collapse=sah (the default): the collapse of least SAH cost in wide terms, by
+// dynamic programming over the binary tree (Ylitie et al. 2017, section 3.1; wbvh.cpp,
+// SahCollapse), where a wide node costs one slab test of all its children and a leaf
+// packet_cost per 4-triangle packet — which also decides the leaves: a binary subtree of up
+// to max_prims triangles becomes one leaf when its packets cost less than a wide node over
+// it, so the binary build runs finer (traversal_cost 2) and the collapse merges its leaves.
+// collapse=greedy, as Embree's BVH4/8 builders do: a wide node starts with its binary
+// node's two children and, while it has fewer than W, replaces the child of largest surface
+// area that is not a leaf by that child's two children (the largest box is the one a ray is
+// most likely to enter); each binary leaf becomes one leaf child. Either way a leaf's
+// triangles are ceil(n / 4) packets.
 // With reinsertion=N the binary tree is first optimised by N passes of the reinsertion
 // optimizer (bvh_reinsertion.h, Meister & Bittner 2018): a binary tree of lower SAH cost,
 // whose collapse has fewer wide nodes on a ray's path (the conference's primary rays: 40%
@@ -73,6 +78,7 @@ WbvhMetrics measure_wbvh(const WbvhTree<W>& tree);
 class Wbvh final : public AcceleratorBase<Wbvh> {
 public:
     enum class Kernel { simd, scalar };
+    enum class Collapse { greedy, sah };
 
     // The parameters, as declared in info() (defaults there only).
     struct Config {
@@ -83,6 +89,8 @@ public:
         double traversal_cost = 0;  // SAH constants of the binary build
         double isect_cost = 0;
         uint32_t reinsertion = 0;      // reinsertion passes on the binary tree before the collapse
+        Collapse collapse = Collapse::sah;  // how binary nodes are grouped into wide nodes and leaves
+        double packet_cost = 0;             // collapse=sah: cost of one packet test, a wide node's = 1
         Kernel kernel = Kernel::simd;  // vector tests, or the scalar ones they must equal
 
         static Config from(const ParamSet& params);
