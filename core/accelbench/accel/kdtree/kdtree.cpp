@@ -738,6 +738,19 @@ struct NoMailbox {
     static constexpr bool seen(uint32_t) { return false; }
 };
 
+// Measured and not adopted (session 5): leaves of 2+ references testing their triangles 4
+// at a time in one SSE watertight test (the wide BVH's packet test moved to a shared
+// header; packets at half the leaf's prim_indices_ offset, answers and prim_tests
+// identical to this loop; branch s5-raysets, 2c6016a). Callgrind, 640x480 primary + shadow rays, closest_hits /
+// any_hits instructions: bunny 263.8M / 210.4M -> 244.5M / 175.8M, conference 1290.6M /
+// 825.6M -> 1044.0M / 688.1M. But the packets copy a triangle per reference (up to 80 bytes
+// against the 4-byte index; the bunny's tree holds 6.8 references per triangle, the
+// conference's 14.4): bunny memory_bytes 9.05 -> 42.4 MB, build +6% instructions (60M of
+// packing), and the extreme-case catalogue's memory bound (4096 bytes per triangle) failed
+// on overlapping soups. Trace / Embree, interleaved, load 6-9: bunny 3.81, 3.71 -> 3.46,
+// 3.48; conference 3.17 -> 3.26 (all references packed) and 3.44, 3.35 -> 4.06, 4.01 with
+// packets only within 1024 bytes per triangle (the conference then falls back to this loop,
+// which as a second template variant cost +5% instructions: 1357M / 857M).
 template <bool kMailbox, class C>
 void KdTree::intersect_with(const Ray& ray, Hit& hit, C& counters) const {
     const WatertightRay wr(ray);
