@@ -363,11 +363,19 @@ TEST(RaySets, SecondaryRaysNeverFindTheSurfaceTheyLeave) {
         std::vector<Ray> rays;
         std::vector<Leaving> from;
         size_t outward_starts = 0;
+        // convex() per component once: it is quadratic in the component's size, and asked
+        // for every outside ray (the sanitized build spent minutes on it).
+        std::map<uint32_t, bool> convex_component;
+        auto is_convex = [&](uint32_t component) {
+            auto [it, inserted] = convex_component.try_emplace(component, false);
+            if (inserted) it->second = convex(scene, comp, component);
+            return it->second;
+        };
         for (size_t i = 0; i < incoming.size(); ++i) {
             if (!first[i].found()) continue;
             const auto n = facing_normal(scene, first[i], incoming[i].dir);
             if (!n) continue;
-            const bool outward = i % 2 == 1 && convex(scene, comp, comp[first[i].prim]);
+            const bool outward = i % 2 == 1 && is_convex(comp[first[i].prim]);
             outward_starts += outward;
             const Vec3 org = offset_ray_origin(hit_point(scene, first[i]), *n, size);
             SplitMix64 rng(mix_seed(uint64_t(i), 14));
