@@ -10,8 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <random>
 #include <map>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -197,36 +197,37 @@ TEST(Wbvh, ReinsertionKeepsEveryAnswer) {
     const auto bunny_rays = probe_rays(bunny, 20000, 11);
     const auto soup_rays = probe_rays(soup, 4000, 3);
     for (const char* collapse : {"greedy", "sah"})
-    for (const char* width : {"4", "8"}) {
-        const Params plain = {{"collapse", collapse}, {"width", width}};
-        const Params reinserted = {{"collapse", collapse}, {"width", width}, {"reinsertion", "3"}};
-        auto a = built(bunny, plain);
-        auto b = built(bunny, reinserted);
-        expect_valid(*b, bunny, describe(reinserted) + " bunny");
-        const BuildStats sa = a->build_stats(), sb = b->build_stats();
-        EXPECT_GT(sb.extra.at("reinsertions"), 0) << describe(reinserted);
-        EXPECT_EQ(sa.extra.count("reinsertions"), 0u) << describe(plain);
-        EXPECT_LT(sb.extra.at("binary_sah_cost"), sa.extra.at("binary_sah_cost")) << describe(reinserted);
-        // The greedy collapse keeps the binary leaves as they are; the SAH collapse may merge
-        // them differently over a different tree.
-        if (std::string(collapse) == "greedy") {
-            EXPECT_EQ(sb.leaves, sa.leaves) << "reinsertion moves subtrees, it keeps the leaves";
+        for (const char* width : {"4", "8"}) {
+            const Params plain = {{"collapse", collapse}, {"width", width}};
+            const Params reinserted = {{"collapse", collapse}, {"width", width}, {"reinsertion", "3"}};
+            auto a = built(bunny, plain);
+            auto b = built(bunny, reinserted);
+            expect_valid(*b, bunny, describe(reinserted) + " bunny");
+            const BuildStats sa = a->build_stats(), sb = b->build_stats();
+            EXPECT_GT(sb.extra.at("reinsertions"), 0) << describe(reinserted);
+            EXPECT_EQ(sa.extra.count("reinsertions"), 0u) << describe(plain);
+            EXPECT_LT(sb.extra.at("binary_sah_cost"), sa.extra.at("binary_sah_cost")) << describe(reinserted);
+            // The greedy collapse keeps the binary leaves as they are; the SAH collapse may merge
+            // them differently over a different tree.
+            if (std::string(collapse) == "greedy") {
+                EXPECT_EQ(sb.leaves, sa.leaves) << "reinsertion moves subtrees, it keeps the leaves";
+            }
+            std::printf("[bunny] %s: binary sah %.3f -> %.3f, wide sah %.3f -> %.3f, %g reinsertions\n",
+                        describe(reinserted).c_str(), sa.extra.at("binary_sah_cost"), sb.extra.at("binary_sah_cost"),
+                        sa.sah_cost.value(), sb.sah_cost.value(), sb.extra.at("reinsertions"));
+            expect_agrees_with_embree(bunny, *b, bunny_rays, describe(reinserted) + " bunny");
+            expect_kernels_identical(bunny, reinserted, bunny_rays, describe(reinserted) + " bunny");
+            auto c = built(soup, reinserted);
+            expect_valid(*c, soup, describe(reinserted) + " soup");
+            expect_agrees_with_embree(soup, *c, soup_rays, describe(reinserted) + " soup");
+            for (const auto& info : procedural_registry()) {
+                const Scene scene = make_procedural(info.name, {});
+                auto w = built(scene, reinserted);
+                expect_valid(*w, scene, describe(reinserted) + " " + info.name);
+                expect_agrees_with_embree(scene, *w, probe_rays(scene, 6000, 13),
+                                          describe(reinserted) + " " + info.name);
+            }
         }
-        std::printf("[bunny] %s: binary sah %.3f -> %.3f, wide sah %.3f -> %.3f, %g reinsertions\n",
-                    describe(reinserted).c_str(), sa.extra.at("binary_sah_cost"), sb.extra.at("binary_sah_cost"),
-                    sa.sah_cost.value(), sb.sah_cost.value(), sb.extra.at("reinsertions"));
-        expect_agrees_with_embree(bunny, *b, bunny_rays, describe(reinserted) + " bunny");
-        expect_kernels_identical(bunny, reinserted, bunny_rays, describe(reinserted) + " bunny");
-        auto c = built(soup, reinserted);
-        expect_valid(*c, soup, describe(reinserted) + " soup");
-        expect_agrees_with_embree(soup, *c, soup_rays, describe(reinserted) + " soup");
-        for (const auto& info : procedural_registry()) {
-            const Scene scene = make_procedural(info.name, {});
-            auto w = built(scene, reinserted);
-            expect_valid(*w, scene, describe(reinserted) + " " + info.name);
-            expect_agrees_with_embree(scene, *w, probe_rays(scene, 6000, 13), describe(reinserted) + " " + info.name);
-        }
-    }
 }
 
 // ---- the vector kernels equal the scalar ones ---------------------------------------------
@@ -292,8 +293,8 @@ void expect_vector_ray_matches(const Ray& ray, const std::string& what) {
 }
 
 TEST(Wbvh, VectorRayConstantsEqualTheScalarOnes) {
-    const float specials[] = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -2.0f, 1e-40f, -1e-40f, 1e-30f, 3e17f,
-                              -3e17f, 1.8e18f, 2e18f, kInfinity, -kInfinity, std::nanf("")};
+    const float specials[] = {0.0f,   -0.0f, 1.0f,   -1.0f,   0.5f,  -2.0f,     1e-40f,     -1e-40f,
+                              1e-30f, 3e17f, -3e17f, 1.8e18f, 2e18f, kInfinity, -kInfinity, std::nanf("")};
     std::vector<Ray> rays;
     for (float dx : specials)
         for (float dy : specials)
@@ -435,12 +436,13 @@ TEST(Wbvh, SahCollapseMergesLeavesIntoPackets) {
     for (const char* collapse : {"greedy", "sah"}) {
         const bool greedy = std::string(collapse) == "greedy";
         for (const char* kernel : {"simd", "scalar"}) {
-            auto w = built(scene, {{"collapse", collapse},
-                                   {"width", "4"},
-                                   {"max_prims", "4"},
-                                   {"traversal_cost", "0"},
-                                   {"packet_cost", "2"},
-                                   {"kernel", kernel}});
+            auto w = built(scene,
+                           {{"collapse", collapse},
+                            {"width", "4"},
+                            {"max_prims", "4"},
+                            {"traversal_cost", "0"},
+                            {"packet_cost", "2"},
+                            {"kernel", kernel}});
             expect_valid(*w, scene, collapse);
             const BuildStats s = w->build_stats();
             EXPECT_EQ(s.extra.at("binary_nodes"), 31) << collapse;  // 16 single-triangle leaves

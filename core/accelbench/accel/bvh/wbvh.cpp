@@ -273,7 +273,7 @@ public:
         // The root is a wide node whatever its cost: one leaf child under it when that is
         // cheaper than distributing the tree over its W slots.
         root_is_leaf_ = binary.nodes[0].is_leaf() ||
-                        (prims[0] <= max_prims && leaf_cost(binary.nodes[0].bounds.area(), prims[0]) <= root_distribute);
+            (prims[0] <= max_prims && leaf_cost(binary.nodes[0].bounds.area(), prims[0]) <= root_distribute);
     }
 
     // The children of the wide node over binary node `node` (the root or an inner child).
@@ -291,8 +291,8 @@ public:
 
 private:
     struct Plan {
-        float cost[W];      // cost(n, i + 1)
-        uint8_t split[W] = {};  // i > 0: k of distribute(n, i + 1), 0 when cost(n, i) is as low
+        float cost[W];           // cost(n, i + 1)
+        uint8_t split[W] = {};   // i > 0: k of distribute(n, i + 1), 0 when cost(n, i) is as low
         uint8_t node_split = 1;  // k of distribute(n, W): the wide node over n
         bool leaf = false;       // cost(n, 1) is a leaf child
     };
@@ -317,8 +317,8 @@ private:
 
 // A leaf child over binary node m: the triangles of its subtree's leaves, left to right, in
 // ceil(n / 4) packets. Returns the number of triangles.
-uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, std::vector<WbvhTriPacket>& packets,
-                   std::vector<uint32_t>& slots, std::vector<uint32_t>& stack) {
+uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, std::vector<WbvhTriPacket>& packets, std::vector<uint32_t>& slots,
+                   std::vector<uint32_t>& stack) {
     slots.clear();
     stack.assign(1, m);
     while (!stack.empty()) {
@@ -623,6 +623,19 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
             }
         }
         // A leaf: its packets in turn, each against the interval shrunk by those before it.
+        // Tried and measured (session 5, branch s5-speed2): a leaf of 5-8 triangles as one
+        // 8-lane AVX2 test of its two packets (loaded as the halves of __m256 rows), the same
+        // IEEE operations lane for lane, the second packet's lanes compared again with the
+        // interval the first's nearest hit leaves, the same answers and counts. No gain:
+        // callgrind, trace/<model>/wbvh8, whole program 1062.2M -> 1065.0M instructions
+        // (bunny), 7781.3M -> 7780.7M (dragon) — the 9 insert loads, 6 broadcasts and the
+        // re-test cost what the second 4-lane test saved, and the any-hit search tests 8 lanes
+        // where the 4-lane tests stop after a hit in the first packet; timed (load 1.4-3.8,
+        // trace / Embree) bunny width 8 1.03-1.09x -> 1.09-1.12x, width 4 1.22-1.23x ->
+        // 1.28-1.29x, dragon 1.27-1.28x -> 1.28-1.29x. Also not adopted: 8-byte closest-hit
+        // stack entries (child and count packed by the tree's index bits): width 4 bunny
+        // 1.22x -> 1.19x, dragon 1.52x -> 1.50x, width 8 unchanged, within the noise, for a
+        // build that must refuse trees whose largest leaf does not fit beside the index.
         for (uint32_t done = 0; done < cur.count; done += WbvhTriPacket::kLanes) {
             const WbvhTriPacket& p = tree.packets[cur.child + done / WbvhTriPacket::kLanes];
             const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, cur.count - done));

@@ -88,10 +88,10 @@ public:
         uint32_t bins = 0;          // binned SAH bins
         double traversal_cost = 0;  // SAH constants of the binary build
         double isect_cost = 0;
-        uint32_t reinsertion = 0;      // reinsertion passes on the binary tree before the collapse
+        uint32_t reinsertion = 0;           // reinsertion passes on the binary tree before the collapse
         Collapse collapse = Collapse::sah;  // how binary nodes are grouped into wide nodes and leaves
         double packet_cost = 0;             // collapse=sah: cost of one packet test, a wide node's = 1
-        Kernel kernel = Kernel::simd;  // vector tests, or the scalar ones they must equal
+        Kernel kernel = Kernel::simd;       // vector tests, or the scalar ones they must equal
 
         static Config from(const ParamSet& params);
     };

@@ -166,10 +166,8 @@ struct WbvhVectorRay {
     // A broadcast: 8 lanes for the AVX test of 8-wide nodes, else 4.
     using Lanes = typename detail::SlabLanes<W>::type;
     static Lanes broadcast(__m128 x) {
-        if constexpr (sizeof(Lanes) == 32)
-            return _mm256_broadcastss_ps(x);
-        else
-            return _mm_shuffle_ps(x, x, 0);
+        if constexpr (sizeof(Lanes) == 32) return _mm256_broadcastss_ps(x);
+        else return _mm_shuffle_ps(x, x, 0);
     }
 
     bool valid = false;
@@ -253,8 +251,7 @@ struct WbvhVectorRay {
     // The plane a slab test reads of `node`: row `slot` of plane_offset (0-2 near, 3-5 far)
     // from lane `offset` on.
     const float* plane(const WbvhNode<W>& node, int slot, int offset = 0) const {
-        return reinterpret_cast<const float*>(reinterpret_cast<const char*>(node.planes) + plane_offset[slot]) +
-            offset;
+        return reinterpret_cast<const float*>(reinterpret_cast<const char*>(node.planes) + plane_offset[slot]) + offset;
     }
 };
 #endif
@@ -422,8 +419,8 @@ inline WbvhPacketHits wbvh_packet_test(const WbvhTriPacket& p, int lanes, const 
     const __m128 e1 = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
     const __m128 e2 = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
     const __m128 zero = _mm_setzero_ps();
-    const uint32_t edge_zero = uint32_t(_mm_movemask_ps(
-        _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)), _mm_cmpeq_ps(e2, zero))));
+    const uint32_t edge_zero = uint32_t(
+        _mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)), _mm_cmpeq_ps(e2, zero))));
     const __m128 any_neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
     const __m128 any_pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
     const uint32_t outside = uint32_t(_mm_movemask_ps(_mm_and_ps(any_neg, any_pos)));
