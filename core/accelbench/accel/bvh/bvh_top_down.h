@@ -210,18 +210,27 @@ constexpr bool may_stop_early() {
     else return false;
 }
 
-inline void fit(std::span<const BvhPrimRef> refs, Bounds3& bounds, Bounds3& centroid_bounds) {
+// The box and the centroid box of a range. For BvhCentroidRef the centroid box only:
+// `bounds` is left empty and the node boxes are made bottom-up after the build
+// (fit_bottom_up).
+template <class Ref>
+inline void fit(std::span<const Ref> refs, Bounds3& bounds, Bounds3& centroid_bounds) {
+    constexpr bool kBoxes = std::is_same_v<Ref, BvhPrimRef>;
     // Two independent accumulator pairs halve the chain of dependent min/max operations.
     BvhBoxAccumulator b[2], cb[2];
+    auto add = [&](const Ref& r, int k) {
+        if constexpr (kBoxes) b[k].extend(r, cb[k]);
+        else cb[k].extend(r);
+    };
     const size_t n = refs.size();
     for (size_t i = 0; i + 1 < n; i += 2) {
-        b[0].extend(refs[i], cb[0]);
-        b[1].extend(refs[i + 1], cb[1]);
+        add(refs[i], 0);
+        add(refs[i + 1], 1);
     }
-    if (n % 2) b[0].extend(refs[n - 1], cb[0]);
+    if (n % 2) add(refs[n - 1], 0);
     b[0].extend(b[1]);
     cb[0].extend(cb[1]);
-    bounds = b[0].bounds();
+    bounds = kBoxes ? b[0].bounds() : Bounds3{};
     centroid_bounds = cb[0].bounds();
 }
 
@@ -246,20 +255,6 @@ inline void fit_bottom_up(FlatBvh& bvh) {
         }
         node.bounds = b;
     }
-}
-
-// The centroid box only (`bounds` is made bottom-up after the build, see fit_bottom_up).
-inline void fit(std::span<const BvhCentroidRef> refs, Bounds3& bounds, Bounds3& centroid_bounds) {
-    BvhBoxAccumulator cb[2];
-    const size_t n = refs.size();
-    for (size_t i = 0; i + 1 < n; i += 2) {
-        cb[0].extend(refs[i]);
-        cb[1].extend(refs[i + 1]);
-    }
-    if (n % 2) cb[0].extend(refs[n - 1]);
-    cb[0].extend(cb[1]);
-    bounds = {};
-    centroid_bounds = cb[0].bounds();
 }
 
 // Splits a range into two halves by count along `axis` (the object median; also the
@@ -444,7 +439,7 @@ FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& setting
     };
     std::vector<Range> pending;  // second children still to build; at most one per level
     Range range{0, n, 0, kInvalidId, 0, {}, {}};
-    detail::fit(refs, range.bounds, range.centroid_bounds);
+    detail::fit<Ref>(refs, range.bounds, range.centroid_bounds);
 
     for (;;) {
         const uint32_t index = uint32_t(bvh.nodes.size());
@@ -476,7 +471,6 @@ FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& setting
         if (!split) {
             for (uint32_t i = 0; i < count; ++i) bvh.prim_ids[range.begin + i] = span[i].id;
             bvh.nodes.push_back(BvhNode::leaf(range.bounds, range.begin, count));  // kCentroidsOnly: fitted below
-            bvh.depth = std::max(bvh.depth, range.depth);
             if (pending.empty()) break;
             range = pending.back();
             pending.pop_back();
