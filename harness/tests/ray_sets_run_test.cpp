@@ -149,9 +149,9 @@ accelerators: [{name: bvh}]
 TEST(RaySetsConfig, ShippedConfigsExpandAsDocumented) {
     const std::string dir = registry().project_dir() + "/configs/";
     const Config rs = load_config(dir + "ray-sets.yaml", registry());
-    EXPECT_EQ(expand(rs).size(), 50u);
+    EXPECT_EQ(expand(rs).size(), 70u);  // 2 models x 7 structures x 5 sets
     const Config ts = load_config(dir + "thread-scaling.yaml", registry());
-    EXPECT_EQ(expand(ts).size(), 10u * ts.thread_counts.size());
+    EXPECT_EQ(expand(ts).size(), 14u * ts.thread_counts.size());  // 2 models x 7 structures
     EXPECT_EQ(ts.thread_counts.front(), 1);
 }
 
