@@ -29,6 +29,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <new>
 #include <optional>
 #include <span>
 #include <stdexcept>
@@ -288,6 +289,22 @@ inline void fit_bottom_up(FlatBvh& bvh) {
 // 28-byte references: 113M instructions, no time gained), and taking a leaf's box from
 // Scene::prim_bounds through its index (a random read per leaf, the bunny 5% slower
 // than session 4) instead of from the triangles finalize() copies in leaf order.
+// Measured and not adopted (session 6, callgrind --branch-sim on an x86-64-v3 build, one
+// median build; base: bunny 98.1M instructions / 780k mispredicted branches, conference
+// 525M / 3.20M; build / Embree from accel_bench, load 11):
+//  - nth_element replaced by a copy of libstdc++'s introselect whose Hoare partition is
+//    branch-free (both scans' stop positions recorded in one pass, then the swaps; the
+//    same permutation as std::nth_element, checked on 300k random, sorted, reversed and
+//    tie-heavy inputs; bunny, igea and conference trees unchanged): bunny 101.8M /
+//    754k, conference 586M / 2.91M. The small ranges' loop exits still mispredict, and the
+//    recording pass costs ~10 instructions per element against ~4.
+//  - the scatter's position chosen by masks (GCC 12 compiles the `?:` chain below to a
+//    branch: 209k of the bunny's mispredictions), fit_bottom_up and FlatBvh::finalize's
+//    depth pass without a branch on leaf / inner node (both boxes computed, one kept):
+//    with the allocation change below, bunny 117.0M / 451k, conference 620M / 2.34M, but
+//    build / Embree bunny 0.46 -> 0.50, conference 0.64 -> 0.66 (one run each): the
+//    extra instructions (+44M scatter, +41M fit_bottom_up, +13M depth pass on the
+//    conference) cost more than the mispredictions they remove.
 template <class Ref>
 class EqualCountSplitter {
 public:
@@ -393,16 +410,45 @@ private:
 }  // namespace detail
 
 // The references the builder starts from: one per scene triangle, in scene order.
-inline std::vector<BvhPrimRef> bvh_prim_refs(const Scene& scene) {
-    std::vector<BvhPrimRef> refs(scene.triangle_count());
-    for (size_t i = 0; i < refs.size(); ++i) refs[i] = {scene.prim_bounds[i], uint32_t(i)};
-    return refs;
+inline void put_refs(const Scene& scene, BvhPrimRef* out) {
+    for (size_t i = 0; i < scene.triangle_count(); ++i) out[i] = {scene.prim_bounds[i], uint32_t(i)};
 }
-inline std::vector<BvhCentroidRef> bvh_centroid_refs(const Scene& scene) {
-    std::vector<BvhCentroidRef> refs(scene.triangle_count());
-    for (size_t i = 0; i < refs.size(); ++i) refs[i] = {scene.centroids[i], uint32_t(i)};
-    return refs;
+inline void put_refs(const Scene& scene, BvhCentroidRef* out) {
+    for (size_t i = 0; i < scene.triangle_count(); ++i) out[i] = {scene.centroids[i], uint32_t(i)};
 }
+
+namespace detail {
+
+// n references in memory that is not initialised: the builder writes each one before it
+// reads it. std::vector<Ref>(n) constructs every reference first (Vec3's members have
+// initialisers: a loop of stores) for both buffers the build moves references between.
+// With these and FlatBvh::finalize appending its triangles instead of resize() then
+// overwrite (session 6, callgrind, one median build, x86-64-v3): bunny 98.1M -> 95.3M
+// instructions, L1 write misses 490k -> 417k; conference 525M -> 512M, 2.53M -> 2.18M
+// (LL write misses 2.14M -> 1.79M). Build / Embree (accel_bench, old and new binary back
+// to back twice, load 6-11): bunny 0.45, 0.46 -> 0.45, 0.45; conference 0.57, 0.60 ->
+// 0.58, 0.57; dragon 0.57, 0.52 -> 0.54, 0.56: no change beyond the noise. A reference
+// is a trivially copyable aggregate, an implicit-lifetime type: allocating the storage
+// creates it.
+template <class Ref>
+class RefBuffer {
+    static_assert(std::is_trivially_copyable_v<Ref> && std::is_trivially_destructible_v<Ref>);
+
+public:
+    explicit RefBuffer(size_t n)
+        : data_(
+              static_cast<Ref*>(::operator new(std::max<size_t>(n, 1) * sizeof(Ref), std::align_val_t(alignof(Ref))))) {
+    }
+    ~RefBuffer() { ::operator delete(data_, std::align_val_t(alignof(Ref))); }
+    RefBuffer(const RefBuffer&) = delete;
+    RefBuffer& operator=(const RefBuffer&) = delete;
+    Ref* data() const { return data_; }
+
+private:
+    Ref* data_;
+};
+
+}  // namespace detail
 
 template <BvhSplitStrategy Strategy>
 FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& settings, Strategy& strategy,
@@ -414,11 +460,9 @@ FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& setting
         throw std::runtime_error("bvh: scene '" + scene.name + "' has more triangles than a BVH node can count");
     FlatBvh bvh;
     counts = {};
-    std::vector<Ref> refs;
-    if constexpr (kCentroidsOnly) refs = bvh_centroid_refs(scene);
-    else refs = bvh_prim_refs(scene);
-    std::vector<Ref> scratch(refs.size());
-    const uint32_t n = uint32_t(refs.size());
+    const uint32_t n = uint32_t(scene.triangle_count());
+    const detail::RefBuffer<Ref> refs(n), scratch(n);
+    put_refs(scene, refs.data());
     if (n == 0) {
         bvh.finalize(scene);
         return bvh;
@@ -439,7 +483,7 @@ FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& setting
     };
     std::vector<Range> pending;  // second children still to build; at most one per level
     Range range{0, n, 0, kInvalidId, 0, {}, {}};
-    detail::fit<Ref>(refs, range.bounds, range.centroid_bounds);
+    detail::fit<Ref>(std::span<const Ref>(refs.data(), n), range.bounds, range.centroid_bounds);
 
     for (;;) {
         const uint32_t index = uint32_t(bvh.nodes.size());
