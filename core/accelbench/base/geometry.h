@@ -176,7 +176,13 @@ constexpr float kBoxSlack = 2.0f * (3.0f * 0x1p-24f / (1.0f - 3.0f * 0x1p-24f));
 // Branch-free: the slack is capped at the largest float, so an infinite t minus (plus) it
 // stays infinite, and a finite t's slack (below 1e-6 |t|) is never capped; NaN stays NaN.
 // The kd-tree computes both at every interior node it visits.
-inline float slack_of(float t) { return std::min(kBoxSlack * std::fabs(t), std::numeric_limits<float>::max()); }
+// Written `s < max ? s : max`, not std::min(s, max) (`max < s ? max : s`): the same value for
+// every s but NaN, where it gives max instead of NaN, and t -+ max is NaN again for the NaN t
+// that alone gives a NaN s; but it is one minss instead of a compare and a blend.
+inline float slack_of(float t) {
+    const float s = kBoxSlack * std::fabs(t);
+    return s < std::numeric_limits<float>::max() ? s : std::numeric_limits<float>::max();
+}
 inline float slack_below(float t) { return t - slack_of(t); }
 inline float slack_above(float t) { return t + slack_of(t); }
 

@@ -50,6 +50,9 @@ public:
     uint32_t prim_count() const { return bits_ >> 2; }
     uint32_t single_prim() const { return payload_; }  // leaf with prim_count() == 1
     uint32_t prim_offset() const { return payload_; }  // leaf with prim_count() > 1
+    // The one-element run of a leaf with prim_count() == 1: its primitive, read in place, so
+    // that one loop serves both kinds of leaf.
+    const uint32_t* single_prim_run() const { return &payload_; }
 
     bool operator==(const KdNode&) const = default;
 
@@ -123,8 +126,8 @@ public:
     uint64_t memory_bytes() const;
 
 private:
-    template <class F>
-    bool any_leaf_prim(const KdNode& leaf, F&& f) const;
+    // The leaf's primitive references: `count` of them from the returned pointer.
+    const uint32_t* leaf_prims(const KdNode& leaf, uint32_t& count) const;
     template <bool kMailbox, class C>
     void intersect_with(const Ray& ray, Hit& hit, C& counters) const;
     template <bool kMailbox, class C>
