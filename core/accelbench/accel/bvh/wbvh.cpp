@@ -317,7 +317,7 @@ private:
 
 // A leaf child over binary node m: the triangles of its subtree's leaves, left to right, in
 // ceil(n / 4) packets. Returns the number of triangles.
-uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, std::vector<WbvhTriPacket>& packets, std::vector<uint32_t>& slots,
+uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, WbvhArray<WbvhTriPacket>& packets, std::vector<uint32_t>& slots,
                    std::vector<uint32_t>& stack) {
     slots.clear();
     stack.assign(1, m);
@@ -605,6 +605,11 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
                 // after, conference 1.25-1.32x vs 1.24-1.32x. Few nodes have 2+ hit children (bunny:
                 // 77% of nodes with a hit have one, 15% two, 8% more); the rest of the mispredicts are
                 // the inner/leaf, none/one/several-hit and pop branches, which it leaves as they are.
+                // Also tried (session 6), not adopted: a software prefetch (_mm_prefetch T0, every
+                // line) of the entry pushed last, the next one popped — its node's 4 lines or its
+                // leaf's packets. No gain, interleaved A/B twice with the tree in huge pages (load
+                // ~4, trace / Embree): dragon width 8 1.16/1.15 -> 1.16/1.13, width 4 1.37/1.35 ->
+                // 1.36/1.35, igea width 8 1.00/0.96 -> 1.05/1.02, width 4 1.20/1.25 -> 1.25/1.17.
                 uint32_t keys[W];
                 int n = 0;
                 keys[n++] = order_key(tnear[first], first);
