@@ -41,81 +41,27 @@
 // (is_valid_ray) are answered "miss" before any count.
 #pragma once
 
-#include <cstddef>
 #include <cstdint>
-#include <cstdlib>
 #include <memory>
-#include <new>
 #include <optional>
 #include <vector>
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 #include "accelbench/accel/accelerator.h"
 #include "accelbench/accel/bvh/bvh.h"
 #include "accelbench/accel/bvh/wbvh_simd.h"
+#include "accelbench/base/huge_pages.h"
 
 namespace accelbench {
 
-// The tree's arrays ask the kernel for transparent huge pages (2 MiB) once they are 2 MiB or
-// larger: aligned to 2 MiB, rounded up to whole huge pages and madvise(MADV_HUGEPAGE)d, as
-// Embree's allocator does for its BVH (alloc.cpp, os_madvise) — on a kernel whose THP mode is
-// `madvise` (this machine's) only such memory gets huge pages. A traversal visits nodes and
-// packets all over the tree; with 4 KiB pages the dragon's 60 MB of wbvh8 (14 MB nodes, 46 MB
-// packets) spans 15,000 pages, far beyond the reach of the L2 TLB (3,072 entries, 12 MB, on
-// this machine's Zen 4), so node and packet loads of its rays miss the TLB as well as the
-// caches, while Embree's BVH lies in huge pages (AnonHugePages of the bench process: 59 MB).
-// Measured (accel_bench, trace / Embree, interleaved, two A/B runs each), first with glibc's
-// own switch (GLIBC_TUNABLES=glibc.malloc.hugetlb=1, the same madvise for every malloc'd
-// mapping; load 9-14): dragon width 8 1.25x/1.22x -> 1.14x/1.14x, igea width 8 1.07x/1.03x ->
-// 1.04x/1.05x; then with this allocator (load 3-10): dragon width 8 1.21x/1.22x -> 1.18x/1.15x,
-// width 4 1.45x/1.43x -> 1.39x/1.38x; bunny, igea, conference within the noise (+-0.04). (The
-// kernel granted 45-60 of the dragon's 60 MB as huge pages: what it has free at build time.)
-// The callgrind cache simulation (which has no TLB) of the dragon's render at width 8 (its two
-// passes, closest and any hit; 1 MiB last level, this machine's L2) puts the traversal's data
-// misses on the packets' vertex rows (864K L1 / 456K L2 misses), then the nodes' planes (452K /
-// 182K), child and count (44K / 19K) and the prim ids read on a hit (29K / 27K); the stack's
-// are negligible (8K). The same tree, byte for byte; arrays under 2 MiB stay on ordinary pages.
-template <class T>
-struct WbvhAllocator {
-    using value_type = T;
-    static constexpr size_t kHugePage = size_t(2) << 20;
-
-    WbvhAllocator() = default;
-    template <class U>
-    WbvhAllocator(const WbvhAllocator<U>&) noexcept {}
-
-    static size_t rounded(size_t bytes) { return (bytes + kHugePage - 1) / kHugePage * kHugePage; }
-    T* allocate(size_t n) {
-        if (n > size_t(-1) / sizeof(T)) throw std::bad_array_new_length();
-        const size_t bytes = n * sizeof(T);
-        if (bytes < kHugePage) return static_cast<T*>(::operator new(bytes, std::align_val_t(alignof(T))));
-        void* p = std::aligned_alloc(kHugePage, rounded(bytes));
-        if (p == nullptr) throw std::bad_alloc();
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-        madvise(p, rounded(bytes), MADV_HUGEPAGE);  // a hint: memory without huge pages works as well
-#endif
-        return static_cast<T*>(p);
-    }
-    void deallocate(T* p, size_t n) noexcept {
-        if (n * sizeof(T) < kHugePage) ::operator delete(p, std::align_val_t(alignof(T)));
-        else std::free(p);
-    }
-    template <class U>
-    bool operator==(const WbvhAllocator<U>&) const noexcept {
-        return true;
-    }
-};
-template <class T>
-using WbvhArray = std::vector<T, WbvhAllocator<T>>;
+// The tree's arrays are HugePageArrays (base/huge_pages.h): the dragon's 60 MB of wbvh8 in
+// 4 KiB pages is far beyond the TLB's reach (measured there).
 
 // A finished wide tree: nodes[0] is the root (always an inner node, even over a scene of
 // one leaf), children of a node are stored after it.
 template <int W>
 struct WbvhTree {
-    WbvhArray<WbvhNode<W>> nodes;
-    WbvhArray<WbvhTriPacket> packets;
+    HugePageArray<WbvhNode<W>> nodes;
+    HugePageArray<WbvhTriPacket> packets;
     uint32_t depth = 0;   // wide levels below the root on the longest path to a leaf child
     uint64_t leaves = 0;  // leaf children
     bool empty() const { return nodes.empty(); }
