@@ -161,7 +161,7 @@ TEST(Lbvh, CubeCornersGiveTheMortonTree) {
     const FlatBvh& t = lbvh->tree();
     ASSERT_EQ(t.nodes.size(), 15u);
     EXPECT_EQ(t.depth, 3u);
-    EXPECT_EQ(t.prim_ids, (HugePageArray<uint32_t>{0, 1, 2, 3, 4, 5, 6, 7}));
+    EXPECT_EQ(t.prim_ids, (std::vector<uint32_t>{0, 1, 2, 3, 4, 5, 6, 7}));
     // Depth-first: root 0, z-halves at 1 and 8, y-quarters at 2, 5, 9, 12, leaves between.
     EXPECT_EQ(t.nodes[0].axis(), 2);
     EXPECT_EQ(t.nodes[0].second_child(), 8u);

@@ -225,8 +225,7 @@ TEST(TreeVariants, ReinsertionLowersTheSahCostAndKeepsTheLeaves) {
         EXPECT_EQ(a.leaves, b.leaves);
         EXPECT_GT(b.extra.at("reinsertions"), 0.0);
         EXPECT_LT(b.sah_cost.value(), a.sah_cost.value());
-        std::vector<uint32_t> ids_a(plain.tree().prim_ids.begin(), plain.tree().prim_ids.end());
-        std::vector<uint32_t> ids_b(optimized.tree().prim_ids.begin(), optimized.tree().prim_ids.end());
+        std::vector<uint32_t> ids_a = plain.tree().prim_ids, ids_b = optimized.tree().prim_ids;
         std::sort(ids_a.begin(), ids_a.end());
         std::sort(ids_b.begin(), ids_b.end());
         EXPECT_EQ(ids_a, ids_b);

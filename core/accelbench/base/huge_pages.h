@@ -1,7 +1,5 @@
-// An allocator for the large arrays a traversal reads all over (tree nodes, leaf triangles,
-// primitive references), used by every structure's tree (FlatBvh, KdTree, Wbvh), so that no
-// row of the tables differs from Embree's by its page size. Arrays of 2 MiB or more ask the
-// kernel for transparent huge pages (2 MiB): aligned to 2 MiB, rounded up to whole huge pages and madvise(MADV_HUGEPAGE)d, as
+// An allocator for the large arrays a traversal reads all over (tree nodes, leaf triangles):
+// arrays of 2 MiB or more ask the kernel for transparent huge pages (2 MiB): aligned to 2 MiB, rounded up to whole huge pages and madvise(MADV_HUGEPAGE)d, as
 // Embree's allocator does for its BVH (alloc.cpp, os_madvise) — on a kernel whose THP mode is
 // `madvise` (this machine's) only such memory gets huge pages. A traversal visits nodes and
 // packets all over the tree; with 4 KiB pages the dragon's 60 MB of wbvh8 (14 MB nodes, 46 MB
@@ -20,6 +18,12 @@
 // 182K), child and count (44K / 19K) and the prim ids read on a hit (29K / 27K); the stack's
 // are negligible (8K). The same tree, byte for byte; arrays under 2 MiB stay on ordinary pages
 // (an array's last huge page is part-used: at most 2 MiB more than its capacity).
+// Used by the wide BVH's tree only. Measured (session 6) and not adopted for the binary BVH's
+// FlatBvh (nodes, prim ids, leaf triangles) and the kd-tree's arrays: no trace gain on the
+// dragon (trace / Embree, interleaved, two A/B rounds, idle: bvh sah 2.25/2.08 -> 2.13/2.23,
+// median 2.82/2.80 -> 2.92/2.83, kdtree 3.44/3.32 -> 3.38/3.48), and the median build got
+// slower (0.58/0.54 -> 0.82/0.91; not profiled — its arrays grow by push_back, and each
+// regrowth past 2 MiB faults in fresh huge pages the kernel zeroes, the likely cause).
 #pragma once
 
 #include <cstddef>

@@ -15,7 +15,7 @@ namespace {
 class LinkedTree {
 public:
     explicit LinkedTree(const FlatBvh& bvh)
-        : nodes_(bvh.nodes.begin(), bvh.nodes.end()),
+        : nodes_(bvh.nodes),
           box_(bvh.nodes.size()),
           left_(bvh.nodes.size(), kInvalidId),
           right_(bvh.nodes.size(), kInvalidId),

@@ -8,7 +8,6 @@
 
 #include "accelbench/accel/bvh/bvh_node.h"
 #include "accelbench/base/geometry.h"
-#include "accelbench/base/huge_pages.h"
 #include "accelbench/scene/scene.h"
 
 namespace accelbench {
@@ -24,10 +23,9 @@ struct LeafTriangle {
 // (a leaf's slots are [first_prim, first_prim + prim_count)), then call finalize().
 // An empty scene gives no nodes at all; traversal then answers "miss".
 struct FlatBvh {
-    // In huge pages where large (base/huge_pages.h): a traversal reads them all over.
-    HugePageArray<BvhNode> nodes;
-    HugePageArray<uint32_t> prim_ids;       // slot -> triangle index in the scene
-    HugePageArray<LeafTriangle> triangles;  // slot -> that triangle's vertices
+    std::vector<BvhNode> nodes;
+    std::vector<uint32_t> prim_ids;       // slot -> triangle index in the scene
+    std::vector<LeafTriangle> triangles;  // slot -> that triangle's vertices
     uint32_t depth = 0;                   // longest root-to-leaf path in edges (root alone: 0)
 
     // Copies each slot's triangle out of the scene and measures the depth (which sizes

@@ -117,7 +117,7 @@ public:
     // Returns the subtree's bounds. `threads`: the subtree's thread budget, its own thread
     // included. Small enough to be inlined into build_inner, so that the leaves — half of
     // all nodes — cost no call of their own.
-    Bounds3 build(uint32_t begin, uint32_t end, uint32_t depth, HugePageArray<BvhNode>& out, Lbvh::Counts& counts,
+    Bounds3 build(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts,
                   int threads) {
         const uint32_t count = end - begin;
         if (count <= config_.max_prims || depth >= config_.max_depth) return build_leaf(begin, end, out, counts);
@@ -125,7 +125,7 @@ public:
     }
 
 private:
-    Bounds3 build_leaf(uint32_t begin, uint32_t end, HugePageArray<BvhNode>& out, Lbvh::Counts& counts) const {
+    Bounds3 build_leaf(uint32_t begin, uint32_t end, std::vector<BvhNode>& out, Lbvh::Counts& counts) const {
         const uint32_t count = end - begin;
         if (count > config_.max_prims) {
             if (count > BvhNode::kMaxLeafPrims)
@@ -140,7 +140,7 @@ private:
         return b;
     }
 
-    Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, HugePageArray<BvhNode>& out, Lbvh::Counts& counts,
+    Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts,
                         int threads) {
         const uint32_t self = uint32_t(out.size());
         out.emplace_back();  // written once the children's bounds are known
@@ -157,7 +157,7 @@ private:
             const int task_threads =
                 std::clamp(int(int64_t(threads) * (end - split.index) / (end - begin)), 1, threads - 1);
             ++counts.tasks;
-            HugePageArray<BvhNode> task_nodes;
+            std::vector<BvhNode> task_nodes;
             Lbvh::Counts task_counts;
             auto task = std::async(std::launch::async, [&] {
                 task_nodes.reserve(2 * size_t(end - split.index) - 1);
@@ -211,7 +211,7 @@ private:
     // Appends a subtree built in its own buffer: its inner nodes' second-child indices
     // were relative to that buffer and move by where it lands. Leaves index the sorted
     // primitive array, which is shared, and need no change.
-    static void append_relocated(HugePageArray<BvhNode>& out, const HugePageArray<BvhNode>& subtree) {
+    static void append_relocated(std::vector<BvhNode>& out, const std::vector<BvhNode>& subtree) {
         const uint32_t base = uint32_t(out.size());
         out.insert(out.end(), subtree.begin(), subtree.end());
         for (size_t i = base; i < out.size(); ++i)

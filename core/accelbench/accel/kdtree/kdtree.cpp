@@ -287,8 +287,8 @@ private:
 // subtree is built. Memory is the current path plus the pending above-siblings.
 class Builder {
 public:
-    Builder(const Scene& scene, const KdTree::Config& s, int max_depth, HugePageArray<KdNode>& nodes,
-            HugePageArray<uint32_t>& prim_indices)
+    Builder(const Scene& scene, const KdTree::Config& s, int max_depth, std::vector<KdNode>& nodes,
+            std::vector<uint32_t>& prim_indices)
         : bounds_(scene.prim_bounds),
           sah_{s.traversal_cost, s.isect_cost, s.empty_bonus},
           max_prims_(uint32_t(s.max_prims)),
@@ -501,8 +501,8 @@ private:
     int max_depth_;
     bool presorted_;
     uint64_t ref_budget_;
-    HugePageArray<KdNode>& nodes_;
-    HugePageArray<uint32_t>& prim_indices_;
+    std::vector<KdNode>& nodes_;
+    std::vector<uint32_t>& prim_indices_;
     std::vector<uint8_t> side_;      // per primitive, set for the node being split
     ListStack<uint32_t> prims_;      // primitive lists
     ListStack<EventKey> events_[3];  // nlogn: sorted event lists per axis

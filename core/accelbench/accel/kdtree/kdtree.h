@@ -20,7 +20,6 @@
 #include <span>
 #include <vector>
 
-#include "accelbench/base/huge_pages.h"
 #include "accelbench/accel/accelerator.h"
 
 namespace accelbench {
@@ -139,10 +138,10 @@ private:
     // The triangles' corners, copied in primitive order: a leaf's test then loads one
     // 36-byte record instead of an index triple and three scattered vertices (~5%
     // faster on the bunny).
-    HugePageArray<std::array<Vec3, 3>> corners_;
+    std::vector<std::array<Vec3, 3>> corners_;
     Bounds3 bounds_;
-    HugePageArray<KdNode> nodes_;  // HugePageArray: base/huge_pages.h
-    HugePageArray<uint32_t> prim_indices_;
+    std::vector<KdNode> nodes_;
+    std::vector<uint32_t> prim_indices_;
     int max_depth_used_ = 0;
     // What only the build knows (the tree's own figures come from measure_kdtree).
     uint64_t bad_refines_ = 0;  // splits made although dearer than a leaf
