@@ -1,10 +1,15 @@
 #include "checked_yaml.h"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 #include "accelbench/base/unknown_name.h"
 #include "text.h"
@@ -52,25 +57,62 @@ ConfigError single_issue(const std::string& file, int line, int column, const st
     return ConfigError(std::move(issues));
 }
 
+namespace {
+
+// Where each document of a YAML stream starts, from the parser's events (nothing is built).
+class DocumentStarts final : public YAML::EventHandler {
+public:
+    std::vector<YAML::Mark> marks;
+    void OnDocumentStart(const YAML::Mark& mark) override { marks.push_back(mark); }
+    void OnDocumentEnd() override {}
+    void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+    void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+    void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+    void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+    void OnSequenceEnd() override {}
+    void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+    void OnMapEnd() override {}
+};
+
+}  // namespace
+
+// Not YAML::LoadAllFromFile: yaml-cpp 0.7.0's LoadAll never returns on some malformed
+// streams — a lone ',' is one (jbeder/yaml-cpp issue 1040, fixed upstream by pull request
+// 1319, after Debian 12's 0.7.0): its parser reports an empty document at the same place
+// again and again, and LoadAll keeps every one. The config fuzz test's process grew to
+// 24 GB before the kernel's OOM killer stopped it (a mutation of configs/scaling-quick.yaml).
+// So the documents are counted from the parser's events, two at most, a second one that
+// starts where the first did is that stuck parser (a syntax error at that place), and only
+// the first document is built (YAML::Load).
 YAML::Node load_yaml_document(const std::string& path) {
-    std::vector<YAML::Node> documents;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw single_issue(path, 0, 0, "cannot open the config file");
+    std::ostringstream bytes;
+    bytes << in.rdbuf();
+    const std::string text = bytes.str();
+    YAML::Node document;
     try {
-        documents = YAML::LoadAllFromFile(path);
-    } catch (const YAML::BadFile&) {
-        throw single_issue(path, 0, 0, "cannot open the config file");
+        std::istringstream stream(text);
+        YAML::Parser parser(stream);
+        DocumentStarts starts;
+        while (starts.marks.size() < 2 && parser.HandleNextDocument(starts)) {}
+        if (starts.marks.size() == 2) {
+            const YAML::Mark& m = starts.marks[1];
+            const int line = m.line >= 0 ? m.line + 1 : 0, column = m.column >= 0 ? m.column + 1 : 0;
+            if (m.pos == starts.marks[0].pos)
+                throw single_issue(path, line, column, "YAML syntax error: the parser cannot read past this point");
+            // A second document (after `---`) would be ignored by a reader of the first:
+            // refused, so that nothing the user wrote is silently dropped.
+            throw single_issue(
+                path, line, column,
+                "a second YAML document (after '---'): a config is one document; join them or use two files");
+        }
+        if (!starts.marks.empty()) document = YAML::Load(text);
     } catch (const YAML::Exception& e) {
         throw single_issue(path, e.mark.line + 1, e.mark.column + 1, "YAML syntax error: " + e.msg);
     }
-    // A second document (after `---`) would be ignored by a reader of the first: refused,
-    // so that nothing the user wrote is silently dropped.
-    if (documents.size() > 1) {
-        const YAML::Mark m = documents[1].Mark();
-        throw single_issue(
-            path, m.line >= 0 ? m.line + 1 : 0, m.column >= 0 ? m.column + 1 : 0,
-            "a second YAML document (after '---'): a config is one document; join them or use two files");
-    }
-    if (documents.empty() || documents[0].IsNull()) throw single_issue(path, 1, 1, "the config is empty");
-    return documents[0];
+    if (!document || document.IsNull()) throw single_issue(path, 1, 1, "the config is empty");
+    return document;
 }
 
 const char* kind_of(const YAML::Node& n) {

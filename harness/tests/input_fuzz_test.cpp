@@ -279,8 +279,9 @@ TEST(InputFuzz, MeshReadersRefuseOrLoadConsistently) {
             const std::string what = e.what();
             ASSERT_EQ(what.find("cannot load mesh '"), 0u) << what << "\ninput: " << escaped(input);
             ASSERT_GT(what.size(), 24u + name.size()) << what;  // a cause follows the name
+        } catch (const std::exception& e) {
+            FAIL() << "not a mesh load error: " << e.what() << "\ninput: " << escaped(input);
         }
-        // Any other exception escapes and fails the test with gtest's message.
     }
     std::printf("mesh fuzzing: %llu inputs (%llu through gzip files), %llu loaded, the rest refused\n",
                 (unsigned long long)runs, (unsigned long long)gz_runs, (unsigned long long)loaded);
@@ -322,6 +323,8 @@ TEST(InputFuzz, ConfigLoaderRefusesOrLoadsConsistently) {
             for (const ModelSpec& m : c.models) ASSERT_FALSE(m.name.empty()) << escaped(input);
         } catch (const ConfigError& e) {
             ASSERT_FALSE(std::string(e.what()).empty());
+        } catch (const std::exception& e) {
+            FAIL() << "not a ConfigError: " << e.what() << "\ninput: " << escaped(input);
         }
     }
     std::printf("config fuzzing: %llu inputs, %llu loaded, the rest refused\n", (unsigned long long)runs,
