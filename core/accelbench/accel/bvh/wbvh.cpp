@@ -317,8 +317,8 @@ private:
 
 // A leaf child over binary node m: the triangles of its subtree's leaves, left to right, in
 // ceil(n / 4) packets. Returns the number of triangles.
-uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, HugePageArray<WbvhTriPacket>& packets, std::vector<uint32_t>& slots,
-                   std::vector<uint32_t>& stack) {
+uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, HugePageArray<WbvhTriPacket>& packets,
+                   std::vector<uint32_t>& slots, std::vector<uint32_t>& stack) {
     slots.clear();
     stack.assign(1, m);
     while (!stack.empty()) {
