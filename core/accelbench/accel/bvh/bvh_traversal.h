@@ -57,6 +57,26 @@
 // origin, and a binary tree with one-triangle leaves has twice the levels and four times
 // the leaves of Embree's 4-wide tree with 4-triangle leaves there — a property of the
 // tree (node width, leaf size), which the report's rows must keep.
+//
+// Session 6 measured, and did not adopt, two children per vector (branch s6-pair): a 64-byte
+// record per inner node holding both children's boxes structure-of-arrays, one 4-lane SSE
+// slab test for both (near planes in lanes 0-1, far planes in lanes 2-3 multiplied by
+// -(1 / dir), so one MAXPS chain gives the entry distances and the negated exit distances,
+// bit for bit intersect_box's; the root's box in a record of its own). Decisions, answers and
+// counts identical (a test compared both forms on every ray of the bunny, the procedural
+// scenes and the extreme-case catalogue, every split and the LBVH). Callgrind, one trace
+// (640x480 primary + shadow), closest / any hit: bunny bvh sah 191.9M / 163.7M -> 153.2M /
+// 117.5M, lbvh 226.4M / 188.4M -> 177.9M / 133.9M; conference bvh sah 1092M / 748M -> 861M /
+// 517M, lbvh 1234M / 1035M -> 1014M / 717M (-18% to -31%). Time did not follow (accel_bench
+// A/B, trace / Embree, two rounds, load 3-6): bunny bvh sah 1.99 -> 1.97 | 1.97 -> 1.92,
+// median 2.43 -> 2.41 | 2.43 -> 2.41, lbvh 2.31 -> 2.28 | 2.31 -> 2.32; conference bvh sah
+// 2.44 -> 2.44 | 2.49 -> 2.34, lbvh 3.12 -> 2.93 | 3.26 -> 2.92, median 5.56 -> 6.16 | 5.71 ->
+// 6.02 (slower in both rounds, not explained). The likely reason, not measured apart: the
+// vector test's chain (three MAXPS, then the widening and the compare) is as long as each of
+// the two scalar tests' chains, which run side by side — the loop is bound by the node-to-node
+// latency, not by instructions. And the records cost node memory x2 and a pass after every
+// build: build / Embree bvh median bunny 0.46 -> 0.55 | 0.45 -> 0.51, lbvh bunny 0.20 -> 0.26
+// | 0.19 -> 0.23, against build goals of 0.5 and 0.25.
 #pragma once
 
 #include <cstdint>
