@@ -791,6 +791,22 @@ struct NoMailbox {
     static constexpr bool seen(uint32_t) { return false; }
 };
 
+// The leaf loop both queries share: each of a leaf's triangles the mailbox has not seen is
+// counted and handed to test(prim), the shear constants made first if this is the ray's
+// first leaf with a triangle; stops (returns false) when test returns false.
+template <class Mailbox, class C, class Test>
+inline bool for_untested_triangles(const uint32_t* prims, uint32_t count, const Ray& ray,
+                                   std::optional<WatertightRay>& wr, Mailbox& mailbox, C& counters, Test&& test) {
+    if (count != 0 && !wr) wr.emplace(ray);
+    for (uint32_t i = 0; i < count; ++i) {
+        const uint32_t prim = prims[i];
+        if (mailbox.seen(prim)) continue;
+        counters.prim();
+        if (!test(prim)) return false;
+    }
+    return true;
+}
+
 // Measured and not adopted (session 5): leaves of 2+ references testing their triangles 4
 // at a time in one SSE watertight test (the wide BVH's packet test moved to a shared
 // header; packets at half the leaf's prim_indices_ offset, answers and prim_tests
@@ -819,14 +835,10 @@ void KdTree::intersect_with(const Ray& ray, Hit& hit, C& counters) const {
         [&](const KdNode& leaf) {
             uint32_t count;
             const uint32_t* prims = leaf_prims(leaf, count);
-            if (count != 0 && !wr) wr.emplace(ray);
-            for (uint32_t i = 0; i < count; ++i) {
-                const uint32_t prim = prims[i];
-                if (mailbox.seen(prim)) continue;
-                counters.prim();
+            return for_untested_triangles(prims, count, ray, wr, mailbox, counters, [&](uint32_t prim) {
                 if (hit_triangle(*wr, prim, ray.tmin, best, hit)) best = hit.t;
-            }
-            return true;
+                return true;
+            });
         },
         // next_t_min is a lower bound of the node's true entry distance, but a hit in it
         // is a computed t that may round below its true value: stop only when the best
@@ -846,17 +858,11 @@ bool KdTree::occluded_with(const Ray& ray, C& counters) const {
             Hit scratch;
             uint32_t count;
             const uint32_t* prims = leaf_prims(leaf, count);
-            if (count != 0 && !wr) wr.emplace(ray);
-            for (uint32_t i = 0; i < count; ++i) {
-                const uint32_t prim = prims[i];
-                if (mailbox.seen(prim)) continue;
-                counters.prim();
-                if (hit_triangle(*wr, prim, ray.tmin, ray.tmax, scratch)) {
-                    found = true;
-                    return false;
-                }
-            }
-            return true;
+            return for_untested_triangles(prims, count, ray, wr, mailbox, counters, [&](uint32_t prim) {
+                if (!hit_triangle(*wr, prim, ray.tmin, ray.tmax, scratch)) return true;
+                found = true;
+                return false;  // stop at the first hit
+            });
         },
         [](float) { return true; });
     return found;
