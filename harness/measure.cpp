@@ -14,6 +14,7 @@
 #include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -661,6 +662,33 @@ void send_frame(int fd, char tag, const std::string& payload) {
     write_all(fd, std::string(1, tag) + std::to_string(payload.size()) + "\n" + payload);
 }
 
+// A child killed by a request to stop — SIGTERM (scancel, a Slurm time limit, kill),
+// SIGINT (Ctrl-C), SIGHUP, SIGQUIT — was not failed by its combination: the whole run is
+// being stopped, and the same signal is on its way to this process (Slurm and a terminal
+// signal every process of the job). Found by make test-slurm (session 7): the child died
+// first, this parent wrote `status=error, the measurement process died from signal 15
+// (Terminated)` before its own SIGTERM arrived, and `--resume` then kept that row instead
+// of measuring the combination again, so the merged grid differed from a single-process
+// run. So the parent stops itself the same way, now, without a row for the combination;
+// its earlier rows are on disk (each is flushed when written), and --resume measures the
+// interrupted combination again (dropping its orphaned repetition rows). A crash of the
+// structure (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT) and the kernel's OOM kill (SIGKILL)
+// stay error rows.
+void stop_if_asked_to_stop(int signal_number) {
+    if (signal_number != SIGTERM && signal_number != SIGINT && signal_number != SIGHUP && signal_number != SIGQUIT)
+        return;
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(nullptr);
+    std::signal(signal_number, SIG_DFL);
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, signal_number);
+    sigprocmask(SIG_UNBLOCK, &set, nullptr);
+    std::raise(signal_number);
+    _exit(128 + signal_number);  // not reached; the shell's code for a death by that signal
+}
+
 }  // namespace
 
 ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s,
@@ -731,6 +759,7 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
     ::close(fds[0]);
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
+    if (!o.timed_out && WIFSIGNALED(status)) stop_if_asked_to_stop(WTERMSIG(status));
     if (o.timed_out) o.result.reset();
     if (!o.result && !o.timed_out) {
         o.failure = WIFSIGNALED(status)

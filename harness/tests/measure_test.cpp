@@ -6,6 +6,9 @@
 #include <cstring>
 #include <thread>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include "accelbench/accel/baseline/brute_force.h"
 #include "accelbench/accel/baseline/embree_accel.h"
 #include "measure.h"
@@ -303,6 +306,33 @@ TEST(IsolationTest, ACrashIsAnErrorAndTheCallerGoesOn) {
     EXPECT_EQ(m.status, "error");
     EXPECT_NE(m.message.find("signal 11"), std::string::npos) << m.message;
     EXPECT_NE(m.message.find("during build repetition 1 of 3"), std::string::npos) << m.message;
+}
+
+// A child stopped by SIGTERM (scancel, kill) or SIGINT is the run being stopped, not a
+// failed combination: the caller stops by the same signal and writes no error row for it,
+// so that --resume measures the combination again (make test-slurm found such rows).
+// The caller here is a forked copy of this test process, so that its death can be seen.
+TEST(IsolationTest, AStopRequestStopsTheCallerWithoutARow) {
+    for (const int sig : {SIGTERM, SIGINT}) {
+        std::fflush(nullptr);
+        const pid_t caller = fork();
+        ASSERT_GE(caller, 0);
+        if (caller == 0) {
+            const Measurement m = run_isolated(
+                [sig](const StageFn& stage) -> Measurement {
+                    stage("build repetition 1 of 1");
+                    std::signal(sig, SIG_DFL);
+                    std::raise(sig);
+                    return {};
+                },
+                60);
+            _exit(m.status == "error" ? 3 : 4);  // returned a row: wrong
+        }
+        int status = 0;
+        ASSERT_EQ(waitpid(caller, &status, 0), caller);
+        ASSERT_TRUE(WIFSIGNALED(status)) << "signal " << sig << ": the caller exited with " << WEXITSTATUS(status);
+        EXPECT_EQ(WTERMSIG(status), sig);
+    }
 }
 
 TEST(IsolationTest, ATimeLimitStopsTheChild) {
