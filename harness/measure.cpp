@@ -662,6 +662,15 @@ void send_frame(int fd, char tag, const std::string& payload) {
     write_all(fd, std::string(1, tag) + std::to_string(payload.size()) + "\n" + payload);
 }
 
+// Everything buffered for stdout and stderr, C++ streams and C stdio, written out: before a
+// fork (or the child would write the parent's buffered text a second time), before a child
+// exits, and before the parent stops itself.
+void flush_all_output() {
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(nullptr);
+}
+
 // A child killed by a request to stop — SIGTERM (scancel, a Slurm time limit, kill),
 // SIGINT (Ctrl-C), SIGHUP, SIGQUIT — was not failed by its combination: the whole run is
 // being stopped, and the same signal is on its way to this process (Slurm and a terminal
@@ -677,9 +686,7 @@ void send_frame(int fd, char tag, const std::string& payload) {
 void stop_if_asked_to_stop(int signal_number) {
     if (signal_number != SIGTERM && signal_number != SIGINT && signal_number != SIGHUP && signal_number != SIGQUIT)
         return;
-    std::cout.flush();
-    std::cerr.flush();
-    std::fflush(nullptr);
+    flush_all_output();
     std::signal(signal_number, SIG_DFL);
     sigset_t set;
     sigemptyset(&set);
@@ -695,9 +702,7 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
                           const std::string& first_stage) {
     int fds[2];
     if (pipe(fds) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
-    std::cout.flush();
-    std::cerr.flush();
-    std::fflush(nullptr);
+    flush_all_output();
     const pid_t pid = fork();
     if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
     if (pid == 0) {
@@ -705,9 +710,7 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
         prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive a killed parent
         const std::string result = work([&](const std::string& s) { send_frame(fds[1], 'S', s); });
         send_frame(fds[1], 'R', result);
-        std::cout.flush();
-        std::cerr.flush();
-        std::fflush(nullptr);
+        flush_all_output();
         _exit(0);
     }
     ::close(fds[1]);
