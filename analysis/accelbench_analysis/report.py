@@ -37,7 +37,8 @@ def provenance_lines(results: Results) -> list[str]:
         out.append(
             f"  **Commit:** `{f['git_sha']}`"
             + (" **(dirty work tree)**" if f["git_dirty"] == "true" else "")
-            + f"; {f['compiler']}, {f['build_type']}; Embree {f['embree_version']}; "
+            + f"; {f['compiler']}, {f['build_type']}; vector extensions (isa) {f['isa']}; "
+            f"Embree {f['embree_version']}; "
             f"{g.rows} rows"
         )
     if ts:

@@ -13,6 +13,7 @@ from accelbench_analysis.schema import (
     COUNT_COLUMNS,
     ERROR_MEMORY_VERDICT_COLUMNS,
     IDENTITY_COLUMNS,
+    ISA_COLUMN,
     PROVENANCE_COLUMNS,
     STATUS_COLUMNS,
     TIMING_COLUMNS,
@@ -45,8 +46,12 @@ PROVENANCE = {
     "cpu": "Test CPU @ 2.0GHz",
     "threads": "1",
     "embree_version": "3.13.5",
+    "isa": "sse2+sse4.2+avx+avx2+fma",
     "timestamp": "2024-01-01T00:00:00Z",
 }
+
+# The harness writes the provenance columns, then `isa` last (schema.ISA_COLUMN).
+PROVENANCE_TAIL = PROVENANCE_COLUMNS + [ISA_COLUMN]
 
 MODELS = {  # name: (triangles, vertices)
     "stanford-bunny": (69451, 35947),
@@ -65,7 +70,7 @@ def header(with_errors: bool = False) -> list[str]:
     cols = IDENTITY_COLUMNS + PARAM_NAMES + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
     if with_errors:
         cols += ERROR_MEMORY_VERDICT_COLUMNS
-    return cols + PROVENANCE_COLUMNS
+    return cols + PROVENANCE_TAIL
 
 
 def row(
@@ -156,7 +161,7 @@ def write_csv(
     """Writes rows in the harness's column order (duplicate names included); extra columns
     go before the provenance."""
     cols = header(with_errors)
-    cols = cols[: -len(PROVENANCE_COLUMNS)] + list(extra_columns) + cols[-len(PROVENANCE_COLUMNS) :]
+    cols = cols[: -len(PROVENANCE_TAIL)] + list(extra_columns) + cols[-len(PROVENANCE_TAIL) :]
     lines = []
     for r in rows:
         vals = [r[c] for c in IDENTITY_COLUMNS]
@@ -166,7 +171,7 @@ def write_csv(
         if with_errors:
             vals += [r["errors"].get(c, "") for c in ERROR_MEMORY_VERDICT_COLUMNS]
         vals += [r["extra"].get(c, "") for c in extra_columns]
-        vals += [r["prov"][c] for c in PROVENANCE_COLUMNS]
+        vals += [r["prov"][c] for c in PROVENANCE_TAIL]
         lines.append(vals)
     keep = [i for i, c in enumerate(cols) if c not in drop]
     with path.open("w", newline="") as fh:

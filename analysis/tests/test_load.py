@@ -142,7 +142,7 @@ def test_error_columns_optional(tmp_path, realistic):
 def test_ragged_csv_is_a_contract_error(tmp_path):
     path = minimal(tmp_path)
     path.write_text(path.read_text() + "a,b,c" + ",x" * 200 + "\n")
-    with pytest.raises(ContractError, match=r"line 4 \(row 3\): 203 fields but the header has 54"):
+    with pytest.raises(ContractError, match=r"line 4 \(row 3\): 203 fields but the header has 55"):
         read_csv(path)
 
 
