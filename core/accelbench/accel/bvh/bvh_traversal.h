@@ -77,6 +77,17 @@
 // latency, not by instructions. And the records cost node memory x2 and a pass after every
 // build: build / Embree bvh median bunny 0.46 -> 0.55 | 0.45 -> 0.51, lbvh bunny 0.20 -> 0.26
 // | 0.19 -> 0.23, against build goals of 0.5 and 0.25.
+//
+// Session 8 measured, and did not adopt, the wide BVH's widened_mask (wbvh_simd.h) here: both
+// children's hit decisions taken from the unwidened comparisons (tnear <= tfar before the
+// 2 gamma(3) widening) with a rarely taken branch to the widened ones when they differ — the
+// same decisions and counts (every ray's totals on the bunny and the conference, ctest), the
+// slack's latency off the chain. The kd-tree's version of it gained 4-6% (kdtree.cpp); here,
+// trace / Embree, interleaved A/B, four rounds: dragon bvh sah 2.11 2.12 2.11 2.11 -> 2.24 2.52
+// 2.26 2.24, median 2.65 2.68 2.73 2.72 -> 2.86 3.02 2.91 2.83; bunny bvh sah 1.81 1.84 ->
+// 1.73 1.84, conference within its noise (median 4.55-5.85 either way). Slower where the
+// tree is largest; not analysed further (the combined mask replaces the short-circuit
+// branches GCC laid out for hn.hit() && hf.hit()).
 #pragma once
 
 #include <cstdint>

@@ -719,19 +719,37 @@ void traverse(std::span<const KdNode> nodes, const Bounds3& bounds, const Ray& r
         if (!node.is_leaf()) {
             const int axis = node.axis();
             const float t_split = (node.split() - org[axis]) * inv_dir[axis];
-            const float split_lo = slack_below(t_split), split_hi = slack_above(t_split);
             const uint32_t below = index + 1, above = node.above_child();
             const uint32_t swap = (below ^ above) & above_first[axis];
             const uint32_t first = below ^ swap, second = above ^ swap;
-            if (split_lo > t_max) {
-                index = first;
-            } else if (split_hi < t_min) {
-                index = second;
-            } else {
-                *top++ = {second, split_lo > t_min ? split_lo : t_min, t_max};
-                t_max = split_hi < t_max ? split_hi : t_max;
-                index = first;
+            // "first only" is split_lo > t_max and "second only" split_hi < t_min. As
+            // split_lo <= t_split <= split_hi (NaN compares false either way), each is the
+            // plain comparison of t_split AND the one with the slack: the same decisions, but
+            // the branch that chooses the child waits for t_split only, and the slack's
+            // comparison is a second branch, nearly always taken with the first (as the wide
+            // BVH's widened_mask, wbvh_simd.h). A mispredicted choice is found out the slack's
+            // latency (abs, multiply, min, subtract) sooner. Measured (session 8, trace / Embree,
+            // four interleaved A/B rounds on two models, two on the others, load ~1): bunny
+            // 3.54 3.46 3.46 3.48 -> 3.27 3.35 3.28 3.21, igea 3.74 3.78 3.79 3.79 -> 3.67 3.58
+            // 3.63 3.63, dragon 3.34 3.39 3.36 3.38 3.35 3.32 -> 3.33 3.22 3.17 3.43 3.20 3.19,
+            // conference 2.86 2.83 2.87 2.92 2.93 2.85 -> 2.90 3.11 2.86 2.87 2.87 2.87 (no change);
+            // mailbox=true within the noise. Answers and counters identical (every ray's
+            // totals on the bunny and the conference, both mailbox settings; ctest).
+            if (t_split > t_max) {
+                if (slack_below(t_split) > t_max) [[likely]] {
+                    index = first;
+                    continue;
+                }
+            } else if (t_split < t_min) {
+                if (slack_above(t_split) < t_min) [[likely]] {
+                    index = second;
+                    continue;
+                }
             }
+            const float split_lo = slack_below(t_split), split_hi = slack_above(t_split);
+            *top++ = {second, split_lo > t_min ? split_lo : t_min, t_max};
+            t_max = split_hi < t_max ? split_hi : t_max;
+            index = first;
             continue;
         }
         if (!visit_leaf(node) || top == stack) return;
