@@ -45,8 +45,9 @@ AcceleratorInfo Wbvh::info() {
                  0,
                  1000,
                  "binary build: nodes at this depth become leaves whatever their size"},
-                // 32, not the binary BVH's 16 (Embree's binned builder uses 32 too): finer planes
-                // near the root. Measured (width 8, accel_bench, 3 reps, idle machine): the
+                // 32, as Embree's binned builder (and, since session 8, `bvh split=sah`'s own
+                // default, bvh.h): finer planes near the root. Measured against 16 (width 8,
+                // accel_bench, 3 reps, idle machine): the
                 // conference's primary rays 2.85M -> 2.24M node visits, 22.0M -> 17.3M box
                 // tests, trace / Embree 1.44 -> 1.22 (width 4: 1.84 -> 1.68); bunny, igea, dragon
                 // within 1% of the counts and of the time; build / Embree +0.08-0.16 (dragon
