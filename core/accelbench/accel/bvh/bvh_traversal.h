@@ -88,6 +88,22 @@
 // 1.73 1.84, conference within its noise (median 4.55-5.85 either way). Slower where the
 // tree is largest; not analysed further (the combined mask replaces the short-circuit
 // branches GCC laid out for hn.hit() && hf.hit()).
+//
+// Session 9 measured, and did not adopt, two forms with fewer simulated mispredictions (the
+// `hn.hit() && hf.hit()` branch is 2.69M of the bunny's 6.44M in callgrind's branch
+// simulation, bvh sah, closest + any hit, two renders); both had identical counts:
+//  - branch-free: both hit children pushed with conditional stack increments (the first
+//    with entry distance -inf, so it is always entered), the order by masks, the next node
+//    always popped: 6.44M -> 3.41M mispredictions, +12% instructions, and trace / Embree
+//    1.3-2.3x slower (bunny bvh sah 1.78 -> 2.5, conference median 5 -> 11): every step's
+//    next index then waits for both box tests and a store-to-load round trip, where the
+//    predicted branch lets the next node's loads start at once (the kd-tree's note, kdtree.cpp).
+//  - one 2-bit hit mask, then `== 3` (both) and `!= 0` (one): 6.44M -> 5.08M, +3%
+//    instructions, and 15-60% slower on all four models, against a binary still without
+//    triangle.h's one-branch outside test (bunny bvh sah 1.90 -> 2.35, dragon
+//    2.18 -> 2.74, conference median 5.3 -> 8.4): the hardware predicts GCC's two short-circuit
+//    branches far better than callgrind's model does, and the mask waits for both tests.
+// Callgrind's misprediction counts are no guide to this loop's time on this machine.
 #pragma once
 
 #include <cstdint>
