@@ -91,7 +91,9 @@
 //
 // Session 9 measured, and did not adopt, two forms with fewer simulated mispredictions (the
 // `hn.hit() && hf.hit()` branch is 2.69M of the bunny's 6.44M in callgrind's branch
-// simulation, bvh sah, closest + any hit, two renders); both had identical counts:
+// simulation, bvh sah, closest + any hit, two renders); both had identical counts, and both
+// were timed against the binary before triangle.h's one-branch outside test, which the new
+// binaries had (so their true loss is larger than the figures):
 //  - branch-free: both hit children pushed with conditional stack increments (the first
 //    with entry distance -inf, so it is always entered), the order by masks, the next node
 //    always popped: 6.44M -> 3.41M mispredictions, +12% instructions, and trace / Embree
@@ -99,8 +101,7 @@
 //    next index then waits for both box tests and a store-to-load round trip, where the
 //    predicted branch lets the next node's loads start at once (the kd-tree's note, kdtree.cpp).
 //  - one 2-bit hit mask, then `== 3` (both) and `!= 0` (one): 6.44M -> 5.08M, +3%
-//    instructions, and 15-60% slower on all four models, against a binary still without
-//    triangle.h's one-branch outside test (bunny bvh sah 1.90 -> 2.35, dragon
+//    instructions, and 15-60% slower on all four models (bunny bvh sah 1.90 -> 2.35, dragon
 //    2.18 -> 2.74, conference median 5.3 -> 8.4): the hardware predicts GCC's two short-circuit
 //    branches far better than callgrind's model does, and the mask waits for both tests.
 // Callgrind's misprediction counts are no guide to this loop's time on this machine.
