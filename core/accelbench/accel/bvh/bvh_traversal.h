@@ -105,6 +105,25 @@
 //    2.18 -> 2.74, conference median 5.3 -> 8.4): the hardware predicts GCC's two short-circuit
 //    branches far better than callgrind's model does, and the mask waits for both tests.
 // Callgrind's misprediction counts are no guide to this loop's time on this machine.
+//
+// Session 10 measured the box-test form apart (the first suspect), and did not adopt
+// it: bvh v2's one FMA per slab, plane * inv + (-origin * inv), made conservative without any
+// per-box cost. Per ray: the inverse scaled by 1 -+ 2^-22 for near and far planes, -origin *
+// that rounded outward by at least an ulp, so each near distance errs below and each far
+// distance above its true value whenever it is not negative (the FMA rounds once; the scaled
+// inverse covers its rounding and the reciprocal's); no far widening then. Valid for rays with
+// tmin >= 0 and every |1 / dir| <= 2^66 (no product overflows below kMaxCoordinate), others
+// kept intersect_box. The closest-hit loop's instructions fell 27% (callgrind, bunny bvh sah
+// 640x480 render: 124.1M -> 90.1M; any hit 81.3M -> 80.9M), and the loop had its 18 FMAs, but
+// trace / Embree did not move (interleaved A/B, three rounds, bunny: bvh sah 1.65 1.71 1.66 ->
+// 1.70 1.72 1.74, median 2.14 2.12 2.20 -> 2.15 2.15 2.15, lbvh 2.02 2.02 2.06 -> 2.02 2.08
+// 2.05; dragon and conference, two rounds, within noise: bvh sah 1.88 1.97 -> 1.88 1.93,
+// conference median 4.53 4.71 -> 4.34 4.35), with a per-ray choice of form or without it. It
+// also admits more boxes where flat boxes meet grazing rays: conference bvh median primary
+// prim tests +2.4% (bunny +0.01%), which would change the report rows' counts. As with the
+// forms above: the loop waits on the node-to-node chain (load, test, branch), not on
+// instructions. (Session 9 had timed bvh v2's unconservative form, no widening at all, 10-20%
+// faster on these trees; why the conservative form keeps none of that was not analysed.)
 #pragma once
 
 #include <cstdint>
