@@ -124,6 +124,12 @@
 // forms above: the loop waits on the node-to-node chain (load, test, branch), not on
 // instructions. (Session 9 had timed bvh v2's unconservative form, no widening at all, 10-20%
 // faster on these trees; why the conservative form keeps none of that was not analysed.)
+// Also measured in session 10, and not adopted: `bvh split=sah`'s leaves of two or more
+// triangles tested as 4-lane packets with the wide BVH's SSE watertight test (wbvh_simd.h,
+// same answers), from packets made in FlatBvh::finalize: trace / Embree bunny 1.67 1.63 1.69
+// -> 1.80 1.70 1.74, conference 2.01 1.92 -> 1.99 2.02. The SAH leaves are small (the bunny's
+// 69,451 triangles in 38,016 leaves, 1.8 a leaf), so a packet is half empty and the vector
+// ray's per-ray constants cost what the lanes save.
 #pragma once
 
 #include <cstdint>
