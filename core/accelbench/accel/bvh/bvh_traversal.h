@@ -126,13 +126,15 @@
 // faster on these trees; why the conservative form keeps none of that was not analysed.)
 // Also measured in session 10, and not adopted: `bvh split=sah`'s leaves of two or more
 // triangles tested as 4-lane packets with the wide BVH's SSE watertight test (wbvh_simd.h,
-// same answers), from packets made in FlatBvh::finalize: trace / Embree bunny 1.67 1.63 1.69
-// -> 1.80 1.70 1.74, conference 2.01 1.92 -> 1.99 2.02. The SAH leaves are small (the bunny's
-// 69,451 triangles in 38,016 leaves, 1.8 a leaf), so a packet is half empty and the vector
-// ray's per-ray constants cost what the lanes save.
+// whose lanes answer as intersect_triangle; wbvh_test checks it), from packets made in
+// FlatBvh::finalize: trace / Embree bunny 1.67 1.63 1.69 -> 1.80 1.70 1.74, conference 2.01
+// 1.92 -> 1.99 2.02. It also counted every used lane of an any-hit packet, where the scalar
+// loop stops at the hit (bunny shadow prim tests 235,584 -> 240,340). The SAH leaves are small
+// (the bunny's 69,451 triangles in 38,016 leaves, 1.8 a leaf), so a packet is half empty; that
+// the vector ray's per-ray constants then cost what the lanes save is likely, not measured.
 // And the stack apart (bvh v2's: node indices only, every popped node entered): bunny primary
-// node visits +8.7% (1,558,153 -> 1,693,775, bvh sah; shadow rays unchanged, they stop at
-// the first hit), trace / Embree bvh sah 1.66 1.63 1.65 -> 1.66 1.68 1.71, median 2.15 2.15
+// node visits +8.7% (1,558,153 -> 1,693,775, bvh sah; shadow rays unchanged: an any-hit ray's
+// interval never shrinks, so no popped node ever lies beyond it), trace / Embree bvh sah 1.66 1.63 1.65 -> 1.66 1.68 1.71, median 2.15 2.15
 // 2.17 -> 2.16 2.16 2.26, lbvh 2.00 1.99 2.01 -> 2.04 2.09 2.07: the distances pay for
 // themselves, and the report rows' counts stay as they are.
 #pragma once

@@ -428,7 +428,8 @@ private:
     // (64) primitives, which then make and sort their own events per axis as the pbrt build
     // does (the same tree): build / Embree bunny 3.25, 3.29 -> 4.20, 4.29 (4.95, 4.86),
     // conference 3.61, 3.53 -> 5.25, 5.24 (7.46, 7.29). Splitting the sorted lists costs less
-    // than sorting even a small node's events (std::sort's comparisons mispredict).
+    // than sorting even a small node's events; likely std::sort's mispredicted comparisons, as
+    // in the root sort's profile (sort_root_events), not profiled here.
     template <class T, class PrimOf>
     std::pair<Range, Range> split_list(ListStack<T>& stack, Range r, PrimOf prim, uint8_t keep = kBoth) {
         const size_t above_begin = stack.size();
