@@ -86,7 +86,7 @@ TEST(BvhTraversal, OrderedCountsOnHandTree) {
     HandTree t;
     Hit hit;
     RayStats s;
-    intersect_bvh_ordered(t.bvh, down_at(6.25f, 0.25f), hit, s);
+    intersect_bvh(BvhTraversal::ordered, t.bvh, down_at(6.25f, 0.25f), hit, s);
     EXPECT_EQ(hit.prim, 3u);
     EXPECT_FLOAT_EQ(hit.t, 1.0f);
     EXPECT_FLOAT_EQ(hit.u, 0.25f);
@@ -98,23 +98,23 @@ TEST(BvhTraversal, OrderedCountsOnHandTree) {
 
     RayStats miss;
     Hit none;
-    intersect_bvh_ordered(t.bvh, down_at(3.5f, 0.5f), none, miss);
+    intersect_bvh(BvhTraversal::ordered, t.bvh, down_at(3.5f, 0.5f), none, miss);
     EXPECT_FALSE(none.found());
     EXPECT_EQ(miss.box_tests, 3u);
     EXPECT_EQ(miss.node_visits, 1u);
     EXPECT_EQ(miss.prim_tests, 0u);
 
     RayStats any;
-    EXPECT_TRUE(occluded_bvh_ordered(t.bvh, down_at(0.25f, 0.25f), any));
+    EXPECT_TRUE(occluded_bvh(BvhTraversal::ordered, t.bvh, down_at(0.25f, 0.25f), any));
     EXPECT_EQ(any.prim_tests, 1u);
-    EXPECT_FALSE(occluded_bvh_ordered(t.bvh, down_at(3.5f, 0.5f), any));
+    EXPECT_FALSE(occluded_bvh(BvhTraversal::ordered, t.bvh, down_at(3.5f, 0.5f), any));
 }
 
 TEST(BvhTraversal, ReportAlgorithmVisitsEveryHitBox) {
     HandTree t;
     Hit hit;
     RayStats s;
-    intersect_bvh_report(t.bvh, down_at(6.25f, 0.25f), hit, s);
+    intersect_bvh(BvhTraversal::report, t.bvh, down_at(6.25f, 0.25f), hit, s);
     EXPECT_EQ(hit.prim, 3u);
     // root, A (miss), B, leaf tri2 (miss), leaf tri3: each visited node is one box test.
     EXPECT_EQ(s.node_visits, 5u);
@@ -122,7 +122,7 @@ TEST(BvhTraversal, ReportAlgorithmVisitsEveryHitBox) {
     EXPECT_EQ(s.prim_tests, 1u);
 
     RayStats any;
-    EXPECT_TRUE(occluded_bvh_report(t.bvh, down_at(2.25f, 0.5f), any));
+    EXPECT_TRUE(occluded_bvh(BvhTraversal::report, t.bvh, down_at(2.25f, 0.5f), any));
     EXPECT_EQ(any.prim_tests, 1u);
 }
 
@@ -141,14 +141,14 @@ TEST(BvhTraversal, NearChildFirstAndCulledByClosestHit) {
     bvh.finalize(scene);
     Hit hit;
     RayStats s;
-    intersect_bvh_ordered(bvh, down_at(0.25f, 0.25f), hit, s);
+    intersect_bvh(BvhTraversal::ordered, bvh, down_at(0.25f, 0.25f), hit, s);
     EXPECT_EQ(hit.prim, 1u);
     EXPECT_EQ(s.prim_tests, 1u);
     EXPECT_EQ(s.node_visits, 2u);
 
     Hit hit_report;
     RayStats r;
-    intersect_bvh_report(bvh, down_at(0.25f, 0.25f), hit_report, r);
+    intersect_bvh(BvhTraversal::report, bvh, down_at(0.25f, 0.25f), hit_report, r);
     EXPECT_EQ(hit_report.prim, 1u);
     EXPECT_EQ(r.prim_tests, 2u);  // Algorithm 1 collects both
 }
@@ -157,11 +157,11 @@ TEST(BvhTraversal, EmptyTreeMisses) {
     FlatBvh empty;
     Hit hit;
     RayStats s;
-    intersect_bvh_ordered(empty, down_at(0, 0), hit, s);
-    intersect_bvh_report(empty, down_at(0, 0), hit, s);
+    intersect_bvh(BvhTraversal::ordered, empty, down_at(0, 0), hit, s);
+    intersect_bvh(BvhTraversal::report, empty, down_at(0, 0), hit, s);
     EXPECT_FALSE(hit.found());
-    EXPECT_FALSE(occluded_bvh_ordered(empty, down_at(0, 0), s));
-    EXPECT_FALSE(occluded_bvh_report(empty, down_at(0, 0), s));
+    EXPECT_FALSE(occluded_bvh(BvhTraversal::ordered, empty, down_at(0, 0), s));
+    EXPECT_FALSE(occluded_bvh(BvhTraversal::report, empty, down_at(0, 0), s));
     EXPECT_EQ(s.node_visits + s.box_tests + s.prim_tests, 0u);
 }
 
@@ -192,10 +192,10 @@ TEST(BvhTraversal, StackGrowsForDeepTrees) {
     for (uint32_t target : {0u, n - 1}) {
         Hit hit;
         NoCounters none;
-        intersect_bvh_ordered(bvh, down_at(float(target) + 0.1f, 0.1f), hit, none);
+        intersect_bvh(BvhTraversal::ordered, bvh, down_at(float(target) + 0.1f, 0.1f), hit, none);
         EXPECT_EQ(hit.prim, target);
         Hit hit_report;
-        intersect_bvh_report(bvh, down_at(float(target) + 0.1f, 0.1f), hit_report, none);
+        intersect_bvh(BvhTraversal::report, bvh, down_at(float(target) + 0.1f, 0.1f), hit_report, none);
         EXPECT_EQ(hit_report.prim, target);
     }
 }

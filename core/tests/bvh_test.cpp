@@ -113,12 +113,78 @@ TEST(Bvh, AgreesWithEmbreeOnClosedGrid) {
         }
 }
 
+// The packet leaf test (leaf_test=packet, the default of split=sah) answers every ray
+// exactly as the scalar one on the same tree — the same primitive, t, u and v bit for bit —
+// visits the same nodes and tests the same boxes; closest-hit queries test the same
+// triangles, any-hit ones at least as many (a hit ends the search after its whole packet).
+// Rays from outside and inside the bunny, a closed grid (shared edges) and a random soup,
+// the shadow rays from the closest hits; SAH trees with leaves of up to 8 (2 packets) and 3
+// (a partial packet), the median tree forced to packets of one triangle; both traversals.
+TEST(Bvh, PacketLeavesAnswerExactlyAsScalarLeaves) {
+    const std::vector<std::pair<std::string, Scene>> scenes = {
+        {"bunny", stanford_bunny()}, {"grid", closed_grid()}, {"soup", random_soup(3000, 5)}};
+    const std::vector<std::map<std::string, std::string>> trees = {
+        {{"split", "sah"}}, {{"split", "sah"}, {"max_prims", "3"}, {"traversal_cost", "8"}}, {{"split", "median"}}};
+    for (const auto& [name, scene] : scenes) {
+        const std::vector<Ray> rays = probe_rays(scene, 4000, 11);
+        for (const auto& tree : trees)
+            for (const std::string traversal : {"ordered", "report"}) {
+                auto params = tree;
+                params["traversal"] = traversal;
+                params["leaf_test"] = "scalar";
+                const auto scalar = built(scene, params);
+                params["leaf_test"] = "packet";
+                const auto packet = built(scene, params);
+                const std::string what = name + " " + describe(params);
+                std::vector<Hit> hs(rays.size()), hp(rays.size());
+                std::vector<RayStats> ss(rays.size()), sp(rays.size());
+                scalar->closest_hits(rays, hs, ss);
+                packet->closest_hits(rays, hp, sp);
+                size_t hits = 0;
+                for (size_t i = 0; i < rays.size(); ++i) {
+                    ASSERT_EQ(hs[i].prim, hp[i].prim) << what << " ray " << i;
+                    EXPECT_EQ(ss[i].node_visits, sp[i].node_visits) << what << " ray " << i;
+                    EXPECT_EQ(ss[i].box_tests, sp[i].box_tests) << what << " ray " << i;
+                    EXPECT_EQ(ss[i].prim_tests, sp[i].prim_tests) << what << " ray " << i;
+                    hits += hs[i].found();
+                    if (!hs[i].found()) continue;
+                    EXPECT_EQ(std::memcmp(&hs[i].t, &hp[i].t, sizeof(float)), 0) << what << " ray " << i;
+                    EXPECT_EQ(std::memcmp(&hs[i].u, &hp[i].u, sizeof(float)), 0) << what << " ray " << i;
+                    EXPECT_EQ(std::memcmp(&hs[i].v, &hp[i].v, sizeof(float)), 0) << what << " ray " << i;
+                }
+                EXPECT_GT(hits, rays.size() / 4) << what;
+                const std::vector<Ray> shadow = shadow_rays(scene, rays, hs);
+                std::vector<uint8_t> os(shadow.size()), op(shadow.size());
+                std::vector<RayStats> as(shadow.size()), ap(shadow.size());
+                scalar->any_hits(shadow, os, as);
+                packet->any_hits(shadow, op, ap);
+                size_t occluded = 0;
+                for (size_t i = 0; i < shadow.size(); ++i) {
+                    ASSERT_EQ(os[i], op[i]) << what << " shadow ray " << i;
+                    occluded += os[i];
+                    EXPECT_EQ(as[i].node_visits, ap[i].node_visits) << what << " shadow ray " << i;
+                    EXPECT_EQ(as[i].box_tests, ap[i].box_tests) << what << " shadow ray " << i;
+                    EXPECT_LE(as[i].prim_tests, ap[i].prim_tests) << what << " shadow ray " << i;
+                }
+                // Some occluded, some not, or the any-hit comparison would say little.
+                if (name != "grid") {
+                    EXPECT_GT(occluded, 0u) << what;
+                    EXPECT_LT(occluded, shadow.size()) << what;
+                }
+            }
+    }
+}
+
 // ---- exact trees on hand-made scenes ----------------------------------------------------
 
 TEST(Bvh, EightSeparatedTrianglesGiveTheBalancedTree) {
     const Scene scene = triangles_along_x({0, 1, 2, 3, 4, 5, 6, 7});
     for (const std::string& split : kSplits) {
-        auto bvh = built(scene, {{"split", split}});
+        // The SAH with a node visit as dear as a triangle test splits down to single
+        // triangles here too; at its default traversal_cost (4), see below.
+        std::map<std::string, std::string> p = {{"split", split}};
+        if (split == "sah") p["traversal_cost"] = "1";
+        auto bvh = built(scene, p);
         expect_shape(*bvh, {15, 8, 3}, split);
         EXPECT_EQ(extra(*bvh, "degenerate_splits"), 0) << split;
         EXPECT_EQ(extra(*bvh, "forced_leaves"), 0) << split;
@@ -131,6 +197,11 @@ TEST(Bvh, EightSeparatedTrianglesGiveTheBalancedTree) {
         // The leaves come out in x order: slot k holds triangle k.
         for (uint32_t k = 0; k < 8; ++k) EXPECT_EQ(bvh->tree().prim_ids[k], k) << split;
     }
+    // SAH at traversal_cost 4 (the default): the triangles are flat (area 2 dx dy), k of them
+    // from x = 0 have box area k - 0.5, all eight 7.5. Root: a leaf costs 8 x 7.5 = 60, the
+    // best split 4 | 4 costs 4 x 7.5 + 3.5 x 4 + 3.5 x 4 = 58: split. Each half: a leaf 4 x 3.5
+    // = 14, its best split 4 x 3.5 + 1.5 x 2 + 1.5 x 2 = 20: leaf. Two leaves of four.
+    expect_shape(*built(scene, {{"split", "sah"}}), {3, 2, 1}, "sah default");
     expect_shape(*built(scene, {{"max_prims", "2"}}), {7, 4, 2}, "max_prims=2");
     expect_shape(*built(scene, {{"max_prims", "3"}}), {7, 4, 2}, "max_prims=3");
     expect_shape(*built(scene, {{"max_prims", "8"}}), {1, 1, 0}, "max_prims=8");
@@ -182,8 +253,10 @@ TEST(Bvh, SplitCriteriaDifferAsTheReportDescribes) {
     expect_shape(*built(outlier, {{"split", "midpoint"}}), {7, 4, 3}, "midpoint");
     // Mean 25.75 -> {0,1,2} | {100}; then mean 1.25 -> {0} | {1,2}.
     expect_shape(*built(outlier, {{"split", "mean"}}), {7, 4, 3}, "mean");
-    // SAH cuts off the outlier's empty space first.
-    expect_shape(*built(outlier, {{"split", "sah"}}), {7, 4, 3}, "sah");
+    // SAH (traversal_cost 1) cuts off the outlier's empty space first. (At the default 4 the
+    // four are one leaf: 4 x 100.5 against 4 x 100.5 + 2.5 x 3 + 0.5 for the best split.)
+    expect_shape(*built(outlier, {{"split", "sah"}, {"traversal_cost", "1"}}), {7, 4, 3}, "sah");
+    expect_shape(*built(outlier, {{"split", "sah"}}), {1, 1, 0}, "sah default");
 
     // Spatial median, the report's example (Figure 5c): sizes {1, 1, 1, 4} -> areas
     // {1, 1, 1, 16}: the big one alone on one side.
@@ -203,10 +276,15 @@ TEST(Bvh, SplitCriteriaDifferAsTheReportDescribes) {
 }
 
 TEST(Bvh, SahStopsEarlyOnlyWhenALeafIsCheaper) {
-    // Four separated triangles: splitting pays, so SAH makes single-triangle leaves even
-    // though max_prims allows a leaf of 4 (median makes that one leaf).
+    // Four separated triangles: with a node visit as dear as a triangle test (traversal_cost
+    // 1) splitting pays, so SAH makes single-triangle leaves even though max_prims allows a
+    // leaf of 4 (median makes that one leaf).
     const Scene separated = triangles_along_x({0, 1, 2, 3});
-    expect_shape(*built(separated, {{"split", "sah"}, {"max_prims", "4"}}), {7, 4, 2}, "sah separated");
+    expect_shape(*built(separated, {{"split", "sah"}, {"max_prims", "4"}, {"traversal_cost", "1"}}), {7, 4, 2},
+                 "sah separated");
+    // At the default traversal_cost 4 a leaf is cheaper: 4 x 3.5 = 14 against 4 x 3.5 + 1.5 x 2
+    // + 1.5 x 2 = 20 for the best split.
+    expect_shape(*built(separated, {{"split", "sah"}, {"max_prims", "4"}}), {1, 1, 0}, "sah separated default");
     expect_shape(*built(separated, {{"split", "median"}, {"max_prims", "4"}}), {1, 1, 0}, "median separated");
     // Four nearly coincident triangles: any split costs more than one leaf of 4.
     const Scene stacked = triangles_along_x({0, 0.01f, 0.02f, 0.03f}, 1.0f);

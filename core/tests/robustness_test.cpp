@@ -59,9 +59,11 @@ std::vector<Config> configs() {
             if (info.watertight(resolve_params(info.name, info.params, flipped)) != watertight_by_default)
                 out.push_back({info.name, flipped, info.name + "_" + spec.name, info.third_party});
         }
-        if (info.name == "bvh") {  // the trees that its options change: SAH leaves, reinsertion
+        if (info.name == "bvh") {  // the trees that its options change (SAH leaves, reinsertion) and its leaf tests
             out.push_back({"bvh", {{"split", "sah"}}, "bvh_sah"});
             out.push_back({"bvh", {{"split", "sah"}, {"reinsertion", "3"}}, "bvh_sah_reinsertion"});
+            out.push_back({"bvh", {{"split", "sah"}, {"leaf_test", "scalar"}}, "bvh_sah_scalar_leaves"});
+            out.push_back({"bvh", {{"leaf_test", "packet"}}, "bvh_packet_leaves"});
         }
     }
     return out;

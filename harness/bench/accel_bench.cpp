@@ -72,6 +72,8 @@ const std::vector<Structure>& structures() {
     static const std::vector<Structure> list = {
         {"bvh_median", "bvh", {{"split", "median"}, {"traversal", "ordered"}}},
         {"bvh_sah", "bvh", {{"split", "sah"}, {"traversal", "ordered"}}},
+        // The same tree with its leaves tested one triangle at a time: what the packet test gains.
+        {"bvh_sah_scalar", "bvh", {{"split", "sah"}, {"leaf_test", "scalar"}, {"traversal", "ordered"}}, true, false},
         {"bvh_sah_reinsert", "bvh", {{"split", "sah"}, {"reinsertion", "3"}, {"traversal", "ordered"}}},
         {"lbvh", "lbvh", {{"threads", "1"}, {"traversal", "ordered"}}},
         {"kdtree_nlogn", "kdtree", {{"build", "nlogn"}}},

@@ -80,6 +80,14 @@ AcceleratorInfo Bvh::info() {
                  1e6,
                  "SAH cost of one triangle test (split=sah only)"},
                 bvh_traversal_param(),
+                {"leaf_test",
+                 ParamType::Enum,
+                 "auto",
+                 {"auto", "scalar", "packet"},
+                 0,
+                 0,
+                 "scalar: a leaf's triangles one watertight test at a time; packet: four per SSE test (the wide "
+                 "BVH's), the same answers; auto: packet for split=sah, scalar for the report's splits"},
                 {"reinsertion",
                  ParamType::Int,
                  format_param(int64_t(d.reinsertion)),
@@ -103,6 +111,10 @@ Bvh::Config Bvh::Config::from(const ParamSet& p) {
     c.isect_cost = float(p.get_float("isect_cost"));
     c.traversal = bvh_traversal_from(p);
     c.reinsertion = uint32_t(p.get_int("reinsertion"));
+    const std::string& leaf_test = p.get_enum("leaf_test");
+    c.leaf_test = leaf_test == "scalar" ? Config::LeafTest::scalar
+        : leaf_test == "packet"         ? Config::LeafTest::packet
+                                        : Config::LeafTest::automatic;
     return c;
 }
 
@@ -314,10 +326,13 @@ void Bvh::build(const Scene& scene) {
         case Split::sah: build_with(SahSplit(config_.bins, config_.traversal_cost, config_.isect_cost)); break;
     }
     reinsertion_counts_ = optimize_bvh_by_reinsertion(bvh_, scene, {config_.reinsertion});
+    if (config_.packet_leaves()) packets_.build(bvh_);
+    else packets_ = {};
 }
 
 BuildStats Bvh::build_stats() const {
     BuildStats s = bvh_build_stats(bvh_);
+    if (s.memory_bytes) *s.memory_bytes += packets_.memory_bytes();
     s.extra["degenerate_splits"] = double(counts_.degenerate_splits);
     s.extra["forced_leaves"] = double(counts_.forced_leaves);
     if (config_.reinsertion > 0) s.extra["reinsertions"] = double(reinsertion_counts_.reinsertions);
@@ -326,11 +341,13 @@ BuildStats Bvh::build_stats() const {
 
 template <class C>
 void Bvh::intersect(const Ray& ray, Hit& hit, C& counters) const {
-    intersect_bvh(config_.traversal, bvh_, ray, hit, counters);
+    if (config_.packet_leaves()) intersect_bvh<PacketLeafTest>(config_.traversal, bvh_, packets_, ray, hit, counters);
+    else intersect_bvh(config_.traversal, bvh_, ray, hit, counters);
 }
 
 template <class C>
 bool Bvh::occluded(const Ray& ray, C& counters) const {
+    if (config_.packet_leaves()) return occluded_bvh<PacketLeafTest>(config_.traversal, bvh_, packets_, ray, counters);
     return occluded_bvh(config_.traversal, bvh_, ray, counters);
 }
 

@@ -16,6 +16,8 @@
 //              8 for sah, which decides its own leaves below that bound: a range becomes a
 //              leaf when its SAH cost is not above the best split's (as pbrt-v4 and bvh v2)
 //   max_depth, bins, traversal_cost, isect_cost, traversal,
+//   leaf_test  scalar | packet | auto (packet for sah): one triangle test at a time or four
+//              per SSE test (bvh_packet_leaves.h), the same answers
 //   reinsertion  passes of the reinsertion optimizer after the build (bvh_reinsertion.h;
 //              0, the default, = off): a better tree for a longer build, same answers.
 #pragma once
@@ -26,6 +28,7 @@
 #include <string_view>
 
 #include "accelbench/accel/accelerator.h"
+#include "accelbench/accel/bvh/bvh_packet_leaves.h"
 #include "accelbench/accel/bvh/bvh_reinsertion.h"
 #include "accelbench/accel/bvh/bvh_top_down.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
@@ -56,10 +59,27 @@ public:
         // models within the noise. Only split=sah reads it: the report's splits build the
         // same trees.
         uint32_t bins = 32;
-        float traversal_cost = 1.0f;  // SAH cost of a node visit (split=sah)
-        float isect_cost = 1.0f;      // SAH cost of a triangle test (split=sah)
+        // SAH cost of a node visit relative to isect_cost (split=sah): only the ratio counts,
+        // and only in the leaf decision (a plane's cost adds the same C_trav A to every plane).
+        // 4, the ratio that fits this traversal: a binary node visit (two box tests, the
+        // near/far choice, the stack) costs far more than the fourth of a packet test that one
+        // more triangle in a leaf adds. Measured (session 11, accel_bench, trace / Embree, two
+        // or three rounds, packet leaves, bunny / igea / conference / dragon): 1 -> 1.56 /
+        // 1.81-1.84 / 1.82-1.91 / 2.01-2.05, 3 -> 1.34-1.37 / 1.46-1.52 / 1.80-1.85 / 1.56-1.58,
+        // 4 -> 1.32-1.51 / 1.41-1.46 / 1.83-2.00 / 1.47-1.50; 6 and max_prims 12-16 within the
+        // same noise. Leaves at 4: 5.4 triangles on the bunny (1.8 at 1).
+        float traversal_cost = 4.0f;
+        float isect_cost = 1.0f;  // SAH cost of a triangle test (split=sah)
         BvhTraversal traversal = BvhTraversal::ordered;
         uint32_t reinsertion = 0;  // reinsertion passes after the build (0: off)
+        // How a leaf's triangles are tested: one at a time (scalar) or four per SSE test
+        // (packet, bvh_packet_leaves.h); auto = packet for split=sah, scalar for the report's
+        // splits, whose one-triangle leaves would leave three lanes of every packet empty.
+        enum class LeafTest { automatic, scalar, packet };
+        LeafTest leaf_test = LeafTest::automatic;
+        bool packet_leaves() const {
+            return leaf_test == LeafTest::packet || (leaf_test == LeafTest::automatic && split == Split::sah);
+        }
 
         static Config from(const ParamSet& params);
         // 1 for the report's splits, which always split down to one triangle; 8 for the
@@ -85,6 +105,7 @@ public:
 private:
     Config config_;
     FlatBvh bvh_;
+    BvhPacketLeaves packets_;  // built when config_.packet_leaves()
     BvhTopDownCounts counts_;
     BvhReinsertionCounts reinsertion_counts_;
 };

@@ -132,6 +132,8 @@
 // loop stops at the hit (bunny shadow prim tests 235,584 -> 240,340). The SAH leaves are small
 // (the bunny's 69,451 triangles in 38,016 leaves, 1.8 a leaf), so a packet is half empty; that
 // the vector ray's per-ray constants then cost what the lanes save is likely, not measured.
+// Session 11 adopted the packets together with SAH leaves fit to fill them (traversal_cost 4,
+// 5.4 triangles a leaf on the bunny): PacketLeafTest below, bvh_packet_leaves.h for the figures.
 // And the stack apart (bvh v2's: node indices only, every popped node entered): bunny primary
 // node visits +8.7% (1,558,153 -> 1,693,775, bvh sah; shadow rays unchanged: an any-hit ray's
 // interval never shrinks, so no popped node ever lies beyond it), trace / Embree bvh sah 1.66 1.63 1.65 -> 1.66 1.68 1.71, median 2.15 2.15
@@ -144,7 +146,9 @@
 #include <string>
 #include <utility>
 
+#include "accelbench/accel/bvh/bvh_packet_leaves.h"
 #include "accelbench/accel/bvh/flat_bvh.h"
+#include "accelbench/accel/bvh/wbvh_simd.h"
 #include "accelbench/base/geometry.h"
 #include "accelbench/base/params.h"
 #include "accelbench/base/triangle.h"
@@ -222,52 +226,124 @@ private:
     Entry* data_ = inline_;
 };
 
-// Tests the triangles of one leaf against [tmin, tmax); on a closer hit, writes `hit` and
-// shrinks tmax. Returns whether any triangle was hit.
-template <class C>
-inline bool intersect_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const WatertightRay& wr, float tmin,
-                               float& tmax, Hit& hit, C& c) {
-    bool found = false;
-    const uint32_t end = leaf.first_prim() + leaf.prim_count();
-    for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
-        c.prim();
-        const LeafTriangle& tri = bvh.triangles[slot];
-        float t, u, v;
-        if (intersect_triangle(wr, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) {
-            tmax = t;
-            hit = {bvh.prim_ids[slot], t, u, v};
+// The leaf tests the traversals are instantiated with. Each is made per ray (its per-ray
+// constants) once the root box is hit, and offers
+//   closest(index, leaf, tmin, tmax, hit, c)  tests the leaf's triangles against [tmin, tmax);
+//                                             on a closer hit writes `hit`, shrinks tmax and
+//                                             returns true
+//   any(index, leaf, tmin, tmax, c)           whether a triangle of the leaf lies in [tmin, tmax)
+// where index is the leaf's node index and leaf the node.
+
+// One triangle at a time (intersect_triangle), read from the tree's slots: the report rows'
+// test (their leaves hold one triangle) and `bvh leaf_test=scalar`.
+class ScalarLeafTest {
+public:
+    using Leaves = FlatBvh;
+    ScalarLeafTest(const FlatBvh& bvh, const Ray& ray) : bvh_(bvh), wr_(ray) {}
+    // intersect_triangle answers an invalid ray itself (no hit), after the traversal has
+    // visited and counted its nodes as for any other ray.
+    static constexpr bool valid() { return true; }
+
+    template <class C>
+    bool closest(uint32_t, const BvhNode& leaf, float tmin, float& tmax, Hit& hit, C& c) const {
+        bool found = false;
+        const uint32_t end = leaf.first_prim() + leaf.prim_count();
+        for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
+            c.prim();
+            const LeafTriangle& tri = bvh_.triangles[slot];
+            float t, u, v;
+            if (intersect_triangle(wr_, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) {
+                tmax = t;
+                hit = {bvh_.prim_ids[slot], t, u, v};
+                found = true;
+            }
+        }
+        return found;
+    }
+
+    template <class C>
+    bool any(uint32_t, const BvhNode& leaf, float tmin, float tmax, C& c) const {
+        const uint32_t end = leaf.first_prim() + leaf.prim_count();
+        for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
+            c.prim();
+            const LeafTriangle& tri = bvh_.triangles[slot];
+            float t, u, v;
+            if (intersect_triangle(wr_, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) return true;
+        }
+        return false;
+    }
+
+private:
+    const FlatBvh& bvh_;
+    WatertightRay wr_;
+};
+
+// Four triangles per test (bvh_packet_leaves.h): `bvh leaf_test=packet`, the default of
+// split=sah. Every packet of a leaf is tested against the interval the packets before it
+// left, so the closest hit is the scalar loop's: the nearest, and of equally near ones the
+// first in slot order. Counts: c.prim() per lane tested, so an any-hit search that stops in a
+// packet counts all of that packet's lanes, where the scalar loop stops at the hit.
+class PacketLeafTest {
+public:
+    using Leaves = BvhPacketLeaves;
+    PacketLeafTest(const BvhPacketLeaves& leaves, const Ray& ray)
+        : packets_(leaves.packets.data()), first_packet_(leaves.first_packet.data()), r_(ray) {}
+    // The vector test needs a valid ray: an invalid one (which hits nothing) ends at the root,
+    // as in the wide BVH.
+    bool valid() const { return r_.valid; }
+
+    template <class C>
+    bool closest(uint32_t index, const BvhNode& leaf, float tmin, float& tmax, Hit& hit, C& c) const {
+        bool found = false;
+        const WbvhTriPacket* p = packets_ + first_packet_[index];
+        for (uint32_t left = leaf.prim_count(); left > 0; ++p) {
+            const int lanes = int(left < WbvhTriPacket::kLanes ? left : WbvhTriPacket::kLanes);
+            left -= uint32_t(lanes);
+            c.prim(uint64_t(lanes));
+            const WbvhPacketHits h = wbvh_packet_test(*p, lanes, r_, tmin, tmax);
+            if (h.mask == 0) continue;
+            const int k = h.nearest();
+            tmax = h.t[k];
+            hit = {p->prim[k], h.t[k], h.u[k], h.v[k]};
             found = true;
         }
+        return found;
     }
-    return found;
-}
 
-// Whether any triangle of one leaf lies within [tmin, tmax).
-template <class C>
-inline bool occluded_bvh_leaf(const FlatBvh& bvh, const BvhNode& leaf, const WatertightRay& wr, float tmin, float tmax,
-                              C& c) {
-    const uint32_t end = leaf.first_prim() + leaf.prim_count();
-    for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
-        c.prim();
-        const LeafTriangle& tri = bvh.triangles[slot];
-        float t, u, v;
-        if (intersect_triangle(wr, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) return true;
+    template <class C>
+    bool any(uint32_t index, const BvhNode& leaf, float tmin, float tmax, C& c) const {
+        const WbvhTriPacket* p = packets_ + first_packet_[index];
+        for (uint32_t left = leaf.prim_count(); left > 0; ++p) {
+            const int lanes = int(left < WbvhTriPacket::kLanes ? left : WbvhTriPacket::kLanes);
+            left -= uint32_t(lanes);
+            c.prim(uint64_t(lanes));
+            if (wbvh_packet_test(*p, lanes, r_, tmin, tmax).mask) return true;
+        }
+        return false;
     }
-    return false;
-}
+
+private:
+    // The arrays' starts, held by value: through a reference to the vectors, GCC reloaded
+    // both data pointers at every leaf.
+    const WbvhTriPacket* packets_;
+    const uint32_t* first_packet_;
+    WbvhRay<4, true> r_;  // the SSE form where it is compiled in
+};
 
 // Ordered traversal. Closest hit (kAnyHit false): `hit` must come in empty (Hit{}) and
 // receives the closest hit; the search interval shrinks to it. Any hit (kAnyHit true):
 // returns at the first hit found (the near-first order costs one comparison and tends to
 // meet occluders early).
-template <bool kAnyHit, class C>
-ACCELBENCH_BVH_HOT bool traverse_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
+template <bool kAnyHit, class LeafTest, class C>
+ACCELBENCH_BVH_HOT bool traverse_bvh_ordered(const FlatBvh& bvh, const typename LeafTest::Leaves& leaves,
+                                             const Ray& ray, Hit& hit, C& c) {
     if (bvh.empty()) return false;
     const RayPrecomp rp(ray);
     float tmax = ray.tmax;  // the closest hit so far: nothing beyond it matters
     c.box();
     if (!intersect_box(bvh.nodes[0].bounds, rp, ray.tmin, tmax).hit()) return false;
-    const WatertightRay wr(ray);
+    const LeafTest leaf_test(leaves, ray);
+    if (!leaf_test.valid()) return false;
     BvhTraversalStack storage(bvh.depth);
     BvhTraversalStack::Cursor stack(storage);
     uint32_t index = 0;
@@ -293,9 +369,9 @@ ACCELBENCH_BVH_HOT bool traverse_bvh_ordered(const FlatBvh& bvh, const Ray& ray,
                 continue;
             }
         } else if constexpr (kAnyHit) {
-            if (occluded_bvh_leaf(bvh, node, wr, ray.tmin, tmax, c)) return true;
+            if (leaf_test.any(index, node, ray.tmin, tmax, c)) return true;
         } else {
-            intersect_bvh_leaf(bvh, node, wr, ray.tmin, tmax, hit, c);
+            leaf_test.closest(index, node, ray.tmin, tmax, hit, c);
         }
         // Next: the nearest pushed node the ray can still reach before the closest hit.
         for (;;) {
@@ -309,20 +385,9 @@ ACCELBENCH_BVH_HOT bool traverse_bvh_ordered(const FlatBvh& bvh, const Ray& ray,
     }
 }
 
-template <class C>
-inline void intersect_bvh_ordered(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
-    traverse_bvh_ordered<false>(bvh, ray, hit, c);
-}
-
-template <class C>
-inline bool occluded_bvh_ordered(const FlatBvh& bvh, const Ray& ray, C& c) {
-    Hit unused;
-    return traverse_bvh_ordered<true>(bvh, ray, unused, c);
-}
-
 // The report's Algorithm 1: visits every node whose box the ray hits over its whole
-// interval, left child before right child, and calls leaf(node) for each leaf reached;
-// stops as soon as leaf() returns true. Returns whether it stopped.
+// interval, left child before right child, and calls leaf(index, node) for each leaf
+// reached; stops as soon as leaf() returns true. Returns whether it stopped.
 template <class C, class Leaf>
 ACCELBENCH_BVH_HOT bool visit_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c, Leaf&& leaf) {
     if (bvh.empty()) return false;
@@ -340,7 +405,7 @@ ACCELBENCH_BVH_HOT bool visit_bvh_report(const FlatBvh& bvh, const Ray& ray, C& 
                 index = index + 1;
                 continue;
             }
-            if (leaf(node)) return true;
+            if (leaf(index, node)) return true;
         }
         if (stack.empty()) return false;
         index = stack.pop().node;
@@ -348,34 +413,56 @@ ACCELBENCH_BVH_HOT bool visit_bvh_report(const FlatBvh& bvh, const Ray& ray, C& 
 }
 
 // Algorithm 1, closest hit: the nearest of the primitives of every leaf reached.
-template <class C>
-ACCELBENCH_BVH_HOT void intersect_bvh_report(const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
-    const WatertightRay wr(ray);
+template <class LeafTest, class C>
+ACCELBENCH_BVH_HOT void intersect_bvh_report(const FlatBvh& bvh, const typename LeafTest::Leaves& leaves,
+                                             const Ray& ray, Hit& hit, C& c) {
+    const LeafTest leaf_test(leaves, ray);
+    if (!leaf_test.valid()) return;
     float nearest = ray.tmax;  // nearest hit among the primitives collected so far
-    visit_bvh_report(bvh, ray, c, [&](const BvhNode& leaf) {
-        intersect_bvh_leaf(bvh, leaf, wr, ray.tmin, nearest, hit, c);
+    visit_bvh_report(bvh, ray, c, [&](uint32_t index, const BvhNode& leaf) {
+        leaf_test.closest(index, leaf, ray.tmin, nearest, hit, c);
         return false;
     });
 }
 
 // Algorithm 1, any hit: the same visiting order, stopping at the first hit.
-template <class C>
-ACCELBENCH_BVH_HOT bool occluded_bvh_report(const FlatBvh& bvh, const Ray& ray, C& c) {
-    const WatertightRay wr(ray);
-    return visit_bvh_report(
-        bvh, ray, c, [&](const BvhNode& leaf) { return occluded_bvh_leaf(bvh, leaf, wr, ray.tmin, ray.tmax, c); });
+template <class LeafTest, class C>
+ACCELBENCH_BVH_HOT bool occluded_bvh_report(const FlatBvh& bvh, const typename LeafTest::Leaves& leaves, const Ray& ray,
+                                            C& c) {
+    const LeafTest leaf_test(leaves, ray);
+    if (!leaf_test.valid()) return false;
+    return visit_bvh_report(bvh, ray, c, [&](uint32_t index, const BvhNode& leaf) {
+        return leaf_test.any(index, leaf, ray.tmin, ray.tmax, c);
+    });
 }
 
-// Dispatch by the structure's `traversal` parameter (one predictable branch per ray).
+// Dispatch by the structure's `traversal` parameter (one predictable branch per ray), with
+// the leaf test LeafTest over `leaves`.
+template <class LeafTest, class C>
+inline void intersect_bvh(BvhTraversal traversal, const FlatBvh& bvh, const typename LeafTest::Leaves& leaves,
+                          const Ray& ray, Hit& hit, C& c) {
+    if (traversal == BvhTraversal::ordered) traverse_bvh_ordered<false, LeafTest>(bvh, leaves, ray, hit, c);
+    else intersect_bvh_report<LeafTest>(bvh, leaves, ray, hit, c);
+}
+
+template <class LeafTest, class C>
+inline bool occluded_bvh(BvhTraversal traversal, const FlatBvh& bvh, const typename LeafTest::Leaves& leaves,
+                         const Ray& ray, C& c) {
+    if (traversal == BvhTraversal::ordered) {
+        Hit unused;
+        return traverse_bvh_ordered<true, LeafTest>(bvh, leaves, ray, unused, c);
+    }
+    return occluded_bvh_report<LeafTest>(bvh, leaves, ray, c);
+}
+
+// The same with the scalar leaf test over the tree's own slots (the LBVH, tests).
 template <class C>
 inline void intersect_bvh(BvhTraversal traversal, const FlatBvh& bvh, const Ray& ray, Hit& hit, C& c) {
-    if (traversal == BvhTraversal::ordered) intersect_bvh_ordered(bvh, ray, hit, c);
-    else intersect_bvh_report(bvh, ray, hit, c);
+    intersect_bvh<ScalarLeafTest>(traversal, bvh, bvh, ray, hit, c);
 }
-
 template <class C>
 inline bool occluded_bvh(BvhTraversal traversal, const FlatBvh& bvh, const Ray& ray, C& c) {
-    return traversal == BvhTraversal::ordered ? occluded_bvh_ordered(bvh, ray, c) : occluded_bvh_report(bvh, ray, c);
+    return occluded_bvh<ScalarLeafTest>(traversal, bvh, bvh, ray, c);
 }
 
 }  // namespace accelbench

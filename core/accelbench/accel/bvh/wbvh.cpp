@@ -5,10 +5,12 @@
 #include <cstring>
 #include <map>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
+#include "accelbench/accel/bvh/bvh_packet_leaves.h"
 
 namespace accelbench {
 
@@ -334,20 +336,9 @@ uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, HugePageArray<WbvhTriPacke
         }
     }
     const uint32_t count = uint32_t(slots.size());
-    for (uint32_t first = 0; first < count; first += WbvhTriPacket::kLanes) {
-        WbvhTriPacket p{};
-        for (int lane = 0; lane < WbvhTriPacket::kLanes; ++lane) {
-            p.prim[lane] = kInvalidId;
-            if (first + uint32_t(lane) >= count) continue;
-            const uint32_t slot = slots[first + uint32_t(lane)];
-            const LeafTriangle& tri = binary.triangles[slot];
-            const Vec3 v[3] = {tri.p0, tri.p1, tri.p2};
-            for (int i = 0; i < 3; ++i)
-                for (int a = 0; a < 3; ++a) p.v[i][a][lane] = v[i][a];
-            p.prim[lane] = binary.prim_ids[slot];
-        }
-        packets.push_back(p);
-    }
+    for (uint32_t first = 0; first < count; first += WbvhTriPacket::kLanes)
+        packets.push_back(pack_triangles(
+            binary, std::span(slots).subspan(first, std::min<uint32_t>(WbvhTriPacket::kLanes, count - first))));
     return count;
 }
 
