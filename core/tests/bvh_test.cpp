@@ -113,7 +113,7 @@ TEST(Bvh, AgreesWithEmbreeOnClosedGrid) {
         }
 }
 
-// The packet leaf test (leaf_test=packet, the default of split=sah) answers every ray
+// The packet leaf test (leaf_test=packet, split=sah's by default) answers every ray
 // exactly as the scalar one on the same tree — the same primitive, t, u and v bit for bit —
 // visits the same nodes and tests the same boxes; closest-hit queries test the same
 // triangles, any-hit ones at least as many (a hit ends the search after its whole packet).
@@ -173,6 +173,20 @@ TEST(Bvh, PacketLeavesAnswerExactlyAsScalarLeaves) {
                 }
             }
     }
+}
+
+// leaf_test=auto: packets where a leaf may hold more than one triangle, whatever the split;
+// the given choice otherwise.
+TEST(Bvh, AutomaticLeafTestFollowsTheLeafLimit) {
+    auto packets = [](const std::map<std::string, std::string>& p) {
+        return Bvh::Config::from(resolve_params("bvh", Bvh::info().params, p)).packet_leaves();
+    };
+    EXPECT_TRUE(packets({{"split", "sah"}}));
+    EXPECT_FALSE(packets({{"split", "sah"}, {"max_prims", "1"}}));
+    EXPECT_FALSE(packets({}));
+    EXPECT_TRUE(packets({{"max_prims", "2"}}));
+    EXPECT_TRUE(packets({{"max_prims", "1"}, {"leaf_test", "packet"}}));
+    EXPECT_FALSE(packets({{"split", "sah"}, {"leaf_test", "scalar"}}));
 }
 
 // ---- exact trees on hand-made scenes ----------------------------------------------------

@@ -87,7 +87,8 @@ AcceleratorInfo Bvh::info() {
                  0,
                  0,
                  "scalar: a leaf's triangles one watertight test at a time; packet: four per SSE test (the wide "
-                 "BVH's), the same answers; auto: packet for split=sah, scalar for the report's splits"},
+                 "BVH's), the same answers; auto: packet where a leaf may hold more than one triangle (max_prims > 1, "
+                 "as split=sah's default), scalar for one-triangle leaves"},
                 {"reinsertion",
                  ParamType::Int,
                  format_param(int64_t(d.reinsertion)),

@@ -16,8 +16,8 @@
 //              8 for sah, which decides its own leaves below that bound: a range becomes a
 //              leaf when its SAH cost is not above the best split's (as pbrt-v4 and bvh v2)
 //   max_depth, bins, traversal_cost, isect_cost, traversal,
-//   leaf_test  scalar | packet | auto (packet for sah): one triangle test at a time or four
-//              per SSE test (bvh_packet_leaves.h), the same answers
+//   leaf_test  scalar | packet | auto (packet where max_prims > 1): one triangle test at a
+//              time or four per SSE test (bvh_packet_leaves.h), the same answers
 //   reinsertion  passes of the reinsertion optimizer after the build (bvh_reinsertion.h;
 //              0, the default, = off): a better tree for a longer build, same answers.
 #pragma once
@@ -73,12 +73,16 @@ public:
         BvhTraversal traversal = BvhTraversal::ordered;
         uint32_t reinsertion = 0;  // reinsertion passes after the build (0: off)
         // How a leaf's triangles are tested: one at a time (scalar) or four per SSE test
-        // (packet, bvh_packet_leaves.h); auto = packet for split=sah, scalar for the report's
-        // splits, whose one-triangle leaves would leave three lanes of every packet empty.
+        // (packet, bvh_packet_leaves.h); auto = packet where a leaf may hold more than one
+        // triangle (split=sah's default max_prims 8), scalar for one-triangle leaves (the
+        // report's splits; Tables 4 and 5's sah row at max_prims 1), where three lanes of
+        // every packet would be empty. Measured there (session 11, trace / Embree, bvh
+        // split=sah max_prims=1, two rounds): packet 2.07-2.08 / 2.75-2.77 / 2.76-2.87,
+        // scalar 2.00-2.03 / 2.62-2.70 / 2.35-2.41 (bunny / conference / dragon).
         enum class LeafTest { automatic, scalar, packet };
         LeafTest leaf_test = LeafTest::automatic;
         bool packet_leaves() const {
-            return leaf_test == LeafTest::packet || (leaf_test == LeafTest::automatic && split == Split::sah);
+            return leaf_test == LeafTest::packet || (leaf_test == LeafTest::automatic && leaf_limit() > 1);
         }
 
         static Config from(const ParamSet& params);

@@ -1,5 +1,5 @@
-// The leaves of a FlatBvh as 4-triangle packets, for `bvh leaf_test=packet` (the default of
-// split=sah): one SSE watertight test covers a leaf's triangles four at a time, the wide
+// The leaves of a FlatBvh as 4-triangle packets, for `bvh leaf_test=packet` (what auto picks
+// where max_prims > 1, as split=sah's default): one SSE watertight test covers a leaf's triangles four at a time, the wide
 // BVH's packet test (wbvh_simd.h, WbvhTriPacket and wbvh_packet_test), which answers lane for
 // lane as intersect_triangle does (wbvh_test compares the two forms).
 //

@@ -278,8 +278,8 @@ private:
     WatertightRay wr_;
 };
 
-// Four triangles per test (bvh_packet_leaves.h): `bvh leaf_test=packet`, the default of
-// split=sah. Every packet of a leaf is tested against the interval the packets before it
+// Four triangles per test (bvh_packet_leaves.h): `bvh leaf_test=packet`, what auto picks
+// for split=sah's default leaves. Every packet of a leaf is tested against the interval the packets before it
 // left, so the closest hit is the scalar loop's: the nearest, and of equally near ones the
 // first in slot order. Counts: c.prim() per lane tested, so an any-hit search that stops in a
 // packet counts all of that packet's lanes, where the scalar loop stops at the hit.
