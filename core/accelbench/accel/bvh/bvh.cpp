@@ -273,8 +273,13 @@ public:
         // Left sweep: plane i = b + 1 separates bins [0, i) from [i, K). After an empty bin
         // the partition equals the previous plane's, so it cannot cost strictly less: only
         // planes after a non-empty bin.
+        // Planes are compared by their area-weighted counts alone, A_left N_left + A_right
+        // N_right: the term C_trav A is the same for every plane, and adding it before the
+        // comparison let its rounding decide near ties, so the planes chosen moved with
+        // traversal_cost (Tables 4 and 5's max_prims=1 trees differed in a few nodes between
+        // traversal_cost 1 and 4). The costs enter the leaf decision only.
         const float node_area = r.bounds.area();
-        float best_cost = kInfinity;
+        float best_sum = kInfinity;
         uint32_t best_plane = 0;
         acc = BvhBoxAccumulator{};
         count = 0;
@@ -287,17 +292,18 @@ public:
                 bin_bounds_[b] = BvhBoxAccumulator{};
                 const uint32_t i = b + 1;
                 if (i >= bins_ || right_count_[i] == 0) continue;
-                const float cost = traversal_cost_ * node_area +
-                    isect_cost_ * (acc.area() * float(count) + right_area_[i] * float(right_count_[i]));
-                if (cost < best_cost) {
-                    best_cost = cost;
+                const float sum = acc.area() * float(count) + right_area_[i] * float(right_count_[i]);
+                if (sum < best_sum) {
+                    best_sum = sum;
                     best_plane = i;
                 }
             }
             used_[w] = 0;
         }
         if (best_plane == 0) return std::nullopt;
-        if (r.leaf_allowed && isect_cost_ * float(refs.size()) * node_area <= best_cost) return std::nullopt;
+        if (r.leaf_allowed &&
+            isect_cost_ * float(refs.size()) * node_area <= traversal_cost_ * node_area + isect_cost_ * best_sum)
+            return std::nullopt;
         const size_t mid = with_axis(axis, [&](auto a) {
             return size_t(std::partition(refs.begin(), refs.end(),
                                          [&](const BvhPrimRef& ref) { return bin_of(ref, a) < best_plane; }) -
