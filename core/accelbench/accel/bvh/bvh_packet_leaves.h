@@ -1,7 +1,8 @@
 // The leaves of a FlatBvh as 4-triangle packets, for `bvh leaf_test=packet` (what auto picks
-// where max_prims > 1, as split=sah's default): one SSE watertight test covers a leaf's triangles four at a time, the wide
-// BVH's packet test (wbvh_simd.h, WbvhTriPacket and wbvh_packet_test), which answers lane for
-// lane as intersect_triangle does (wbvh_test compares the two forms).
+// where max_prims > 1, as split=sah's default): one SSE watertight test covers a leaf's
+// triangles four at a time, the wide BVH's packet test (wbvh_simd.h, WbvhTriPacket and
+// wbvh_leaf_test), which answers lane for lane as intersect_triangle does (wbvh_test compares
+// the two forms).
 //
 // Why: SAH leaves hold several triangles (4-5 on the scanned models at traversal_cost 4),
 // and the scalar loop tests them one after the other, each test a chain of data-dependent
@@ -44,7 +45,6 @@ struct BvhPacketLeaves {
 
     // Makes the packets of a finished (finalized) tree.
     void build(const FlatBvh& bvh);
-    bool empty() const { return first_packet.empty(); }
     size_t memory_bytes() const {
         return packets.size() * sizeof(WbvhTriPacket) + first_packet.size() * sizeof(uint32_t);
     }

@@ -228,11 +228,10 @@ private:
 
 // The leaf tests the traversals are instantiated with. Each is made per ray (its per-ray
 // constants) once the root box is hit, and offers
-//   closest(index, leaf, tmin, tmax, hit, c)  tests the leaf's triangles against [tmin, tmax);
-//                                             on a closer hit writes `hit`, shrinks tmax and
-//                                             returns true
-//   any(index, leaf, tmin, tmax, c)           whether a triangle of the leaf lies in [tmin, tmax)
-// where index is the leaf's node index and leaf the node.
+//   test<kAnyHit>(index, leaf, tmin, tmax, hit, c)
+// over the leaf's triangles against [tmin, tmax), index being the leaf's node index and leaf
+// the node. Closest hit (kAnyHit false): on a closer hit writes `hit`, shrinks tmax and
+// returns true. Any hit: returns true at the first hit, leaving tmax and `hit` as they are.
 
 // One triangle at a time (intersect_triangle), read from the tree's slots: the report rows'
 // test (their leaves hold one triangle) and `bvh leaf_test=scalar`.
@@ -244,33 +243,21 @@ public:
     // visited and counted its nodes as for any other ray.
     static constexpr bool valid() { return true; }
 
-    template <class C>
-    bool closest(uint32_t, const BvhNode& leaf, float tmin, float& tmax, Hit& hit, C& c) const {
+    template <bool kAnyHit, class C>
+    bool test(uint32_t, const BvhNode& leaf, float tmin, float& tmax, Hit& hit, C& c) const {
         bool found = false;
         const uint32_t end = leaf.first_prim() + leaf.prim_count();
         for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
             c.prim();
             const LeafTriangle& tri = bvh_.triangles[slot];
             float t, u, v;
-            if (intersect_triangle(wr_, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) {
-                tmax = t;
-                hit = {bvh_.prim_ids[slot], t, u, v};
-                found = true;
-            }
+            if (!intersect_triangle(wr_, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) continue;
+            if constexpr (kAnyHit) return true;
+            tmax = t;
+            hit = {bvh_.prim_ids[slot], t, u, v};
+            found = true;
         }
         return found;
-    }
-
-    template <class C>
-    bool any(uint32_t, const BvhNode& leaf, float tmin, float tmax, C& c) const {
-        const uint32_t end = leaf.first_prim() + leaf.prim_count();
-        for (uint32_t slot = leaf.first_prim(); slot < end; ++slot) {
-            c.prim();
-            const LeafTriangle& tri = bvh_.triangles[slot];
-            float t, u, v;
-            if (intersect_triangle(wr_, tri.p0, tri.p1, tri.p2, tmin, tmax, t, u, v)) return true;
-        }
-        return false;
     }
 
 private:
@@ -278,11 +265,11 @@ private:
     WatertightRay wr_;
 };
 
-// Four triangles per test (bvh_packet_leaves.h): `bvh leaf_test=packet`, what auto picks
-// for split=sah's default leaves. Every packet of a leaf is tested against the interval the packets before it
-// left, so the closest hit is the scalar loop's: the nearest, and of equally near ones the
-// first in slot order. Counts: c.prim() per lane tested, so an any-hit search that stops in a
-// packet counts all of that packet's lanes, where the scalar loop stops at the hit.
+// Four triangles per test (bvh_packet_leaves.h, wbvh_leaf_test): `bvh leaf_test=packet`, what
+// auto picks for split=sah's default leaves. The closest hit is the scalar loop's (the
+// nearest, and of equally near ones the first in slot order). Counts: c.prim() per lane
+// tested, so an any-hit search that stops in a packet counts all of that packet's lanes,
+// where the scalar loop stops at the hit.
 class PacketLeafTest {
 public:
     using Leaves = BvhPacketLeaves;
@@ -292,34 +279,9 @@ public:
     // as in the wide BVH.
     bool valid() const { return r_.valid; }
 
-    template <class C>
-    bool closest(uint32_t index, const BvhNode& leaf, float tmin, float& tmax, Hit& hit, C& c) const {
-        bool found = false;
-        const WbvhTriPacket* p = packets_ + first_packet_[index];
-        for (uint32_t left = leaf.prim_count(); left > 0; ++p) {
-            const int lanes = int(left < WbvhTriPacket::kLanes ? left : WbvhTriPacket::kLanes);
-            left -= uint32_t(lanes);
-            c.prim(uint64_t(lanes));
-            const WbvhPacketHits h = wbvh_packet_test(*p, lanes, r_, tmin, tmax);
-            if (h.mask == 0) continue;
-            const int k = h.nearest();
-            tmax = h.t[k];
-            hit = {p->prim[k], h.t[k], h.u[k], h.v[k]};
-            found = true;
-        }
-        return found;
-    }
-
-    template <class C>
-    bool any(uint32_t index, const BvhNode& leaf, float tmin, float tmax, C& c) const {
-        const WbvhTriPacket* p = packets_ + first_packet_[index];
-        for (uint32_t left = leaf.prim_count(); left > 0; ++p) {
-            const int lanes = int(left < WbvhTriPacket::kLanes ? left : WbvhTriPacket::kLanes);
-            left -= uint32_t(lanes);
-            c.prim(uint64_t(lanes));
-            if (wbvh_packet_test(*p, lanes, r_, tmin, tmax).mask) return true;
-        }
-        return false;
+    template <bool kAnyHit, class C>
+    bool test(uint32_t index, const BvhNode& leaf, float tmin, float& tmax, Hit& hit, C& c) const {
+        return wbvh_leaf_test<kAnyHit>(packets_ + first_packet_[index], leaf.prim_count(), r_, tmin, tmax, hit, c);
     }
 
 private:
@@ -368,10 +330,8 @@ ACCELBENCH_BVH_HOT bool traverse_bvh_ordered(const FlatBvh& bvh, const typename 
                 index = hn.hit() ? near : far;
                 continue;
             }
-        } else if constexpr (kAnyHit) {
-            if (leaf_test.any(index, node, ray.tmin, tmax, c)) return true;
-        } else {
-            leaf_test.closest(index, node, ray.tmin, tmax, hit, c);
+        } else if (leaf_test.template test<kAnyHit>(index, node, ray.tmin, tmax, hit, c) && kAnyHit) {
+            return true;
         }
         // Next: the nearest pushed node the ray can still reach before the closest hit.
         for (;;) {
@@ -420,7 +380,7 @@ ACCELBENCH_BVH_HOT void intersect_bvh_report(const FlatBvh& bvh, const typename 
     if (!leaf_test.valid()) return;
     float nearest = ray.tmax;  // nearest hit among the primitives collected so far
     visit_bvh_report(bvh, ray, c, [&](uint32_t index, const BvhNode& leaf) {
-        leaf_test.closest(index, leaf, ray.tmin, nearest, hit, c);
+        leaf_test.template test<false>(index, leaf, ray.tmin, nearest, hit, c);
         return false;
     });
 }
@@ -431,8 +391,10 @@ ACCELBENCH_BVH_HOT bool occluded_bvh_report(const FlatBvh& bvh, const typename L
                                             C& c) {
     const LeafTest leaf_test(leaves, ray);
     if (!leaf_test.valid()) return false;
+    float tmax = ray.tmax;  // an any-hit test leaves it as it is
+    Hit unused;
     return visit_bvh_report(bvh, ray, c, [&](uint32_t index, const BvhNode& leaf) {
-        return leaf_test.any(index, leaf, ray.tmin, ray.tmax, c);
+        return leaf_test.template test<true>(index, leaf, ray.tmin, tmax, unused, c);
     });
 }
 

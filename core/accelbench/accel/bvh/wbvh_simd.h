@@ -27,6 +27,7 @@
 // is true" form intersect_box relies on for a ray lying in a slab's plane.
 #pragma once
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstddef>
@@ -483,5 +484,29 @@ inline WbvhPacketHits wbvh_packet_test(const WbvhTriPacket& p, int lanes, const 
     return out;
 }
 #endif
+
+// A leaf's `count` triangles in consecutive packets from `p` (the wide BVH's leaves, and the
+// binary BVH's with leaf_test=packet): each packet against the interval the packets before it
+// left, so the closest hit is that of testing the triangles one after the other — the
+// nearest, and of equally near ones the first. Closest hit (kAnyHit false): on a closer hit
+// writes `hit` and shrinks tmax; returns whether there was one. Any hit: returns true at the
+// first packet with a hit, leaving tmax and `hit` as they are. c.prim() per lane tested.
+template <bool kAnyHit, class R, class C>
+inline bool wbvh_leaf_test(const WbvhTriPacket* p, uint32_t count, const R& r, float tmin, float& tmax, Hit& hit,
+                           C& c) {
+    bool found = false;
+    for (uint32_t done = 0; done < count; done += WbvhTriPacket::kLanes, ++p) {
+        const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, count - done));
+        c.prim(uint64_t(lanes));
+        const WbvhPacketHits h = wbvh_packet_test(*p, lanes, r, tmin, tmax);
+        if (h.mask == 0) continue;
+        if constexpr (kAnyHit) return true;
+        const int k = h.nearest();
+        tmax = h.t[k];
+        hit = {p->prim[k], h.t[k], h.u[k], h.v[k]};
+        found = true;
+    }
+    return found;
+}
 
 }  // namespace accelbench
