@@ -95,6 +95,11 @@ TEST(Bvh, AgreesWithEmbreeOnLargerLeavesAndOtherBinCounts) {
              {{"split", "sah"}, {"max_prims", "8"}, {"bins", "2"}},
              {{"split", "sah"}, {"max_prims", "8"}, {"bins", "64"}, {"traversal_cost", "4"}},
              {{"split", "sah"}, {"traversal_cost", "0"}, {"isect_cost", "10"}},
+             {{"split", "sah"}, {"all_axes_min", "1"}},
+             {{"split", "sah"}, {"all_axes_min", "1"}, {"max_prims", "1"}, {"bins", "2"}},
+             // more than 64 bins: the binning's used-bin words then mark every bin used
+             {{"split", "sah"}, {"all_axes_min", "1"}, {"bins", "100"}},
+             {{"split", "sah"}, {"all_axes_min", "0"}, {"bins", "100"}},
              {{"split", "midpoint"}, {"max_prims", "3"}, {"traversal", "report"}}}) {
         auto bvh = built(scene, p);
         expect_agrees_with_embree(scene, *bvh, rays, describe(p));
@@ -307,6 +312,40 @@ TEST(Bvh, SahStopsEarlyOnlyWhenALeafIsCheaper) {
     expect_shape(*built(stacked, {{"split", "sah"}, {"max_prims", "2"}}), {3, 2, 1}, "sah stacked max_prims=2");
 }
 
+// Two rows of eight triangles along x, ten apart in y: the centroid box is longest in x
+// (17.5 against 10), and every x plane cuts both rows (children 11 high); a y plane separates
+// them: A_left N_left + A_right N_right = 37 x 8 + 37 x 8 = 592, against 2 x 187 x 8 = 2992
+// for the even x plane. all_axes_min says from which range size the y plane is seen.
+TEST(Bvh, AllAxesFindThePlaneTheLongestAxisMisses) {
+    Scene rows;
+    rows.name = "test-two-rows";
+    for (int row = 0; row < 2; ++row)
+        for (int i = 0; i < 8; ++i) {
+            const float x = 2.5f * float(i), y = 10.0f * float(row);
+            add_triangle(rows, {x, y, 0}, {x + 1, y, 0}, {x, y + 1, 0});
+        }
+    rows.finalize();
+    auto children_height = [&](const std::map<std::string, std::string>& extra) {
+        std::map<std::string, std::string> p = {{"split", "sah"}};
+        p.insert(extra.begin(), extra.end());
+        auto bvh = built(rows, p);
+        const FlatBvh& t = bvh->tree();
+        EXPECT_FALSE(t.nodes[0].is_leaf()) << describe(p);
+        if (t.nodes[0].is_leaf()) return 0.0f;
+        return std::max(t.nodes[1].bounds.diagonal().y, t.nodes[t.nodes[0].second_child()].bounds.diagonal().y);
+    };
+    EXPECT_EQ(children_height({{"all_axes_min", "1"}}), 1.0f);    // every range
+    EXPECT_EQ(children_height({{"all_axes_min", "16"}}), 1.0f);   // the root's 16 triangles are enough
+    EXPECT_EQ(children_height({{"all_axes_min", "17"}}), 11.0f);  // too few: the longest axis, x
+    EXPECT_EQ(children_height({{"all_axes_min", "0"}}), 11.0f);   // none
+    EXPECT_EQ(children_height({}), 11.0f);                        // the default, 1024
+    // round_robin starts at x too; with all axes its rule no longer picks the root's plane.
+    EXPECT_EQ(children_height({{"axis", "round_robin"}, {"all_axes_min", "0"}}), 11.0f);
+    EXPECT_EQ(children_height({{"axis", "round_robin"}, {"all_axes_min", "1"}}), 1.0f);
+    EXPECT_LT(built(rows, {{"split", "sah"}, {"all_axes_min", "1"}})->build_stats().sah_cost.value(),
+              built(rows, {{"split", "sah"}})->build_stats().sah_cost.value());
+}
+
 TEST(Bvh, CountsOfOrderedTraversalOnHandScene) {
     // A ray straight down onto triangle 5 of the eight: the root box, then two child boxes
     // per level on the way down (3 levels), with both children of a level tested; only the
@@ -454,6 +493,7 @@ TEST(Bvh, ParametersAreValidated) {
     EXPECT_THROW(make_accelerator("bvh", {{"max_prims", "0"}}), ParamError);
     EXPECT_THROW(make_accelerator("bvh", {{"bins", "1"}}), ParamError);
     EXPECT_THROW(make_accelerator("bvh", {{"traversal", "stackless"}}), ParamError);
+    EXPECT_THROW(make_accelerator("bvh", {{"all_axes_min", "-1"}}), ParamError);
     EXPECT_NO_THROW(make_accelerator("bvh", {{"split", "sah"}, {"bins", "32"}, {"axis", "round_robin"}}));
 }
 

@@ -64,6 +64,7 @@ std::vector<Config> configs() {
             out.push_back({"bvh", {{"split", "sah"}, {"reinsertion", "3"}}, "bvh_sah_reinsertion"});
             out.push_back({"bvh", {{"split", "sah"}, {"leaf_test", "scalar"}}, "bvh_sah_scalar_leaves"});
             out.push_back({"bvh", {{"leaf_test", "packet"}}, "bvh_packet_leaves"});
+            out.push_back({"bvh", {{"split", "sah"}, {"all_axes_min", "1"}}, "bvh_sah_all_axes"});
         }
     }
     return out;

@@ -51,6 +51,7 @@ const std::vector<Variant>& variants() {
         {"bvh", {{"split", "sah"}, {"traversal", "report"}}},
         {"bvh", {{"split", "sah"}, {"leaf_test", "scalar"}}},
         {"bvh", {{"split", "sah"}, {"traversal_cost", "1"}}},
+        {"bvh", {{"split", "sah"}, {"all_axes_min", "1"}}},
         {"lbvh", {}},
         {"kdtree", {}},
     };
@@ -156,9 +157,13 @@ TEST(TreeVariants, ReportTreesOfTheBunnyAreUnchanged) {
     };
     for (const Pinned& p : std::vector<Pinned>{
              {{"bvh", {{"split", "median"}}}, 138901, 17, 40.1611438116},
-             // The SAH tree of one-triangle leaves the project built before max_prims and bins
-             // got their SAH defaults (8, and 32 bins instead of 16).
-             {{"bvh", {{"split", "sah"}, {"max_prims", "1"}, {"bins", "16"}}}, 138901, 21, 33.7583599924},
+             // The SAH tree of one-triangle leaves the project built before max_prims, bins and
+             // all_axes_min got their SAH defaults (8, 32 bins instead of 16, 1024 instead of the
+             // longest axis everywhere).
+             {{"bvh", {{"split", "sah"}, {"max_prims", "1"}, {"bins", "16"}, {"all_axes_min", "0"}}},
+              138901,
+              21,
+              33.7583599924},
              {{"lbvh", {}}, 138901, 24, 38.9748402418},
          }) {
         auto accel = make_accelerator(p.v.accel, p.v.params);

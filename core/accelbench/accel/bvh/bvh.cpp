@@ -65,6 +65,14 @@ AcceleratorInfo Bvh::info() {
                  2,
                  1024,
                  "SAH bins along the split axis (split=sah only)"},
+                {"all_axes_min",
+                 ParamType::Int,
+                 format_param(int64_t(d.all_axes_min)),
+                 {},
+                 0,
+                 int64_t(BvhNode::kMaxLeafPrims),
+                 "split=sah only: a range of at least this many triangles takes the cheapest plane over all three "
+                 "axes (Embree, bvh v2), a smaller one bins along `axis` only; 1 = every range, 0 = none"},
                 {"traversal_cost",
                  ParamType::Float,
                  format_param(double(d.traversal_cost)),
@@ -108,6 +116,7 @@ Bvh::Config Bvh::Config::from(const ParamSet& p) {
     if (p.given("max_prims")) c.max_prims = uint32_t(p.get_int("max_prims"));
     c.max_depth = uint32_t(p.get_int("max_depth"));
     c.bins = uint32_t(p.get_int("bins"));
+    c.all_axes_min = uint32_t(p.get_int("all_axes_min"));
     c.traversal_cost = float(p.get_float("traversal_cost"));
     c.isect_cost = float(p.get_float("isect_cost"));
     c.traversal = bvh_traversal_from(p);
@@ -206,12 +215,19 @@ private:
 };
 
 // Binned SAH (Wald 2007): instead of sorting, drop each centroid into one of K equal
-// bins along the axis (O(n)), keep each bin's box and count, and evaluate the SAH
+// bins along the axis (O(n)) — along all three axes in ranges of all_axes_min or more
+// references (bvh.h) — keep each bin's box and count, and evaluate the SAH
 //   cost(plane) = C_trav * A + C_isect * (A_left * N_left + A_right * N_right)
 // (the usual cost multiplied by the node's area A, so a flat node needs no division) at
-// the K-1 bin boundaries with two sweeps over the bins. Like pbrt-v4's BVH build, a range
-// small enough to be a leaf (<= max_prims) stays a leaf when that is cheaper
-// (C_isect * N * A).
+// the K-1 bin boundaries of each axis with two sweeps over its bins. Like pbrt-v4's BVH
+// build, a range small enough to be a leaf (<= max_prims) stays a leaf when that is cheaper
+// (C_isect * N * A). The range is then partitioned out of place, the children's boxes taken
+// from the bins and their centroid boxes on the way (partition() below), so the builder
+// reads the references once for the bins and once to move them, and never to fit them.
+// Measured (session 12, accel_bench, build / Embree, three rounds, all_axes_min 1024) against
+// std::partition in place and the builder's fit of both children: bunny 0.71-0.74 ->
+// 0.52-0.54, dragon 0.82-0.85 -> 0.72-0.78, conference 0.68-0.72 -> 0.73-0.74 (slower there,
+// not analysed; every reference is copied, where std::partition moves only those out of place).
 // Measured (session 11) and not adopted: Embree's block form of the counts, ceil(N / 4) for
 // N (a leaf costs its packet tests, bvh_packet_leaves.h), with traversal_cost 0.5-2 in place
 // of 4. At 2 (leaves of 6.4 triangles on the bunny) trace / Embree, interleaved with today's
@@ -222,35 +238,155 @@ class SahSplit {
 public:
     static constexpr bool kMayStopEarly = true;
 
-    SahSplit(uint32_t bins, float traversal_cost, float isect_cost)
+    // all_axes_min: in a range of at least this many references the planes of all three
+    // axes compete (as in Embree's and bvh v2's binned builders), in smaller ones only those
+    // of the axis rule's axis (as in pbrt-v4's); 0: the axis rule's everywhere.
+    SahSplit(uint32_t bins, float traversal_cost, float isect_cost, uint32_t all_axes_min)
         : bins_(bins),
+          words_((size_t(bins) + 63) / 64),
           traversal_cost_(traversal_cost),
           isect_cost_(isect_cost),
-          bin_bounds_(bins),
-          bin_counts_(bins),
-          right_area_(bins),
+          all_axes_min_(all_axes_min),
+          bin_bounds_(3 * size_t(bins)),
+          bin_counts_(3 * size_t(bins)),
+          right_bounds_(bins),
           right_count_(bins),
-          used_((size_t(bins) + 63) / 64) {}
+          used_(3 * words_) {}
 
     std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) {
-        const int axis = r.axis;
-        const float lo = r.centroid_bounds.lower[axis];
-        // (1 - 1e-6): the largest centroid lands in the last bin, not one past it.
-        const float scale = float(bins_) * (1.0f - 1e-6f) / (r.centroid_bounds.upper[axis] - lo);
-        const uint32_t last = bins_ - 1;
-        // Clamped in float before the conversion: a tiny extent can make scale infinite.
-        auto bin_of = [=](const BvhPrimRef& ref, auto a) {
-            return uint32_t(std::min(float(last), std::max(0.0f, (ref.centroid(a) - lo) * scale)));
-        };
-        // The bins are empty on entry (cleared after use below).
-        with_axis(axis, [&](auto a) {
-            for (const BvhPrimRef& ref : refs) {
-                const uint32_t b = bin_of(ref, a);
-                bin_bounds_[b].extend(ref);
-                ++bin_counts_[b];
-                used_[b >> 6] |= uint64_t(1) << (b & 63);
+        const BinMap map(r, bins_);
+        const bool all_axes = all_axes_min_ > 0 && refs.size() >= all_axes_min_;
+        if (all_axes) bin<true>(refs, map, r.axis);
+        else bin<false>(refs, map, r.axis);
+        // The cheapest plane; of equally cheap ones the first in x, y, z order. An axis the
+        // centroids do not spread along has no plane (all of them in one bin); its bins are
+        // still emptied.
+        int best_axis = r.axis;
+        Plane best;
+        for (int axis = 0; axis < 3; ++axis) {
+            if (!all_axes && axis != r.axis) continue;
+            if (const Plane p = best_plane_on(axis); p.sum < best.sum) {
+                best = p;
+                best_axis = axis;
             }
+        }
+        if (best.plane == 0) return std::nullopt;
+        const float node_area = r.bounds.area();
+        if (r.leaf_allowed &&
+            isect_cost_ * float(refs.size()) * node_area <= traversal_cost_ * node_area + isect_cost_ * best.sum)
+            return std::nullopt;
+        return partition(refs, r.scratch, map, best_axis, best);
+    }
+
+private:
+    using F4 = BvhBoxAccumulator::F4;
+    using I4 = int32_t __attribute__((vector_size(16)));
+
+    // Centroid -> bin, along each axis (lanes 0-2): (c - lo) * scale clamped to [0, K - 1].
+    // Clamped in float before the conversion: a tiny extent can make scale infinite, and
+    // a zero one makes (c - lo) * scale NaN, which the clamp sends to bin 0. Lane 3 maps
+    // everything to bin 0.
+    struct BinMap {
+        F4 lo, scale, last;
+        BinMap(const BvhSplitRequest& r, uint32_t bins) {
+            const Bounds3& cb = r.centroid_bounds;
+            // (1 - 1e-6): the largest centroid lands in the last bin, not one past it.
+            const float k = float(bins) * (1.0f - 1e-6f);
+            lo = F4{cb.lower.x, cb.lower.y, cb.lower.z, 0.0f};
+            scale =
+                F4{k / (cb.upper.x - cb.lower.x), k / (cb.upper.y - cb.lower.y), k / (cb.upper.z - cb.lower.z), 0.0f};
+            const float l = float(bins - 1);
+            last = F4{l, l, l, 0.0f};
+        }
+        I4 bins(F4 centroid) const {
+            F4 f = (centroid - lo) * scale;
+            const F4 zero = {};
+            f = zero < f ? f : zero;  // NaN -> 0
+            f = f < last ? f : last;
+            return __builtin_convertvector(f, I4);
+        }
+    };
+    struct Plane {
+        float sum = kInfinity;  // A_left N_left + A_right N_right
+        uint32_t plane = 0;     // 0: none
+        uint32_t left_count = 0;
+        BvhBoxAccumulator left, right;  // the two sides' boxes
+    };
+
+    // Moves the references below `best`'s plane to scratch[0, left_count) and the others to
+    // scratch[left_count, n), each side in its order, without a branch on the side, and
+    // takes the children's centroid boxes on the way. Their boxes come from the bins (the
+    // same unions of the same boxes as a fit, so the same floats), so the builder does not
+    // read the references again. The side is decided by the binning's own arithmetic
+    // (BinMap::bins), so every reference goes where the sweep counted it.
+    BvhSplit partition(std::span<const BvhPrimRef> refs, std::span<BvhPrimRef> scratch, const BinMap& map, int axis,
+                       const Plane& best) const {
+        const F4 inf = {kInfinity, kInfinity, kInfinity, kInfinity};
+        F4 lo[2] = {inf, inf}, hi[2] = {-inf, -inf};
+        with_axis(axis, [&](auto a) {
+            size_t left = 0, right = best.left_count;
+            for (const BvhPrimRef& ref : refs) {
+                const F4 c = BvhBoxAccumulator::centroid(ref);
+                const bool is_right = uint32_t(map.bins(c)[decltype(a)::value]) >= best.plane;
+                scratch[is_right ? right : left] = ref;
+                left += !is_right;
+                right += is_right;
+                const I4 m = I4{} - int32_t(is_right);  // all ones on the right
+                lo[0] = m ? lo[0] : (c < lo[0] ? c : lo[0]);
+                hi[0] = m ? hi[0] : (c > hi[0] ? c : hi[0]);
+                lo[1] = m ? (c < lo[1] ? c : lo[1]) : lo[1];
+                hi[1] = m ? (c > hi[1] ? c : hi[1]) : hi[1];
+            }
+            // The sweep counted the sides with the same BinMap::bins, so this cannot fail unless
+            // that arithmetic stopped being deterministic (it is compiled without contraction).
+            if (left != best.left_count || right != refs.size())
+                throw std::logic_error("bvh: SAH partition disagrees with its bins");
         });
+        BvhSplit split{best.left_count, axis, /*in_scratch=*/true, /*fitted=*/true};
+        split.bounds[0] = best.left.bounds();
+        split.bounds[1] = best.right.bounds();
+        for (int k = 0; k < 2; ++k)
+            split.centroid_bounds[k] = {{lo[k][0], lo[k][1], lo[k][2]}, {hi[k][0], hi[k][1], hi[k][2]}};
+        return split;
+    }
+
+    // Drops every reference into its bin along all three axes (kAll: one pass computes the
+    // three bins at once, as Embree's binner does) or along `axis` alone. The bins are empty
+    // on entry (emptied by best_plane_on).
+    template <bool kAll>
+    void bin(std::span<const BvhPrimRef> refs, const BinMap& map, int axis) {
+        BvhBoxAccumulator* const bounds = bin_bounds_.data();
+        uint32_t* const counts = bin_counts_.data();
+        // Which bins are used, kept in registers where one word holds an axis's bins (up to
+        // 64 bins; 32 is the default). With more bins every bin counts as used: an empty bin's
+        // plane repeats the one before it, which it cannot beat, so only the sweeps' length
+        // changes, not their answer.
+        uint64_t used[3] = {};
+        for (const BvhPrimRef& ref : refs) {
+            const I4 b = map.bins(BvhBoxAccumulator::centroid(ref));
+            for (int a = kAll ? 0 : axis; a < (kAll ? 3 : axis + 1); ++a) {
+                const size_t i = size_t(a) * bins_ + uint32_t(b[a]);
+                bounds[i].extend(ref);
+                ++counts[i];
+                used[a] |= uint64_t(1) << (b[a] & 63);
+            }
+        }
+        for (int a = 0; a < 3; ++a) {
+            if (words_ == 1) {
+                used_[a] = used[a];
+                continue;
+            }
+            uint64_t* const words = &used_[size_t(a) * words_];
+            std::fill_n(words, words_, ~uint64_t(0));
+            if (bins_ % 64) words[words_ - 1] = (uint64_t(1) << (bins_ % 64)) - 1;  // no bits past the last bin
+        }
+    }
+
+    // The cheapest bin boundary along `axis`; leaves that axis's bins empty.
+    Plane best_plane_on(int axis) {
+        BvhBoxAccumulator* const bounds = &bin_bounds_[size_t(axis) * bins_];
+        uint32_t* const counts = &bin_counts_[size_t(axis) * bins_];
+        uint64_t* const used = &used_[size_t(axis) * words_];
         // The sweeps visit the non-empty bins only (`used_`, a bit per bin): most of a small
         // range's bins are empty, and looping over all of them was a fifth of the build's
         // instructions at 32 bins. The planes, sums and their order are those of a sweep
@@ -260,15 +396,15 @@ public:
         // sweep evaluates), the box area and count of bins [i, K).
         BvhBoxAccumulator acc;
         uint32_t count = 0;
-        for (size_t w = used_.size(); w-- > 0;)
-            for (uint64_t bits = used_[w]; bits; bits &= ~(uint64_t(1) << (63 - std::countl_zero(bits)))) {
+        for (size_t w = words_; w-- > 0;)
+            for (uint64_t bits = used[w]; bits; bits &= ~(uint64_t(1) << (63 - std::countl_zero(bits)))) {
                 const uint32_t b = uint32_t(w * 64 + size_t(63 - std::countl_zero(bits)));
                 if (b + 1 < bins_) {
-                    right_area_[b + 1] = acc.area();
+                    right_bounds_[b + 1] = acc;
                     right_count_[b + 1] = count;
                 }
-                acc.extend(bin_bounds_[b]);
-                count += bin_counts_[b];
+                acc.extend(bounds[b]);
+                count += counts[b];
             }
         // Left sweep: plane i = b + 1 separates bins [0, i) from [i, K). After an empty bin
         // the partition equals the previous plane's, so it cannot cost strictly less: only
@@ -278,48 +414,36 @@ public:
         // comparison let its rounding decide near ties, so the planes chosen moved with
         // traversal_cost (Tables 4 and 5's max_prims=1 trees differed in a few nodes between
         // traversal_cost 1 and 4). The costs enter the leaf decision only.
-        const float node_area = r.bounds.area();
-        float best_sum = kInfinity;
-        uint32_t best_plane = 0;
+        Plane best;
         acc = BvhBoxAccumulator{};
         count = 0;
-        for (size_t w = 0; w < used_.size(); ++w) {
-            for (uint64_t bits = used_[w]; bits; bits &= bits - 1) {
+        for (size_t w = 0; w < words_; ++w) {
+            for (uint64_t bits = used[w]; bits; bits &= bits - 1) {
                 const uint32_t b = uint32_t(w * 64 + size_t(std::countr_zero(bits)));
-                acc.extend(bin_bounds_[b]);
-                count += bin_counts_[b];
-                bin_counts_[b] = 0;  // the bins are left empty for the next range
-                bin_bounds_[b] = BvhBoxAccumulator{};
+                acc.extend(bounds[b]);
+                count += counts[b];
+                counts[b] = 0;  // the bins are left empty for the next range
+                bounds[b] = BvhBoxAccumulator{};
                 const uint32_t i = b + 1;
-                if (i >= bins_ || right_count_[i] == 0) continue;
-                const float sum = acc.area() * float(count) + right_area_[i] * float(right_count_[i]);
-                if (sum < best_sum) {
-                    best_sum = sum;
-                    best_plane = i;
-                }
+                if (i >= bins_ || count == 0 || right_count_[i] == 0) continue;
+                const float sum = acc.area() * float(count) + right_bounds_[i].area() * float(right_count_[i]);
+                if (sum < best.sum) best = {sum, i, count, acc, right_bounds_[i]};
             }
-            used_[w] = 0;
+            used[w] = 0;
         }
-        if (best_plane == 0) return std::nullopt;
-        if (r.leaf_allowed &&
-            isect_cost_ * float(refs.size()) * node_area <= traversal_cost_ * node_area + isect_cost_ * best_sum)
-            return std::nullopt;
-        const size_t mid = with_axis(axis, [&](auto a) {
-            return size_t(std::partition(refs.begin(), refs.end(),
-                                         [&](const BvhPrimRef& ref) { return bin_of(ref, a) < best_plane; }) -
-                          refs.begin());
-        });
-        return BvhSplit{mid, axis};
+        return best;
     }
 
-private:
     uint32_t bins_;
+    size_t words_;  // of used_, per axis
     float traversal_cost_, isect_cost_;
-    std::vector<BvhBoxAccumulator> bin_bounds_;  // allocated once per build, reused by every node
+    uint32_t all_axes_min_;
+    // Per axis (axis * bins_ + bin), allocated once per build and reused by every node.
+    std::vector<BvhBoxAccumulator> bin_bounds_;
     std::vector<uint32_t> bin_counts_;
-    std::vector<float> right_area_;
+    std::vector<BvhBoxAccumulator> right_bounds_;  // of bins [i, K), for plane i
     std::vector<uint32_t> right_count_;
-    std::vector<uint64_t> used_;  // bit b: bin b is not empty
+    std::vector<uint64_t> used_;  // per axis (axis * words_ + word), bit b: bin b is not empty
 };
 
 }  // namespace
@@ -336,7 +460,9 @@ void Bvh::build(const Scene& scene) {
         case Split::midpoint: build_with(MidpointSplit{}); break;
         case Split::mean: build_with(MeanSplit{}); break;
         case Split::spatial_median: build_with(SpatialMedianSplit(scene)); break;
-        case Split::sah: build_with(SahSplit(config_.bins, config_.traversal_cost, config_.isect_cost)); break;
+        case Split::sah:
+            build_with(SahSplit(config_.bins, config_.traversal_cost, config_.isect_cost, config_.all_axes_min));
+            break;
     }
     reinsertion_counts_ = optimize_bvh_by_reinsertion(bvh_, scene, {config_.reinsertion});
     if (config_.packet_leaves()) packets_.build(bvh_);

@@ -10,12 +10,13 @@
 //              spatial_median  where the summed triangle area of the two sides is equal
 //                              (report's "spatial median", Figure 5c)
 //              sah             binned SAH (Wald 2007, "On fast construction of SAH-based
-//                              bounding volume hierarchies"), `bins` bins along the axis
+//                              bounding volume hierarchies"), `bins` bins along the axis,
+//                              or along all three in ranges of `all_axes_min` or more
 //   axis       longest | round_robin     (report, Figure 6)
 //   max_prims  the largest leaf. auto (the default): 1 for the report's splits (its Table 3),
 //              8 for sah, which decides its own leaves below that bound: a range becomes a
 //              leaf when its SAH cost is not above the best split's (as pbrt-v4 and bvh v2)
-//   max_depth, bins, traversal_cost, isect_cost, traversal,
+//   max_depth, bins, all_axes_min, traversal_cost, isect_cost, traversal,
 //   leaf_test  scalar | packet | auto (packet where max_prims > 1): one triangle test at a
 //              time or four per SSE test (bvh_packet_leaves.h), the same answers
 //   reinsertion  passes of the reinsertion optimizer after the build (bvh_reinsertion.h;
@@ -59,6 +60,21 @@ public:
         // models within the noise. Only split=sah reads it: the report's splits build the
         // same trees.
         uint32_t bins = 32;
+        // split=sah: ranges of at least this many triangles take the cheapest plane over all
+        // three axes, smaller ones bin along `axis` only (0: none). Binning all three axes
+        // costs about as much again per reference and level as the rest of the build, so it
+        // is spent where a plane decides for the most rays: the top levels (1024: about 6 of
+        // the bunny's 16, 10 of the dragon's 23). Measured (session 12; accelbench render
+        // 320x240, primary + shadow; accel_bench, trace and build / Embree, two to six
+        // rounds), all_axes_min 0 / 1 / 64 / 1024 / 4096: conference box tests 7.11M / 5.60M /
+        // 5.88M / 5.91M / 5.96M, triangle tests 1.05M / 1.45M / 0.98M / 0.96M / 1.03M (at 1 the
+        // small ranges' planes cost more triangle tests at an equal SAH cost: 39.42 against
+        // 39.23 at 1024, 42.26 at 0); trace / Embree conference 1.90-1.97 at 0, 1.59-1.86 at
+        // 1, 1.57-1.85 at 64, 1.57-1.84 at 1024; dragon 1.52-1.62 at 0, 1.44-1.65 at the
+        // others; bunny 1.40-1.46 at 0, 1.34-1.47 at the others (igea level); build / Embree
+        // bunny 0.57-0.58 at 0, 0.77-0.79 at 1, 0.52-0.53 at 1024, conference 0.56-0.59,
+        // 0.90-0.98, 0.71-0.75 (the builds at 1 and 1024 with SahSplit's fused partition).
+        uint32_t all_axes_min = 1024;
         // SAH cost of a node visit relative to isect_cost (split=sah): only the ratio counts,
         // and only in the leaf decision (a plane's cost adds the same C_trav A to every plane).
         // 4, the ratio that fits this traversal: a binary node visit (two box tests, the

@@ -94,6 +94,13 @@ public:
         centroids.lo_ = c < centroids.lo_ ? c : centroids.lo_;
         centroids.hi_ = c > centroids.hi_ ? c : centroids.hi_;
     }
+    // r's centroid in lanes 0-2 (the arithmetic of BvhPrimRef::centroid, so the same
+    // floats); lane 3 carries no meaning.
+    static F4 centroid(const BvhPrimRef& r) {
+        return 0.5f *
+            (load(reinterpret_cast<const unsigned char*>(&r)) +
+             load(reinterpret_cast<const unsigned char*>(&r) + sizeof(Vec3)));
+    }
     // Extends this box by r's centroid (lane 3 holds the id's bits: never read back).
     void extend(const BvhCentroidRef& r) {
         const F4 c = load(reinterpret_cast<const unsigned char*>(&r));

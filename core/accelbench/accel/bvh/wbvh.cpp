@@ -55,6 +55,19 @@ AcceleratorInfo Wbvh::info() {
                 // within 1% of the counts and of the time; build / Embree +0.08-0.16 (dragon
                 // 1.05 -> 1.13, conference 0.90 -> 1.06, bunny 0.80 -> 0.96). 64: no better.
                 {"bins", ParamType::Int, "32", {}, 2, 1024, "binned SAH bins along the split axis"},
+                // 0 (none), unlike bvh split=sah's 1024 (bvh.h): all three axes in the top
+                // ranges. Measured (session 12, width 8, accel_bench, two rounds, 1024 against
+                // 0): trace / Embree conference 0.91-0.98 -> 0.84-0.92, bunny and dragon level;
+                // build / Embree conference 0.83-0.84 -> 0.91-0.96, bunny and dragon level, the
+                // dragon's already at 0.99-1.18 of the goal's 1.2. An option, not the default.
+                {"all_axes_min",
+                 ParamType::Int,
+                 "0",
+                 {},
+                 0,
+                 BvhNode::kMaxLeafPrims,
+                 "binary build: a range of at least this many triangles takes the cheapest SAH plane over all three "
+                 "axes, a smaller one the longest axis's; 1 = every range, 0 = none"},
                 // 2 with collapse=sah: a finer binary tree, whose leaves the SAH collapse
                 // merges into packets as the wide cost model says (the binary SAH charges per
                 // triangle, not per packet). Measured (width 8, max_prims 8, packet_cost 2,
@@ -137,6 +150,7 @@ Wbvh::Config Wbvh::Config::from(const ParamSet& params) {
     c.max_prims = uint32_t(params.get_int("max_prims"));
     c.max_depth = uint32_t(params.get_int("max_depth"));
     c.bins = uint32_t(params.get_int("bins"));
+    c.all_axes_min = uint32_t(params.get_int("all_axes_min"));
     c.traversal_cost = params.get_float("traversal_cost");
     c.isect_cost = params.get_float("isect_cost");
     c.reinsertion = uint32_t(params.get_int("reinsertion"));
@@ -157,6 +171,7 @@ ParamSet binary_params(const Wbvh::Config& c) {
         {"max_prims", std::to_string(c.max_prims)},
         {"max_depth", std::to_string(c.max_depth)},
         {"bins", std::to_string(c.bins)},
+        {"all_axes_min", std::to_string(c.all_axes_min)},
         {"traversal_cost", format_param(c.traversal_cost)},
         {"isect_cost", format_param(c.isect_cost)},
         {"reinsertion", std::to_string(c.reinsertion)},

@@ -90,6 +90,7 @@ public:
         uint32_t max_prims = 0;     // leaf cap of the binary build (SAH may stop earlier)
         uint32_t max_depth = 0;     // binary build's depth limit
         uint32_t bins = 0;          // binned SAH bins
+        uint32_t all_axes_min = 0;  // ranges that bin all three axes (bvh.h)
         double traversal_cost = 0;  // SAH constants of the binary build
         double isect_cost = 0;
         uint32_t reinsertion = 0;           // reinsertion passes on the binary tree before the collapse
