@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "accelbench/accel/bvh/bvh_packet_leaves.h"
 #include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/scene/scene.h"
 
@@ -20,8 +21,10 @@ inline bool contains(const Bounds3& outer, const Bounds3& inner) {
 // Checks: each triangle in exactly one leaf slot; leaves cover the slots in order;
 // depth-first layout (first child follows its parent, second child after the first
 // child's subtree); every box contains its children's or its triangles' boxes, and with
-// `tight` equals their union; the leaf triangle copies match the scene; depth is right.
-inline void expect_valid_bvh(const FlatBvh& bvh, const Scene& scene, bool tight, const std::string& what) {
+// `tight` equals their union; the leaf triangle copies match the scene (with `copies`; a
+// tree whose leaves are packets has released them: see expect_valid_packets); depth is right.
+inline void expect_valid_bvh(const FlatBvh& bvh, const Scene& scene, bool tight, const std::string& what,
+                             bool copies = true) {
     const size_t n = scene.triangle_count();
     if (n == 0) {
         EXPECT_TRUE(bvh.nodes.empty()) << what;
@@ -29,11 +32,12 @@ inline void expect_valid_bvh(const FlatBvh& bvh, const Scene& scene, bool tight,
     }
     ASSERT_FALSE(bvh.nodes.empty()) << what;
     ASSERT_EQ(bvh.prim_ids.size(), n) << what;
-    ASSERT_EQ(bvh.triangles.size(), n) << what;
+    ASSERT_EQ(bvh.triangles.size(), copies ? n : 0) << what;
     std::vector<int> seen(n, 0);
     for (size_t slot = 0; slot < n; ++slot) {
         ASSERT_LT(bvh.prim_ids[slot], n) << what;
         ++seen[bvh.prim_ids[slot]];
+        if (!copies) continue;
         const uint32_t p = bvh.prim_ids[slot];
         EXPECT_EQ(bvh.triangles[slot].p0, scene.vertex(p, 0)) << what;
         EXPECT_EQ(bvh.triangles[slot].p1, scene.vertex(p, 1)) << what;
@@ -75,6 +79,38 @@ inline void expect_valid_bvh(const FlatBvh& bvh, const Scene& scene, bool tight,
     EXPECT_EQ(expected_node, bvh.nodes.size()) << what << ": unreachable nodes";
     EXPECT_EQ(next_slot, n) << what;
     EXPECT_EQ(bvh.depth, depth) << what;
+}
+
+// The packets of a tree's leaves (bvh_packet_leaves.h): each leaf's slots in order, four to
+// a packet, every lane holding its slot's scene triangle and index, the lanes past the
+// leaf's count empty (kInvalidId).
+inline void expect_valid_packets(const BvhPacketLeaves& leaves, const FlatBvh& bvh, const Scene& scene,
+                                 const std::string& what) {
+    ASSERT_EQ(leaves.first_packet.size(), bvh.nodes.size()) << what;
+    size_t expected_first = 0;
+    for (size_t i = 0; i < bvh.nodes.size(); ++i) {
+        const BvhNode& node = bvh.nodes[i];
+        if (!node.is_leaf()) continue;
+        ASSERT_EQ(leaves.first_packet[i], expected_first) << what << ": node " << i;
+        const uint32_t count = node.prim_count();
+        const size_t packets = (count + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes;
+        ASSERT_LE(expected_first + packets, leaves.packets.size()) << what << ": node " << i;
+        for (uint32_t k = 0; k < packets * WbvhTriPacket::kLanes; ++k) {
+            const WbvhTriPacket& p = leaves.packets[expected_first + k / WbvhTriPacket::kLanes];
+            const int lane = int(k % WbvhTriPacket::kLanes);
+            if (k >= count) {
+                EXPECT_EQ(p.prim[lane], kInvalidId) << what << ": node " << i << " lane " << lane;
+                continue;
+            }
+            const uint32_t prim = bvh.prim_ids[node.first_prim() + k];
+            ASSERT_EQ(p.prim[lane], prim) << what << ": node " << i << " slot " << k;
+            for (int v = 0; v < 3; ++v)
+                for (int a = 0; a < 3; ++a)
+                    EXPECT_EQ(p.v[v][a][lane], scene.vertex(prim, v)[a]) << what << ": node " << i << " slot " << k;
+        }
+        expected_first += packets;
+    }
+    EXPECT_EQ(expected_first, leaves.packets.size()) << what;
 }
 
 }  // namespace accelbench::test

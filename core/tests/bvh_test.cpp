@@ -33,7 +33,9 @@ std::unique_ptr<Bvh> make_bvh(const std::map<std::string, std::string>& params) 
 std::unique_ptr<Bvh> built(const Scene& scene, const std::map<std::string, std::string>& params) {
     auto bvh = make_bvh(params);
     bvh->build(scene);
-    expect_valid_bvh(bvh->tree(), scene, /*tight=*/true, "bvh");
+    const BvhPacketLeaves* packets = bvh->packet_leaves();
+    expect_valid_bvh(bvh->tree(), scene, /*tight=*/true, "bvh", /*copies=*/packets == nullptr);
+    if (packets) expect_valid_packets(*packets, bvh->tree(), scene, "bvh packets");
     return bvh;
 }
 

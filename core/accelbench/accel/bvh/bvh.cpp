@@ -465,8 +465,14 @@ void Bvh::build(const Scene& scene) {
             break;
     }
     reinsertion_counts_ = optimize_bvh_by_reinsertion(bvh_, scene, {config_.reinsertion});
-    if (config_.packet_leaves()) packets_.build(bvh_);
-    else packets_ = {};
+    if (config_.packet_leaves()) {
+        packets_.build(bvh_);
+        // The packets hold the same vertices; the slot copies only the scalar test reads
+        // would double the memory the structure holds and reports (bunny: 6.9 MB, 4.4 without).
+        bvh_.triangles = {};
+    } else {
+        packets_ = {};
+    }
 }
 
 BuildStats Bvh::build_stats() const {

@@ -120,7 +120,9 @@ public:
     template <class C>
     bool occluded(const Ray& ray, C& counters) const;
 
+    // The tree; with packet leaves its `triangles` are released (the packets hold them).
     const FlatBvh& tree() const { return bvh_; }
+    const BvhPacketLeaves* packet_leaves() const { return config_.packet_leaves() ? &packets_ : nullptr; }
 
 private:
     Config config_;

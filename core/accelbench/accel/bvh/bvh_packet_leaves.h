@@ -15,9 +15,10 @@
 // session 10 had found no gain there): the packets pay where the SAH makes leaves to fill
 // them (bvh.h, traversal_cost).
 //
-// Kept beside the tree rather than in it: FlatBvh's slots (prim_ids, triangles) stay what the
-// builders, the reinsertion optimizer, the metrics and the tests read, and the report rows
-// (one triangle a leaf) keep the scalar loop. A leaf finds its packets through
+// Kept beside the tree rather than in it: FlatBvh's nodes and slots stay what the builders,
+// the reinsertion optimizer, the metrics and the tests read, and the report rows (one
+// triangle a leaf) keep the scalar loop. Packed from the tree's triangle copies, which the
+// Bvh then releases (only the scalar test reads them). A leaf finds its packets through
 // first_packet[node index], a load whose address is known as soon as the node is, not after
 // the node's own fields.
 #pragma once

@@ -24,9 +24,11 @@ struct LeafTriangle {
 // An empty scene gives no nodes at all; traversal then answers "miss".
 struct FlatBvh {
     std::vector<BvhNode> nodes;
-    std::vector<uint32_t> prim_ids;       // slot -> triangle index in the scene
-    std::vector<LeafTriangle> triangles;  // slot -> that triangle's vertices
-    uint32_t depth = 0;                   // longest root-to-leaf path in edges (root alone: 0)
+    std::vector<uint32_t> prim_ids;  // slot -> triangle index in the scene
+    // slot -> that triangle's vertices; released (empty) by a Bvh whose leaves are tested as
+    // packets (bvh_packet_leaves.h), which hold the same vertices
+    std::vector<LeafTriangle> triangles;
+    uint32_t depth = 0;  // longest root-to-leaf path in edges (root alone: 0)
 
     // Copies each slot's triangle out of the scene and measures the depth (which sizes
     // the traversal stack, so a deep tree can never overflow it).

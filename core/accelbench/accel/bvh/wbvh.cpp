@@ -175,6 +175,9 @@ ParamSet binary_params(const Wbvh::Config& c) {
         {"traversal_cost", format_param(c.traversal_cost)},
         {"isect_cost", format_param(c.isect_cost)},
         {"reinsertion", std::to_string(c.reinsertion)},
+        // The collapse reads the binary tree's triangle copies, and the binary tree is never
+        // traced: no packet leaves (which would release the copies, bvh.cpp).
+        {"leaf_test", "scalar"},
     };
     return resolve_params("bvh", Bvh::info().params, given);
 }
