@@ -284,17 +284,20 @@ private:
 
     // Centroid -> bin, along each axis (lanes 0-2): (c - lo) * scale clamped to [0, K - 1].
     // Clamped in float before the conversion: a tiny extent can make scale infinite, and
-    // a zero one makes (c - lo) * scale NaN, which the clamp sends to bin 0. Lane 3 maps
-    // everything to bin 0.
+    // (c - lo) * scale then infinite (clamped to K - 1) or, at c = lo, NaN (sent to bin 0,
+    // NaN failing the first comparison). An axis without extent (no
+    // plane; the builder never asks for one when its own axis has none) gets scale 0, not a
+    // division by zero: every centroid in bin 0. Lane 3 maps everything to bin 0.
     struct BinMap {
         F4 lo, scale, last;
         BinMap(const BvhSplitRequest& r, uint32_t bins) {
             const Bounds3& cb = r.centroid_bounds;
             // (1 - 1e-6): the largest centroid lands in the last bin, not one past it.
             const float k = float(bins) * (1.0f - 1e-6f);
+            auto scale_of = [k](float lower, float upper) { return upper > lower ? k / (upper - lower) : 0.0f; };
             lo = F4{cb.lower.x, cb.lower.y, cb.lower.z, 0.0f};
-            scale =
-                F4{k / (cb.upper.x - cb.lower.x), k / (cb.upper.y - cb.lower.y), k / (cb.upper.z - cb.lower.z), 0.0f};
+            scale = F4{scale_of(cb.lower.x, cb.upper.x), scale_of(cb.lower.y, cb.upper.y),
+                       scale_of(cb.lower.z, cb.upper.z), 0.0f};
             const float l = float(bins - 1);
             last = F4{l, l, l, 0.0f};
         }
