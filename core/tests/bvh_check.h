@@ -81,6 +81,15 @@ inline void expect_valid_bvh(const FlatBvh& bvh, const Scene& scene, bool tight,
     EXPECT_EQ(bvh.depth, depth) << what;
 }
 
+// Lane `lane` of packet `p` (wbvh_simd.h: the wide BVH's leaves and the binary BVH's packet
+// leaves) holds the scene's triangle `prim`: its three vertices, bit for bit.
+inline void expect_lane_holds(const WbvhTriPacket& p, int lane, uint32_t prim, const Scene& scene,
+                              const std::string& what) {
+    for (int v = 0; v < 3; ++v)
+        EXPECT_EQ((Vec3{p.v[v][0][lane], p.v[v][1][lane], p.v[v][2][lane]}), scene.vertex(prim, v))
+            << what << ": triangle " << prim << " vertex " << v;
+}
+
 // The packets of a tree's leaves (bvh_packet_leaves.h): each leaf's slots in order, four to
 // a packet, every lane holding its slot's scene triangle and index, the lanes past the
 // leaf's count empty (kInvalidId).
@@ -104,9 +113,7 @@ inline void expect_valid_packets(const BvhPacketLeaves& leaves, const FlatBvh& b
             }
             const uint32_t prim = bvh.prim_ids[node.first_prim() + k];
             ASSERT_EQ(p.prim[lane], prim) << what << ": node " << i << " slot " << k;
-            for (int v = 0; v < 3; ++v)
-                for (int a = 0; a < 3; ++a)
-                    EXPECT_EQ(p.v[v][a][lane], scene.vertex(prim, v)[a]) << what << ": node " << i << " slot " << k;
+            expect_lane_holds(p, lane, prim, scene, what + ": node " + std::to_string(i));
         }
         expected_first += packets;
     }

@@ -18,6 +18,7 @@
 #include "accelbench/scene/procedural.h"
 #include "accelbench/verify/robustness_cases.h"
 #include "agreement.h"
+#include "bvh_check.h"
 #include "test_scenes.h"
 
 using namespace accelbench;
@@ -86,9 +87,7 @@ void expect_valid_tree(const WbvhTree<W>& tree, const Scene& scene, const std::s
                 EXPECT_TRUE(box.lower.x <= pb.lower.x && box.lower.y <= pb.lower.y && box.lower.z <= pb.lower.z &&
                             box.upper.x >= pb.upper.x && box.upper.y >= pb.upper.y && box.upper.z >= pb.upper.z)
                     << what << ": leaf box misses triangle " << prim;
-                for (int v = 0; v < 3; ++v)
-                    EXPECT_EQ((Vec3{p.v[v][0][i % 4], p.v[v][1][i % 4], p.v[v][2][i % 4]}), scene.vertex(prim, v))
-                        << what;
+                expect_lane_holds(p, int(i % 4), prim, scene, what);
             }
             if (node.count[k] % 4) {
                 EXPECT_EQ(tree.packets.at(node.child[k] + node.count[k] / 4).prim[3], kInvalidId) << what;
