@@ -114,7 +114,7 @@ REPRODUCE_CONFIGS := quick-table2 quick-tables scaling-quick
 SCALING_CONFIG    := scaling-quick
 endif
 REFERENCE_RUN := results/reference
-COST_IMAGES    = harness/cost_images.sh $(BUILD_DIR) $(PYTHON)
+COST_IMAGES    = harness/scripts/cost_images.sh $(BUILD_DIR) $(PYTHON)
 REPRODUCE      = $(ANALYSIS) reproduce $(foreach c,$(REPRODUCE_CONFIGS),configs/$(c).yaml) \
   --scaling configs/$(SCALING_CONFIG).yaml --accelbench $(ACCELBENCH) \
   --report-numbers results/report/report-tables.csv --reference-run $(REFERENCE_RUN)

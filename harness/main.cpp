@@ -2,9 +2,9 @@
 #include <cstdio>
 #include <cstring>
 
-#include "cli.h"
-#include "provenance.h"
-#include "run_command.h"
+#include "commands/cli.h"
+#include "commands/run_command.h"
+#include "csv/provenance.h"
 
 namespace {
 

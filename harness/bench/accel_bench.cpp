@@ -43,9 +43,9 @@
 
 #include "accelbench/accel/registry.h"
 #include "accelbench/render/renderer.h"
-#include "cli.h"
-#include "model_registry.h"
-#include "stats.h"
+#include "commands/cli.h"
+#include "models/model_registry.h"
+#include "util/stats.h"
 
 using namespace accelbench;
 

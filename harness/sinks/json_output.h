@@ -7,7 +7,7 @@
 
 #include <fstream>
 
-#include "sinks/run_sink.h"
+#include "run/run_sink.h"
 
 namespace accelbench {
 

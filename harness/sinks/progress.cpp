@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "text.h"
+#include "util/text.h"
 
 namespace accelbench {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "sinks/run_sink.h"
+#include "run/run_sink.h"
 
 namespace accelbench {
 

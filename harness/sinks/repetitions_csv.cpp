@@ -1,6 +1,6 @@
 #include "sinks/repetitions_csv.h"
 
-#include "text.h"
+#include "util/text.h"
 
 namespace accelbench {
 

@@ -4,8 +4,8 @@
 // (prepare_resume), never a results row without its samples.
 #pragma once
 
-#include "results.h"
-#include "sinks/run_sink.h"
+#include "csv/results.h"
+#include "run/run_sink.h"
 
 namespace accelbench {
 

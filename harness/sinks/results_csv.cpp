@@ -1,8 +1,8 @@
 #include "sinks/results_csv.h"
 
-#include "provenance.h"
-#include "stats.h"
-#include "text.h"
+#include "csv/provenance.h"
+#include "util/stats.h"
+#include "util/text.h"
 
 namespace accelbench {
 

@@ -4,8 +4,8 @@
 
 #include <optional>
 
-#include "results.h"
-#include "sinks/run_sink.h"
+#include "csv/results.h"
+#include "run/run_sink.h"
 
 namespace accelbench {
 

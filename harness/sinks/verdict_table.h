@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "sinks/run_sink.h"
+#include "run/run_sink.h"
 
 namespace accelbench {
 

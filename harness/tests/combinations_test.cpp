@@ -4,8 +4,8 @@
 
 #include <set>
 
-#include "combinations.h"
 #include "harness_test_util.h"
+#include "plan/combinations.h"
 
 namespace accelbench {
 namespace {

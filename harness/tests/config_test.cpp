@@ -4,7 +4,7 @@
 #include <sys/stat.h>
 
 #include "accelbench/verify/robustness_cases.h"
-#include "config.h"
+#include "config/config.h"
 #include "harness_test_util.h"
 
 namespace accelbench {

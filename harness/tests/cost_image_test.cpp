@@ -4,9 +4,9 @@
 
 #include <algorithm>
 
-#include "cli.h"
-#include "cost_image.h"
+#include "commands/cli.h"
 #include "harness_test_util.h"
+#include "util/cost_image.h"
 
 namespace accelbench {
 namespace {

@@ -9,9 +9,9 @@
 #include <filesystem>
 
 #include "accelbench/scene/mesh_io.h"
-#include "derived_model.h"
 #include "harness_test_util.h"
-#include "sha256.h"
+#include "plan/derived_model.h"
+#include "util/sha256.h"
 
 namespace accelbench {
 namespace {

@@ -9,8 +9,8 @@
 #include <string>
 
 #include "accelbench/base/temp_dir.h"
-#include "config.h"
-#include "model_registry.h"
+#include "config/config.h"
+#include "models/model_registry.h"
 
 namespace accelbench::testing_util {
 

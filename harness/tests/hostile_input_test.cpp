@@ -14,11 +14,11 @@
 #include <chrono>
 #include <filesystem>
 
-#include "csv.h"
+#include "commands/run_command.h"
+#include "csv/csv.h"
+#include "csv/results.h"
 #include "harness_test_util.h"
-#include "output_lock.h"
-#include "results.h"
-#include "run_command.h"
+#include "util/output_lock.h"
 
 namespace accelbench {
 namespace {

@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "accelbench/scene/mesh_io.h"
-#include "config.h"
+#include "config/config.h"
 #include "harness_test_util.h"
 
 namespace accelbench {

@@ -4,7 +4,7 @@
 
 #include "accelbench/base/temp_dir.h"
 #include "harness_test_util.h"
-#include "instructions.h"
+#include "run/instructions.h"
 
 namespace accelbench {
 namespace {

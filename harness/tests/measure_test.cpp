@@ -11,7 +11,7 @@
 
 #include "accelbench/accel/baseline/brute_force.h"
 #include "accelbench/accel/baseline/embree_accel.h"
-#include "measure.h"
+#include "run/measure.h"
 
 namespace accelbench {
 namespace {

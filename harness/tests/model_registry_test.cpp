@@ -1,6 +1,6 @@
 // The model registry: configs/models.yaml, the lookup order, checksums, downloads (tested
 // offline through file:// URLs) and loading the real models in ../shared/models.
-#include "model_registry.h"
+#include "models/model_registry.h"
 
 #include <gtest/gtest.h>
 
@@ -14,7 +14,7 @@
 #include <utility>
 
 #include "accelbench/base/temp_dir.h"
-#include "sha256.h"
+#include "util/sha256.h"
 
 namespace accelbench {
 namespace {

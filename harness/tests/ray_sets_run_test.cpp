@@ -7,12 +7,12 @@
 #include <map>
 #include <set>
 
-#include "combinations.h"
-#include "config.h"
-#include "csv.h"
+#include "commands/run_command.h"
+#include "config/config.h"
+#include "csv/csv.h"
+#include "csv/results.h"
 #include "harness_test_util.h"
-#include "results.h"
-#include "run_command.h"
+#include "plan/combinations.h"
 
 namespace accelbench {
 namespace {

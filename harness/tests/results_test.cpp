@@ -5,10 +5,10 @@
 #include <filesystem>
 
 #include "accelbench/accel/registry.h"
-#include "csv.h"
+#include "csv/csv.h"
+#include "csv/provenance.h"
+#include "csv/results.h"
 #include "harness_test_util.h"
-#include "provenance.h"
-#include "results.h"
 
 namespace accelbench {
 namespace {

@@ -6,11 +6,11 @@
 #include <map>
 #include <set>
 
-#include "combinations.h"
-#include "csv.h"
+#include "commands/run_command.h"
+#include "csv/csv.h"
+#include "csv/results.h"
 #include "harness_test_util.h"
-#include "results.h"
-#include "run_command.h"
+#include "plan/combinations.h"
 
 namespace accelbench {
 namespace {

@@ -1,6 +1,6 @@
 // SHA-256 against the FIPS 180-4 example vectors (NIST "SHA256.pdf" examples): the
 // wrapper around OpenSSL's EVP digest, fed whole and in pieces, and from a file.
-#include "sha256.h"
+#include "util/sha256.h"
 
 #include <gtest/gtest.h>
 

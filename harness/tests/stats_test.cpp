@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "stats.h"
+#include "util/stats.h"
 
 namespace accelbench {
 namespace {

@@ -1,0 +1,51 @@
+// `accelbench list`: what a config may name — accelerators with their parameters,
+// procedural scenes with theirs, and the robustness cases with their requirements.
+#include "commands/cli.h"
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "accelbench/accel/registry.h"
+#include "accelbench/scene/procedural.h"
+#include "accelbench/verify/robustness_cases.h"
+
+namespace accelbench {
+
+int list_command(int, char**) {
+    auto print_params = [](const std::vector<ParamSpec>& specs) {
+        for (const auto& p : specs) {
+            std::string domain;
+            if (p.type == ParamType::Enum) {
+                for (const auto& c : p.choices) domain += (domain.empty() ? "{" : ", ") + c;
+                domain += "}";
+            } else if (p.type != ParamType::Bool) {
+                char buf[96];
+                std::snprintf(buf, sizeof buf, "[%g, %g]", p.min, p.max);
+                domain = buf;
+            }
+            std::printf("    %-16s %-5s default %-8s %-28s %s\n", p.name.c_str(), to_string(p.type),
+                        p.default_value.c_str(), domain.c_str(), p.help.c_str());
+        }
+    };
+    std::printf("accelerators:\n");
+    for (const auto& info : accelerator_registry()) {
+        std::printf("  %s — %s\n", info.name.c_str(), info.description.c_str());
+        print_params(info.params);
+    }
+    std::printf("\nprocedural scenes (--model procedural:KIND,k=v,...):\n");
+    for (const auto& kind : procedural_registry()) {
+        std::printf("  %s — %s\n", kind.name.c_str(), kind.description.c_str());
+        print_params(kind.params);
+    }
+    // Generating a case takes microseconds to milliseconds; its requirement is part of it.
+    std::printf("\nrobustness cases (configs: models: [{case: ID}] or [{case: all}]):\n");
+    for (const auto& entry : robustness_case_list()) {
+        const RobustnessCase c = entry.make();
+        std::printf("  %-4s %s — %zu triangles, %zu rays: %s\n", c.id.c_str(), c.name.c_str(), c.scene.triangle_count(),
+                    c.rays.size(), c.requirement.c_str());
+    }
+    return 0;
+}
+
+}  // namespace accelbench

@@ -1,0 +1,94 @@
+#include "config/ray_file.h"
+
+#include <cstdlib>
+#include <fstream>
+
+namespace accelbench {
+
+namespace {
+
+constexpr size_t kMaxIssues = 20;
+
+std::string trim(const std::string& s) {
+    size_t b = s.find_first_not_of(" \t\r");
+    if (b == std::string::npos) return "";
+    size_t e = s.find_last_not_of(" \t\r");
+    return s.substr(b, e - b + 1);
+}
+
+// Splits at commas, remembering the 1-based column where each field starts (not csv.h's
+// reader: a ray file holds only numbers, and its errors name the column of the field).
+std::vector<std::pair<std::string, int>> split_fields(const std::string& line) {
+    std::vector<std::pair<std::string, int>> out;
+    size_t start = 0;
+    for (;;) {
+        size_t comma = line.find(',', start);
+        out.emplace_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)),
+                         int(start) + 1);
+        if (comma == std::string::npos) return out;
+        start = comma + 1;
+    }
+}
+
+}  // namespace
+
+RayFileContents read_ray_file(const std::string& path, const std::string& display) {
+    RayFileContents result;
+    auto issue = [&](int line, int column, const std::string& msg) {
+        if (result.issues.size() < kMaxIssues) result.issues.push_back({{display, line, column}, "", msg});
+    };
+    std::ifstream in(path);
+    if (!in) {
+        issue(0, 0, "cannot open ray file '" + path + "'");
+        return result;
+    }
+    std::string line;
+    int line_no = 0;
+    size_t fields = 0;  // 6 or 7 once the header is read
+    while (std::getline(in, line)) {
+        ++line_no;
+        const std::string text = trim(line);
+        if (text.empty()) continue;
+        if (fields == 0) {
+            if (text == "ox,oy,oz,dx,dy,dz") fields = 6;
+            else if (text == "ox,oy,oz,dx,dy,dz,tmax") fields = 7;
+            else {
+                issue(line_no, 1,
+                      "expected the header 'ox,oy,oz,dx,dy,dz' or 'ox,oy,oz,dx,dy,dz,tmax', got '" + text + "'");
+                return result;
+            }
+            continue;
+        }
+        auto parts = split_fields(line);
+        if (parts.size() != fields) {
+            issue(
+                line_no, 1,
+                "expected " + std::to_string(fields) + " comma-separated numbers, got " + std::to_string(parts.size()));
+            continue;
+        }
+        float v[7] = {0, 0, 0, 0, 0, 0, kInfinity};
+        bool ok = true;
+        for (size_t i = 0; i < fields; ++i) {
+            const std::string& f = parts[i].first;
+            char* end = nullptr;
+            v[i] = std::strtof(f.c_str(), &end);
+            if (f.empty() || end != f.c_str() + f.size()) {
+                issue(line_no, parts[i].second, "field " + std::to_string(i + 1) + " is not a number: '" + f + "'");
+                ok = false;
+                break;
+            }
+        }
+        if (!ok) continue;
+        Ray r;
+        r.org = {v[0], v[1], v[2]};
+        r.dir = {v[3], v[4], v[5]};
+        r.tmin = 0.0f;
+        r.tmax = v[6];
+        result.rays.push_back(r);
+    }
+    if (fields == 0) issue(line_no, 0, "empty ray file: expected a header line and at least one ray");
+    else if (result.rays.empty() && result.issues.empty()) issue(line_no, 0, "the ray file has a header but no rays");
+    return result;
+}
+
+}  // namespace accelbench

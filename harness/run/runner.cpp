@@ -1,0 +1,272 @@
+#include "run/runner.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+
+#include "accelbench/accel/registry.h"
+#include "plan/loaded_model.h"
+#include "run/measure.h"
+#include "run/verdicts.h"
+#include "util/text.h"
+
+namespace accelbench {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// A config model as the run needs it: its sizes when known without loading, the prepared
+// model on first need. A model that does not load is bad input: its combinations get no
+// rows at all.
+//
+// Preparing a model is loading it (reading and checking the mesh, a derived model's
+// transform, procedural generation), making its ray sets and tracing the reference's
+// answers, once per model, before its first measurement. It runs in one child process under
+// the config's timeout_s, like each measurement (unless --in-process), and comes back to
+// the parent as bytes (loaded_model_bytes): a model whose preparation cannot finish in time
+// gets timeout rows naming the stage, never an unbounded wait in the parent. A robustness
+// case (a small generated scene that brings its own reference answers) is made in the parent.
+class ModelOnDemand {
+public:
+    ModelOnDemand(const ModelSpec& spec, const RunPlan& plan, std::vector<const Combination*> combinations,
+                  bool reference_wanted, bool in_process)
+        : spec_(spec),
+          plan_(plan),
+          combinations_(std::move(combinations)),
+          reference_wanted_(reference_wanted),
+          in_process_(in_process) {
+        triangles = known_triangles(spec, plan.registry);
+        if (const ModelEntry* entry = spec.kind == ModelSpec::Kind::Registry ? plan.registry.find(spec.name) : nullptr)
+            vertices = entry->vertices;
+        // The skip rules need the count: the model is prepared now.
+        if (!triangles) prepare();
+    }
+
+    // The prepared model, prepared if it was not; nullptr when it is not there: load_error
+    // (it does not load) or timeout (its preparation passed the deadline).
+    const LoadedModel* prepare() {
+        if (prepared_) return loaded_ ? &*loaded_ : nullptr;
+        prepared_ = true;
+        if (in_process_ || spec_.kind == ModelSpec::Kind::Case) take(prepare_here({}));
+        else prepare_in_child();
+        if (!timeout.empty())
+            std::fprintf(stderr, "accelbench run: preparing %s: %s\n", spec_.label.c_str(), timeout.c_str());
+        else if (!load_error.empty())
+            std::fprintf(stderr, "accelbench run: cannot load %s: %s\n", spec_.label.c_str(), load_error.c_str());
+        else if (!reference_error.empty())
+            std::fprintf(stderr, "accelbench run: the reference cannot trace %s: %s\n", spec_.label.c_str(),
+                         reference_error.c_str());
+        else if (loaded_->reference)
+            std::fprintf(stderr, "accelbench run: reference answers for %s: %zu primary rays in %.2f s\n",
+                         spec_.label.c_str(), loaded_->reference->hits.size(), loaded_->reference->seconds);
+        if (loaded_ && !triangles)
+            triangles = loaded_->scene.triangle_count(), vertices = loaded_->scene.vertex_count();
+        return loaded_ ? &*loaded_ : nullptr;
+    }
+
+    std::optional<uint64_t> triangles, vertices;
+    // Why the model has no rows; why the reference cannot trace it; which stage of its
+    // preparation passed the deadline.
+    std::string load_error, reference_error, timeout;
+
+private:
+    // The model, or why there is none, and why the reference cannot trace it.
+    struct Preparation {
+        std::optional<LoadedModel> model;
+        std::string load_error, reference_error;
+    };
+
+    static constexpr const char* reference_stage = "the reference pass (once per model, before its measurements)";
+
+    std::string loading_stage() const { return concat("loading ", spec_.label); }
+
+    // Every stage of preparing, in this process; `stage` hears each one begin.
+    Preparation prepare_here(const StageFn& stage) const {
+        Preparation p;
+        if (stage) stage(loading_stage());
+        const auto t0 = Clock::now();
+        try {
+            p.model = load_model(spec_, plan_.registry, plan_.config.render);
+        } catch (const std::exception& e) {
+            p.load_error = e.what();
+            return p;
+        }
+        std::fprintf(stderr, "accelbench run: loaded %s: %zu triangles, %zu vertices in %.2f s\n", spec_.label.c_str(),
+                     p.model->scene.triangle_count(), p.model->scene.vertex_count(), seconds_since(t0));
+        if (!reference_needed(*p.model)) return p;
+        try {
+            // Single-threaded, outside anything timed.
+            if (plan_.config.ray_sets) {
+                if (stage) stage("making the ray sets (once per model, before its measurements)");
+                add_ray_sets(*p.model, plan_.config.render, *plan_.config.ray_sets);
+            }
+            if (stage) stage(reference_stage);
+            add_reference_answers(*p.model, plan_.config.render);
+        } catch (const std::exception& e) {
+            p.reference_error = e.what();
+        }
+        return p;
+    }
+
+    // The reference's answers (and the ray sets, which need them to be made at all, `errors`
+    // or not) are made when a combination on the model will be measured: not for a
+    // robustness case, which brings its own, nor when the skip rules skip every one.
+    bool reference_needed(const LoadedModel& m) const {
+        if ((!reference_wanted_ && !plan_.config.ray_sets) || m.robustness_case) return false;
+        return std::any_of(combinations_.begin(), combinations_.end(), [&](const Combination* c) {
+            return !skip_reason(plan_.config, *c, m.scene.triangle_count());
+        });
+    }
+
+    void take(Preparation p) {
+        if (p.model) loaded_ = std::move(*p.model);
+        load_error = std::move(p.load_error);
+        reference_error = std::move(p.reference_error);
+    }
+
+    // The child's answer: 'L' and why the model does not load, or 'M', the length of why the
+    // reference cannot trace it (0: it can), a newline, that text and the model's bytes.
+    void prepare_in_child() {
+        const double limit = plan_.config.timeout_s;
+        const ChildOutcome o = run_in_child(
+            [&](const StageFn& stage) -> std::string {
+                try {
+                    Preparation p = prepare_here(stage);
+                    if (!p.model) return concat("L", p.load_error);
+                    return concat("M", std::to_string(p.reference_error.size()), "\n", p.reference_error,
+                                  loaded_model_bytes(*p.model));
+                } catch (const std::exception& e) {  // the model does not fit into bytes (bad_alloc)
+                    return concat("L", "cannot bring the prepared model to the parent process: ", e.what());
+                }
+            },
+            limit, loading_stage());
+        if (o.timed_out) {
+            timeout = time_limit_message(limit, o.stage);
+        } else if (!o.result) {
+            // A crash is a bug of ours, not bad input; while loading it still leaves no model.
+            const std::string why = concat("the process preparing the model ", o.failure, " during ", o.stage);
+            if (o.stage == loading_stage()) load_error = why;
+            else reference_error = why;
+        } else if ((*o.result)[0] == 'L') {
+            load_error = o.result->substr(1);
+        } else {
+            const size_t nl = o.result->find('\n');
+            const size_t n = std::stoull(o.result->substr(1, nl - 1));
+            reference_error = o.result->substr(nl + 1, n);
+            try {
+                loaded_ = loaded_model_from_bytes(std::string_view(*o.result).substr(nl + 1 + n), spec_);
+            } catch (const std::exception& e) {  // a bug of ours: no model, no rows
+                load_error = concat("the prepared model came back damaged from its process: ", e.what());
+            }
+        }
+    }
+
+    const ModelSpec& spec_;
+    const RunPlan& plan_;
+    const std::vector<const Combination*> combinations_;
+    const bool reference_wanted_, in_process_;
+    bool prepared_ = false;
+    std::optional<LoadedModel> loaded_;
+};
+
+class Runner {
+public:
+    Runner(const RunPlan& plan, const RunOptions& options) : plan_(plan), options_(options) {}
+
+    // One combination: skipped by a rule, a timeout (its model's preparation passed the
+    // deadline), not run (its model did not load), an error without measuring (the
+    // reference cannot trace the model), or measured.
+    CombinationResult run_one(const Combination& c, ModelOnDemand& model) {
+        const ModelSpec& spec = plan_.config.models[c.model];
+        CombinationResult r{c, spec, model.triangles, model.vertices, utc_now("%Y-%m-%dT%H:%M:%SZ"), "", {}, {}};
+        if (auto reason = model.triangles ? skip_reason(plan_.config, c, *model.triangles) : std::nullopt) {
+            r.measurement.status = "skipped";
+            r.measurement.message = *reason;
+        } else if (const LoadedModel* loaded = model.prepare(); !loaded && !model.timeout.empty()) {
+            r.measurement.status = "timeout";
+            r.measurement.message = model.timeout;
+        } else if (!loaded) {
+            r.load_error = model.load_error;
+        } else if (!model.reference_error.empty()) {
+            r.measurement.status = "error";
+            r.measurement.message =
+                "no error measurement: the reference cannot trace the model: " + model.reference_error;
+        } else {
+            const auto t0 = Clock::now();
+            r.measurement = measure_combination(c, *loaded);
+            r.measuring_s = seconds_since(t0);
+        }
+        return r;
+    }
+
+private:
+    // Timed (or judged, for a robustness case) in a child process that the time limit can
+    // stop, unless --in-process.
+    Measurement measure_combination(const Combination& c, const LoadedModel& model) {
+        const AcceleratorInfo* info = find_accelerator(c.accel);
+        MeasureSettings ms;
+        ms.repetitions = repetitions_of(plan_.config, c);
+        ms.warmup = warmup_of(plan_.config, c);
+        ms.show_repetitions = options_.show_repetitions;
+        ms.show_context = first_measurement_;
+        ms.json = !options_.json_out.empty();
+        ms.timeout_s = plan_.config.timeout_s;
+        ms.callgrind_out = options_.callgrind_out;
+        ms.callgrind_tag = c.id;
+        if (!options_.callgrind_out.empty()) {
+            // Under valgrind times are not measurements and every render is slow: one
+            // counted repetition (the counted one), the counting render as warm-up.
+            ms.repetitions = 1;
+            ms.warmup = std::min(ms.warmup, 1);
+        }
+        first_measurement_ = false;
+        auto work = [&](const StageFn& stage) {
+            if (model.robustness_case) return judge_measurement(c.accel, c.given, *model.robustness_case, stage);
+            return measure(c.name, *info, c.params, model, render_of(plan_.config, c), ms, stage, c.ray_set);
+        };
+        return options_.in_process ? work(StageFn{}) : run_isolated(work, plan_.config.timeout_s);
+    }
+
+    const RunPlan& plan_;
+    const RunOptions& options_;
+    bool first_measurement_ = true;  // Google Benchmark's machine description is shown once
+};
+
+}  // namespace
+
+int run_plan(const RunPlan& plan, const RunOptions& options, const std::vector<RunSink*>& sinks) {
+    const RunContext context{
+        plan.config,      plan.out, plan.shard, plan.selected.size(), plan.selected.size() - plan.to_do.size(),
+        plan.to_do.size()};
+    for (RunSink* s : sinks) s->context(context);
+    // Not under callgrind, whose instruction counts are the point of such a run.
+    const bool reference_wanted = plan.config.errors && options.callgrind_out.empty();
+    Runner runner(plan, options);
+    bool not_loaded = false, errors = false;
+    for (size_t mi = 0; mi < plan.config.models.size(); ++mi) {
+        std::vector<const Combination*> mine;
+        std::copy_if(plan.to_do.begin(), plan.to_do.end(), std::back_inserter(mine),
+                     [&](const Combination* c) { return c->model == mi; });
+        if (mine.empty()) continue;
+        ModelOnDemand model(plan.config.models[mi], plan, mine, reference_wanted, options.in_process);
+        for (const Combination* c : mine) {
+            for (RunSink* s : sinks) s->starting(*c);
+            const CombinationResult result = runner.run_one(*c, model);
+            not_loaded |= !result.written();
+            errors |= result.written() && result.measurement.status == "error";
+            try {
+                for (RunSink* s : sinks) s->report(result);
+            } catch (const std::exception& e) {
+                std::fprintf(stderr, "accelbench run: %s\n", e.what());
+                return 2;
+            }
+        }
+    }
+    for (RunSink* s : sinks) s->finalize();
+    return not_loaded ? 2 : errors ? 1 : 0;
+}
+
+}  // namespace accelbench

@@ -1,0 +1,28 @@
+#include "run/verdicts.h"
+
+#include <algorithm>
+
+#include "accelbench/base/memory.h"
+#include "util/text.h"
+
+namespace accelbench {
+
+Measurement judge_measurement(const std::string& accel, const std::map<std::string, std::string>& given,
+                              const RobustnessCase& c, const StageFn& stage) {
+    reset_peak_rss();
+    if (stage) stage("judging case " + c.id);
+    const CaseVerdict v = judge_case(c, accel, given);
+    Measurement m;
+    m.rays = v.rays;
+    m.build.max_depth = v.max_depth;
+    m.build.memory_bytes = v.memory_bytes;
+    // A bad-input case is judged on its rejection at load: nothing was traced to compare.
+    if (v.built) m.columns = error_columns(v.vs_reference, std::nullopt);
+    m.columns["verdict"] = v.pass ? "pass" : "fail";
+    m.columns["verdict_counts"] = v.counts();
+    m.columns["peak_rss_bytes"] = std::to_string(peak_rss_bytes());
+    m.message = v.detail;
+    return m;
+}
+
+}  // namespace accelbench
