@@ -325,7 +325,7 @@ def point_latest(latest: Path, run_dir: Path) -> None:
 def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
     """Runs the job; returns (exit code, run directory). The run is marked complete only
     when every config measured and the analysis ran."""
-    from .cli import main as analysis_main
+    from .pipeline import main as analysis_main
 
     now = now or datetime.now(UTC)
     if job.require_clean_tree:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from accelbench_analysis.schema import (
+from accelbench_analysis.inputs.schema import (
     COUNT_COLUMNS,
     ERROR_MEMORY_VERDICT_COLUMNS,
     IDENTITY_COLUMNS,

@@ -6,7 +6,8 @@ import math
 import pytest
 from synthetic import BVH, KD, LBVH, row, write_csv
 
-from accelbench_analysis.claims import (
+from accelbench_analysis.inputs.schema import load_results
+from accelbench_analysis.outputs.claims import (
     CLAIMS,
     FAILS,
     HOLDS,
@@ -17,7 +18,6 @@ from accelbench_analysis.claims import (
     approx_range,
     evaluate,
 )
-from accelbench_analysis.schema import load_results
 
 CLAIM = {c.id: c for c in CLAIMS}
 # What the report's own numbers say (computed by hand from report-tables.csv):

@@ -9,12 +9,12 @@ import pytest
 from synthetic import BVH, EMBREE, KD, LBVH, SAH, ZERO_ERRORS, case_row, realistic_rows, row, write_csv
 from test_tables import cells_of, section_rows
 
-from accelbench_analysis import figures
-from accelbench_analysis.errors import NOT_MEASURED
-from accelbench_analysis.formatting import Section, to_latex, to_markdown
-from accelbench_analysis.schema import ContractError, load_results, read_csv
-from accelbench_analysis.selection import STRUCTURE, Picker
-from accelbench_analysis.tables import NOT_MEASURED_SECTION, model_table, table2
+from accelbench_analysis.inputs.schema import ContractError, load_results, read_csv
+from accelbench_analysis.mapping.selection import STRUCTURE, Picker
+from accelbench_analysis.outputs import figures
+from accelbench_analysis.outputs.errors import NOT_MEASURED
+from accelbench_analysis.outputs.formatting import Section, to_latex, to_markdown
+from accelbench_analysis.outputs.tables import NOT_MEASURED_SECTION, model_table, table2
 
 BUNNY = "stanford-bunny"
 
@@ -262,7 +262,7 @@ def test_harness_column_order_loads(tmp_path, report_nums):
     import csv
     from pathlib import Path
 
-    from accelbench_analysis.schema import ERROR_MEMORY_VERDICT_COLUMNS
+    from accelbench_analysis.inputs.schema import ERROR_MEMORY_VERDICT_COLUMNS
 
     src = Path(__file__).resolve().parents[2] / "results" / "reference" / "csv" / "table4.csv"
     rows = list(csv.reader(src.open(newline="")))

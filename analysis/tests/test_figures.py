@@ -6,8 +6,8 @@ import pandas as pd
 import pytest
 from synthetic import BVH, row, write_csv
 
-from accelbench_analysis import figures
-from accelbench_analysis.schema import load_results
+from accelbench_analysis.inputs.schema import load_results
+from accelbench_analysis.outputs import figures
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -14,9 +14,21 @@ from PIL import Image
 from synthetic import KD, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.grid import CHEAP, FINAL, analyse, heatmap_data, marker_position, published_settings
-from accelbench_analysis.grid_config import GridConfigError, expand_range, load_grid_config, parse_objective
-from accelbench_analysis.schema import load_results, parse_params
+from accelbench_analysis.grid.grid import (
+    CHEAP,
+    FINAL,
+    analyse,
+    heatmap_data,
+    marker_position,
+    published_settings,
+)
+from accelbench_analysis.grid.grid_config import (
+    GridConfigError,
+    expand_range,
+    load_grid_config,
+    parse_objective,
+)
+from accelbench_analysis.inputs.schema import load_results, parse_params
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -13,9 +13,10 @@ from pathlib import Path
 import pytest
 from synthetic import BVH, KD, LBVH, row, write_csv
 
-from accelbench_analysis.claims import FAILS, HOLDS, evaluate_all
 from accelbench_analysis.cli import main
-from accelbench_analysis.comparison import three_way
+from accelbench_analysis.inputs.schema import load_results
+from accelbench_analysis.outputs.claims import FAILS, HOLDS, evaluate_all
+from accelbench_analysis.outputs.comparison import three_way
 from accelbench_analysis.reproduce import (
     RUN_JSON,
     Job,
@@ -26,7 +27,6 @@ from accelbench_analysis.reproduce import (
     reproduce,
     tree_changes,
 )
-from accelbench_analysis.schema import load_results
 
 REPO = Path(__file__).resolve().parents[2]
 ACCELBENCH = REPO / "build" / "accelbench"

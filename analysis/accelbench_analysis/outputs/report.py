@@ -6,12 +6,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
+from ..inputs.schema import Results
 from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow
 from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
 from .figures import FIGURES, Skipped
 from .formatting import md_escape
-from .report_numbers import REPORT_MACHINE, REPORT_MODELS
-from .schema import Results
 
 TABLE_CAPTIONS = {
     "table2": "Table 2: kd-tree maxPrims and maxDepth sweeps on the Stanford bunny.",

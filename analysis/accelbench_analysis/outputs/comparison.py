@@ -21,11 +21,11 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..inputs.report_numbers import REPORT_MODEL, TABLE2_MODEL, TABLE4_MODELS, TABLE5_MODELS, report_value
+from ..inputs.schema import Results
+from ..mapping.selection import STRUCTURES
 from .claims import Missing, OurSource
 from .formatting import fmt_count, fmt_sig, is_missing, md_table
-from .report_numbers import REPORT_MODEL, TABLE2_MODEL, TABLE4_MODELS, TABLE5_MODELS, report_value
-from .schema import Results
-from .selection import STRUCTURES
 from .tables import METRIC, ratio
 
 TIME_METRICS = ["build", "render"]

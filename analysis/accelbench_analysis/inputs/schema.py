@@ -240,7 +240,7 @@ def _rename_param_columns(header: list[str]) -> list[str]:
     return names
 
 
-def _scan_records(path: Path) -> list[int]:
+def scan_records(path: Path) -> list[int]:
     """The line each data row starts on (1-based, the header is line 1). Refuses, naming the
     line, a row with more or fewer fields than the header (a row cut short), an empty line,
     and a file whose last row has no line break (the harness ends every row with one: a
@@ -286,14 +286,14 @@ def _scan_records(path: Path) -> list[int]:
     return starts
 
 
-def _lines(starts: list[int], index) -> str:
+def record_lines(starts: list[int], index) -> str:
     """ "line 3 (row 2)" for up to five data rows (row: counted from 1 after the header)."""
     picked = [int(i) for i in list(index)[:5]]
     more = f" and {len(index) - 5} more" if len(index) > 5 else ""
     return ", ".join(f"line {starts[i]} (row {i + 1})" for i in picked) + more
 
 
-def _to_numbers(
+def to_numbers(
     df: pd.DataFrame, columns: list[str], starts: list[int], positive: list[str] = ()
 ) -> list[str]:
     """Converts the columns in place (empty text = missing); returns the problems found,
@@ -326,7 +326,7 @@ def _to_numbers(
             if bad.any():
                 idx = df.index[bad]
                 problems.append(
-                    f"column {col!r} has {what} on {_lines(starts, idx)} (e.g. {text[bad].iloc[0]!r}){note}"
+                    f"column {col!r} has {what} on {record_lines(starts, idx)} (e.g. {text[bad].iloc[0]!r}){note}"
                 )
                 break
         df[col] = nums
@@ -344,7 +344,7 @@ def read_csv(path: str | Path) -> pd.DataFrame:
             f"beside it (its .reps.csv is read automatically)"
         )
     header = _read_header(path)
-    starts = _scan_records(path)
+    starts = scan_records(path)
     names = _rename_param_columns(header)
     missing = [c for c in REQUIRED_COLUMNS if c not in names]
     if missing:
@@ -359,19 +359,19 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         raise ContractError(f"{path}: not a well-formed CSV ({e})") from None
     if df.empty:
         raise ContractError(f"{path}: no data rows")
-    problems = _to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
+    problems = to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
     if "ray_set" not in df.columns:
         df["ray_set"] = CAMERA_SET
     df["ray_set"] = df["ray_set"].str.strip().replace("", CAMERA_SET)
     if "render_cpu_s_median" in df.columns:
-        problems += _to_numbers(df, ["render_cpu_s_median"], starts)
+        problems += to_numbers(df, ["render_cpu_s_median"], starts)
 
     status = df["status"].str.strip().str.lower()
     bad_status = ~status.isin(STATUSES)
     if bad_status.any():
         problems.append(
             f"column 'status' must be one of {', '.join(STATUSES)}; found "
-            f"{sorted(set(df['status'][bad_status]))} on {_lines(starts, df.index[bad_status])}"
+            f"{sorted(set(df['status'][bad_status]))} on {record_lines(starts, df.index[bad_status])}"
         )
     df["status"] = status
 
@@ -381,14 +381,14 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         if bad.any():
             problems.append(
                 f"column 'verdict' must be pass, fail or empty; found "
-                f"{sorted(set(df['verdict'][bad]))} on {_lines(starts, df.index[bad])}"
+                f"{sorted(set(df['verdict'][bad]))} on {record_lines(starts, df.index[bad])}"
             )
         df["verdict"] = verdict
 
     for col in ("model", "accel", "config"):
         empty = df[col].str.strip() == ""
         if empty.any():
-            problems.append(f"column {col!r} is empty on {_lines(starts, df.index[empty])}")
+            problems.append(f"column {col!r} is empty on {record_lines(starts, df.index[empty])}")
 
     try:
         df["param_dict"] = [parse_params(p) for p in df["params"]]
@@ -401,7 +401,7 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         bad = ~dirty.isin(["true", "false"])
         problems.append(
             f"column 'git_dirty' must be true/false; found "
-            f"{sorted(set(df['git_dirty'][bad]))} on {_lines(starts, df.index[bad])}"
+            f"{sorted(set(df['git_dirty'][bad]))} on {record_lines(starts, df.index[bad])}"
         )
     df["git_dirty"] = dirty
 
@@ -430,10 +430,10 @@ def read_reps(path: Path) -> pd.DataFrame:
     missing = [c for c in REPS_REQUIRED_COLUMNS if c not in header]
     if missing:
         raise ContractError(f"{path}: missing required columns: {', '.join(missing)}")
-    starts = _scan_records(path)
+    starts = scan_records(path)
     df = pd.read_csv(path, dtype=str, keep_default_na=False)
     df.columns = [c.strip() for c in df.columns]
-    problems = _to_numbers(df, ["repetition"] + REPS_TIME_COLUMNS, starts, REPS_TIME_COLUMNS)
+    problems = to_numbers(df, ["repetition"] + REPS_TIME_COLUMNS, starts, REPS_TIME_COLUMNS)
     if problems:
         raise ContractError(f"{path}: " + "; ".join(problems))
     df["source"] = str(path)

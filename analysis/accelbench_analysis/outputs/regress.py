@@ -31,8 +31,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..inputs.schema import INSTRUCTIONS_COLUMN, KEY_COLUMNS, ContractError, Results, load_results
 from .formatting import fmt_count, fmt_sig, md_table
-from .schema import INSTRUCTIONS_COLUMN, KEY_COLUMNS, ContractError, Results, load_results
 
 EXIT_PASS, EXIT_REGRESSION, EXIT_BAD_INPUT, EXIT_REMEASURE = 0, 1, 2, 3
 

@@ -23,10 +23,10 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
+from ..inputs.report_numbers import REPORT_MODELS, TABLE2_MODEL, our_model, report_value  # noqa: E402
+from ..inputs.schema import Results  # noqa: E402
+from ..mapping.selection import STRUCTURE, STRUCTURES, Picker, setting_spec  # noqa: E402
 from .errors import wrong_answers  # noqa: E402
-from .report_numbers import REPORT_MODELS, TABLE2_MODEL, our_model, report_value  # noqa: E402
-from .schema import Results  # noqa: E402
-from .selection import STRUCTURE, STRUCTURES, Picker, setting_spec  # noqa: E402
 from .tables import preferred_variant, ratio, structure_rows  # noqa: E402
 
 SEED = 0
@@ -106,7 +106,7 @@ def structure_frame(results: Results) -> pd.DataFrame:
     return pd.DataFrame.from_records(records)
 
 
-def _save(g, path: Path) -> Path:
+def save_figure(g, path: Path) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     fig = g.figure if hasattr(g, "figure") else g
     fig.savefig(path, dpi=DPI, bbox_inches="tight", metadata={"Software": None})
@@ -185,7 +185,7 @@ def build_vs_render(results: Results, path: Path) -> Path | Skipped:
     g.figure.suptitle(
         "Build vs render time at the report's default parameters (lower left is better)", y=1.02
     )
-    return _save(g, path)
+    return save_figure(g, path)
 
 
 # ---- Table 2 sweeps -------------------------------------------------------------------------
@@ -284,7 +284,7 @@ def table2_sweeps(results: Results, report_nums: pd.DataFrame, path: Path) -> Pa
     g.figure.suptitle(
         "Table 2 sweeps (kd-tree, Stanford bunny): how each metric moves, ours vs the report", y=1.02
     )
-    return _save(g, path)
+    return save_figure(g, path)
 
 
 # ---- per-ray counters ---------------------------------------------------------------------------
@@ -345,7 +345,7 @@ def per_ray(results: Results, path: Path) -> Path | Skipped:
     g.set_axis_labels("", "per ray\n(primary + shadow)")
     note = f" ({', '.join(without)}: no counters)" if without else ""
     g.figure.suptitle(f"Traversal work per ray at the report's default parameters{note}", y=1.02)
-    return _save(g, path)
+    return save_figure(g, path)
 
 
 # ---- render time vs error ---------------------------------------------------------------------
@@ -468,7 +468,7 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
         "structure's Pareto front; ringed: optimal overall)",
         y=1.04,
     )
-    return _save(g, path)
+    return save_figure(g, path)
 
 
 # ---- relative to BVH --------------------------------------------------------------------------
@@ -554,7 +554,7 @@ def relative_to_bvh(results: Results, report_nums: pd.DataFrame, path: Path) -> 
         "than BVH): the comparison that survives a change of machine",
         y=1.01,
     )
-    return _save(g, path)
+    return save_figure(g, path)
 
 
 FIGURES = {

@@ -18,10 +18,10 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..inputs.report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
+from ..inputs.schema import Results
+from ..mapping.selection import Picker, setting_spec
 from .formatting import fmt_sig, md_escape
-from .report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
-from .schema import Results
-from .selection import Picker, setting_spec
 from .tables import METRIC, preferred_variant
 
 # "~N x": the measured factor must lie within a factor APPROX_FACTOR of N, and never closer

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
-from .schema import Results
+from ..inputs.schema import Results
 
 AUTO = "<auto>"  # the kd-tree's scene-dependent default depth (see kd_auto_depths)
 AUTO_TEXT = {"", "auto", "default"}

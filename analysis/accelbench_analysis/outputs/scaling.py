@@ -14,8 +14,8 @@ import matplotlib.ticker as mticker  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
+from ..inputs.schema import PARAM_PREFIX, ContractError, Results, record_lines, scan_records, to_numbers  # noqa: E402
 from .figures import DPI, STRUCTURE_COLOURS, plain_log_ticks  # noqa: E402
-from .schema import PARAM_PREFIX, ContractError, Results, _lines, _scan_records, _to_numbers  # noqa: E402
 
 TIMES = {"build_s_median": "build", "render_s_median": "render"}
 FAMILY_MARKERS = ["o", "s", "^", "D", "v"]
@@ -196,19 +196,19 @@ def read_cost_csv(path: Path) -> dict[str, np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise ContractError(f"{path}: no such file")
-    starts = _scan_records(path)
+    starts = scan_records(path)
     df = pd.read_csv(path, dtype=str, keep_default_na=False)
     missing = {"x", "y", *COST_METRICS} - set(df.columns)
     if missing:
         raise ContractError(f"{path}: not a cost CSV (missing {', '.join(sorted(missing))})")
     if df.empty:
         raise ContractError(f"{path}: no pixels")
-    problems = _to_numbers(df, ["x", "y", *COST_METRICS], starts)
+    problems = to_numbers(df, ["x", "y", *COST_METRICS], starts)
     for col in ("x", "y"):
         bad = df[col].isna() | (df[col] != df[col].round())
         if not problems and bad.any():
             problems.append(
-                f"column {col!r} has values that are not pixel coordinates on {_lines(starts, df.index[bad])}"
+                f"column {col!r} has values that are not pixel coordinates on {record_lines(starts, df.index[bad])}"
             )
     if problems:
         raise ContractError(f"{path}: " + "; ".join(problems))
@@ -218,7 +218,7 @@ def read_cost_csv(path: Path) -> dict[str, np.ndarray]:
     if seen.any():
         raise ContractError(
             f"{path}: pixel ({x[seen.idxmax()]}, {y[seen.idxmax()]}) a second time on "
-            f"{_lines(starts, seen.index[seen])}"
+            f"{record_lines(starts, seen.index[seen])}"
         )
     if len(df) != w * h:
         raise ContractError(f"{path}: {len(df)} rows for a {w}x{h} image")

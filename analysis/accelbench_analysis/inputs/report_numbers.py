@@ -15,7 +15,7 @@ import pandas as pd
 
 from .schema import ContractError
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+REPO_ROOT = Path(__file__).resolve().parents[3]
 DEFAULT_REPORT_NUMBERS = REPO_ROOT / "results" / "report" / "report-tables.csv"
 
 REPORT_NUMBERS_COLUMNS = [

@@ -21,7 +21,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from .schema import normalise_value
+from ..inputs.schema import normalise_value
 
 GRID_KEYS = {"objective", "frames", "constraint", "mode", "successive_halving", "halved_from"}
 HALVING_KEYS = {"keep", "repetitions", "warmup"}

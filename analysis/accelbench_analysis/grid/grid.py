@@ -28,11 +28,11 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from .errors import COMPACT_HEADER, compact_errors
-from .formatting import fmt_sig, md_table
+from ..inputs.schema import ERROR_COLUMNS, Results, normalise_value
+from ..mapping.selection import kd_auto_depth_pbrt, kd_auto_depth_report
+from ..outputs.errors import COMPACT_HEADER, compact_errors
+from ..outputs.formatting import fmt_sig, md_table
 from .grid_config import GridConfig, GridConfigError
-from .schema import ERROR_COLUMNS, Results, normalise_value
-from .selection import kd_auto_depth_pbrt, kd_auto_depth_report
 
 # ---- published default settings, marked on the heatmaps ---------------------------------------------------
 
@@ -509,7 +509,7 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch, Rectangle
 
-    from .figures import _save, setup
+    from ..outputs.figures import save_figure, setup
 
     setup()
     sel = a.ranked[a.ranked["model"] == model]
@@ -611,7 +611,7 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     if (grid.isna() & ~data.rejected).any().any():
         handles.append(Patch(facecolor="#d0d0d0", label="grey: not measured"))
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0, -0.14), fontsize=7, frameon=False)
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def write_heatmaps(a: GridAnalysis, out: Path) -> tuple[list[Path], list[str]]:

@@ -19,6 +19,28 @@ from pathlib import Path
 
 import pandas as pd
 
+from ..inputs.report_numbers import (
+    REPORT_MACHINE,
+    REPORT_MODEL,
+    REPORT_PRIMARY_RAYS,
+    TABLE2_MODEL,
+    TABLE4_MODELS,
+    TABLE5_MODELS,
+    our_model,
+    report_value,
+)
+from ..inputs.schema import Results
+from ..mapping.selection import (
+    AUTO,
+    STRUCTURE,
+    STRUCTURES,
+    Pick,
+    Picker,
+    Spec,
+    Structure,
+    setting_spec,
+    variant_label,
+)
 from .errors import (
     COMPACT_HEADER,
     NOT_MEASURED,
@@ -39,18 +61,6 @@ from .formatting import (
     to_latex,
     to_markdown,
 )
-from .report_numbers import (
-    REPORT_MACHINE,
-    REPORT_MODEL,
-    REPORT_PRIMARY_RAYS,
-    TABLE2_MODEL,
-    TABLE4_MODELS,
-    TABLE5_MODELS,
-    our_model,
-    report_value,
-)
-from .schema import Results
-from .selection import AUTO, STRUCTURE, STRUCTURES, Pick, Picker, Spec, Structure, setting_spec, variant_label
 
 # Our traversal variant used wherever one BVH/LBVH row must stand for the structure (the
 # "relative to BVH" denominators and the claims): the report's own order first.

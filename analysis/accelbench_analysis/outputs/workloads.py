@@ -27,8 +27,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
+from ..inputs.schema import CAMERA_SET, RAY_SETS, Results  # noqa: E402
 from .formatting import md_escape  # noqa: E402
-from .schema import CAMERA_SET, RAY_SETS, Results  # noqa: E402
 
 BASELINE = "embree"
 

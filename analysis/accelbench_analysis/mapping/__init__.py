@@ -1,0 +1,1 @@
+"""From the report's cells to our rows: which structure setting stands for which report column."""

@@ -1,0 +1,1 @@
+"""What is written: tables, claims, figures, the comparison, REPORT.md, robustness, scaling, regressions."""
