@@ -8,11 +8,11 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <regex>
 #include <string>
 #include <vector>
+
+#include "include_scan.h"
 
 namespace fs = std::filesystem;
 
@@ -36,7 +36,6 @@ fs::path library_dir() {
 TEST(Layering, EveryIncludePointsToItsOwnLayerOrBelow) {
     const fs::path root = library_dir();
     ASSERT_TRUE(fs::is_directory(root)) << root;
-    const std::regex include_re(R"(^\s*#\s*include\s+"accelbench/([^"]+)\")");
     int files = 0;
     std::vector<std::string> violations;
     for (const auto& e : fs::recursive_directory_iterator(root)) {
@@ -49,20 +48,14 @@ TEST(Layering, EveryIncludePointsToItsOwnLayerOrBelow) {
         const auto [layer, folder] = layer_and_folder(rel);
         ASSERT_TRUE(kLayer.count(layer)) << "unknown layer folder " << layer << " (" << rel << ")";
         ++files;
-        std::ifstream in(e.path());
-        std::string line;
-        int n = 0;
-        while (std::getline(in, line)) {
-            ++n;
-            std::smatch m;
-            const std::string where = rel.string() + ":" + std::to_string(n) + " ";
-            if (!std::regex_search(line, m, include_re)) {
-                if (line.find("#include \"") != std::string::npos &&
-                    line.find("#include \"accelbench/") == std::string::npos)
-                    violations.push_back(where + "includes a header outside the library: " + line);
+        for (const auto& inc : accelbench::testing::quoted_includes(e.path())) {
+            const std::string where = rel.string() + ":" + std::to_string(inc.line) + " ";
+            const std::string prefix = "accelbench/";
+            if (inc.path.rfind(prefix, 0) != 0) {
+                violations.push_back(where + "includes a header outside the library: " + inc.path);
                 continue;
             }
-            const fs::path target(m[1].str());
+            const fs::path target(inc.path.substr(prefix.size()));
             if (target.parent_path().empty() || !kLayer.count(target.begin()->string())) {
                 violations.push_back(where + "includes " + target.string() + ", not in a layer");
                 continue;

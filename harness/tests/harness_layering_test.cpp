@@ -8,11 +8,11 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <regex>
 #include <string>
 #include <vector>
+
+#include "include_scan.h"
 
 namespace fs = std::filesystem;
 
@@ -33,7 +33,6 @@ fs::path harness_dir() {
 TEST(HarnessLayering, EveryIncludePointsToItsOwnFolderOrAnEarlierOne) {
     const fs::path root = harness_dir();
     ASSERT_TRUE(fs::is_directory(root)) << root;
-    const std::regex include_re(R"(^\s*#\s*include\s+"([^"]+)\")");
     int files = 0;
     std::vector<std::string> violations;
     for (const auto& e : fs::recursive_directory_iterator(root)) {
@@ -47,15 +46,9 @@ TEST(HarnessLayering, EveryIncludePointsToItsOwnFolderOrAnEarlierOne) {
             continue;
         }
         ++files;
-        std::ifstream in(e.path());
-        std::string line;
-        int n = 0;
-        while (std::getline(in, line)) {
-            ++n;
-            std::smatch m;
-            if (!std::regex_search(line, m, include_re)) continue;
-            const fs::path target(m[1].str());
-            const std::string where = rel.string() + ":" + std::to_string(n) + " ";
+        for (const auto& inc : accelbench::testing::quoted_includes(e.path())) {
+            const fs::path target(inc.path);
+            const std::string where = rel.string() + ":" + std::to_string(inc.line) + " ";
             const std::string t_layer = target.begin()->string();
             if (t_layer == "accelbench") continue;  // the core library: below every harness folder
             if (layer == "tests" && target.parent_path().empty()) continue;  // the tests' own helpers
