@@ -218,7 +218,7 @@ robustness: build models venv
 	  | tee $(ROBUSTNESS_DIR)/robustness.log | sed -n '/^Robustness verdicts/,$$p'
 	$(ANALYSIS) robustness --csv $(ROBUSTNESS_DIR)/robustness.csv --out $(ROBUSTNESS_DIR)
 
-# ---- Slurm (issue 16) ------------------------------------------------------------------
+# ---- Slurm ------------------------------------------------------------------------
 # `make slurm-submit CONFIG=configs/NAME.yaml SHARDS=N`: an array job of N tasks, task i
 # running `accelbench run --shard i/N` into $(SLURM_OUT)/shard-<i>ofN.csv, and a merge job
 # (--dependency=afterok on the array) that joins them into $(SLURM_OUT)/NAME.csv, refusing

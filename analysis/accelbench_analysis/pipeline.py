@@ -270,7 +270,7 @@ def run(args: argparse.Namespace) -> list[Path]:
     out: Path = args.out
     written: list[Path] = []
     claims = figures = comparison = None
-    # Ray-set and thread-scaling rows (issue 14) have outputs of their own; the report's
+    # Ray-set and thread-scaling rows have outputs of their own; the report's
     # tables, claims and figures see only the other rows.
     from dataclasses import replace
 

@@ -37,7 +37,7 @@ def test_report_md_states_provenance_stand_ins_and_regeneration(everything):
     text = (everything / "REPORT.md").read_text()
     assert PROVENANCE["git_sha"] in text and PROVENANCE["cpu"] in text
     assert "RelWithDebInfo" in text and "Embree 3.13.5" in text
-    # issue 12: the vector extensions compiled in, from the rows' `isa` column
+    # the vector extensions compiled in, from the rows' `isa` column
     assert "vector extensions (isa) sse2+sse4.2+avx+avx2+fma" in text
     assert "procedural forest" in text and "procedural city" in text
     assert "Stanford dragon (871,414 triangles" in text and "happy-buddha-100k" in text

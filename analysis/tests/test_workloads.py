@@ -1,4 +1,4 @@
-"""Ray-set and thread-scaling outputs (issue 14) on crafted rows with known answers, and
+"""Ray-set and thread-scaling outputs on crafted rows with known answers, and
 `all` on a mix of old and new CSVs: the report's tables stay what they were."""
 
 from __future__ import annotations

@@ -523,11 +523,11 @@ TEST(Bvh, StanfordBunnyAgreesWithEmbree) {
     }
 }
 
-// ---- the median build is the same tree as session 4's ---------------------------------
+// ---- the median build is the same tree as the in-place one's --------------------------
 //
-// The median build (split=median, the report's default) was rewritten for speed in
-// session 5 with the promise of the same tree: the same nodes, leaves and primitive order,
-// byte for byte. The reference below is the session-4 algorithm (main 42f25d3) frozen here
+// The median build (split=median, the report's default) was rewritten for speed
+// with the promise of the same tree: the same nodes, leaves and primitive order,
+// byte for byte. The reference below is the earlier in-place algorithm (42f25d3) frozen here
 // as the specification, written recursively: the equal-count split (bins, a three-way
 // scatter, std::nth_element inside the median's bin) on 28-byte references moved in place,
 // then a separate fit of each child. std::nth_element's tie-breaking among equal centroids
@@ -632,7 +632,7 @@ void expect_same_tree_as_reference(const Scene& scene, const std::map<std::strin
 
 }  // namespace
 
-TEST(Bvh, MedianBuildIsSessionFourTreeByteForByte) {
+TEST(Bvh, MedianBuildIsInPlaceTreeByteForByte) {
     const std::vector<Scene> scenes = {test::stanford_bunny(), closed_grid(), random_soup(3000, 17),
                                        common_centroid_scene(200), triangles_along_x({0, 0, 0, 1, 1, 2, 5, 5, 5, 5})};
     for (const Scene& scene : scenes) {

@@ -1,4 +1,4 @@
-// The ray sets of issue 14 (ray_sets.h): made deterministically from a seed and the
+// The ray sets (ray_sets.h): made deterministically from a seed and the
 // reference's answers, the same on every run, different for another seed; answered by
 // every structure as the reference answers them; secondary rays that never find the
 // surface they leave, even on the closed meshes translated to 1e7; and the same hits

@@ -302,7 +302,7 @@ private:
     std::map<std::string, Samples> samples_;
 };
 
-// The default models (issue 12's four), each if it is here or can be fetched.
+// The default models (the four the speed goals name), each if it is here or can be fetched.
 std::vector<std::string> default_models(const ModelRegistry& registry) {
     std::vector<std::string> names;
     for (const char* name : {"stanford-bunny", "igea", "conference", "stanford-dragon"}) {

@@ -85,7 +85,7 @@ struct SkipRule {
     std::string key_path;  // "skip[0]"
 };
 
-// `ray_sets` (issue 14): the ray sets to time, each in a row of its own, and their
+// `ray_sets`: the ray sets to time, each in a row of its own, and their
 // parameters (core/accelbench/render/ray_sets.h).
 struct RaySetsSpec {
     std::vector<RaySetKind> sets;  // in the order written; default every set

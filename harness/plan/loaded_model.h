@@ -39,7 +39,7 @@ struct LoadedModel {
     // no view and is judged (judge_case), never timed.
     std::shared_ptr<const RobustnessCase> robustness_case;
     std::shared_ptr<const ReferenceAnswers> reference;  // set by add_reference_answers
-    // The config's ray sets (issue 14), with the reference's answers; set by add_ray_sets.
+    // The config's ray sets, with the reference's answers; set by add_ray_sets.
     std::shared_ptr<const std::vector<GeneratedRaySet>> ray_sets;
 
     // The set of that kind; throws std::logic_error if it was not made.

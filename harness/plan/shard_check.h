@@ -1,5 +1,5 @@
-// Whether shard files make a whole config: `accelbench merge --config CONFIG --shards N`
-// (issue 16). A Slurm task that failed, was cancelled or never started leaves its
+// Whether shard files make a whole config: `accelbench merge --config CONFIG --shards N`.
+// A Slurm task that failed, was cancelled or never started leaves its
 // combinations in no input; a merge of the others must not pass for the whole run.
 #pragma once
 

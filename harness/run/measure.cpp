@@ -674,7 +674,7 @@ void flush_all_output() {
 // A child killed by a request to stop — SIGTERM (scancel, a Slurm time limit, kill),
 // SIGINT (Ctrl-C), SIGHUP, SIGQUIT — was not failed by its combination: the whole run is
 // being stopped, and the same signal is on its way to this process (Slurm and a terminal
-// signal every process of the job). Found by make test-slurm (session 7): the child died
+// signal every process of the job). Found by make test-slurm: the child died
 // first, this parent wrote `status=error, the measurement process died from signal 15
 // (Terminated)` before its own SIGTERM arrived, and `--resume` then kept that row instead
 // of measuring the combination again, so the merged grid differed from a single-process

@@ -1,4 +1,4 @@
-# A throw-away single-node Slurm cluster on this machine, for make test-slurm (issue 16).
+# A throw-away single-node Slurm cluster on this machine, for make test-slurm.
 # Sourced by bash:
 #
 #   source harness/slurm/local_cluster.sh

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Submits a config as a Slurm array job plus its merge job (issue 16); `make slurm-submit`
+# Submits a config as a Slurm array job plus its merge job; `make slurm-submit`
 # calls it with the Makefile's variables:
 #
 #   harness/slurm/submit.sh ACCELBENCH PYTHON CONFIG.yaml SHARDS OUT_DIR [ARRAY]

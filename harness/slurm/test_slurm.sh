@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# make test-slurm (issue 16): a grid config through a real single-node Slurm cluster
+# make test-slurm: a grid config through a real single-node Slurm cluster
 # (local_cluster.sh) as `make slurm-submit` submits it, with a failure on the way:
 #
 #   1. the config in one process, outside Slurm: the reference rows;

@@ -1,4 +1,4 @@
-// `accelbench run` with `ray_sets` and a list of render thread counts (issue 14): one row
+// `accelbench run` with `ray_sets` and a list of render thread counts: one row
 // per combination and set, the set's hash the same on every structure's row, answers
 // compared with the reference, hits and counts independent of the thread count; and the
 // config errors of the new keys.

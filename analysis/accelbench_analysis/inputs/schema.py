@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-# A row's identity. `ray_set` (issue 14: camera, or one of RAY_SETS) and the render
+# A row's identity. `ray_set` (camera, or one of RAY_SETS) and the render
 # `threads` tell apart the rows of one combination in a ray-set or thread-scaling run;
 # CSVs from before them get ray_set = camera, and their threads never vary within a file.
 KEY_COLUMNS = ["config", "model", "accel", "params", "ray_set", "threads"]

@@ -1,4 +1,4 @@
-"""Beyond the report's one workload (issue 14): Mrays/s per ray set (primary, shadow, ao,
+"""Beyond the report's one workload: Mrays/s per ray set (primary, shadow, ao,
 diffuse, random) and thread scaling.
 
 Rows of ray-set runs carry `ray_set` != camera (configs/ray-sets.yaml); rows of

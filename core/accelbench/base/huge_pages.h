@@ -18,12 +18,8 @@
 // 182K), child and count (44K / 19K) and the prim ids read on a hit (29K / 27K); the stack's
 // are negligible (8K). The same tree, byte for byte; arrays under 2 MiB stay on ordinary pages
 // (an array's last huge page is part-used: at most 2 MiB more than its capacity).
-// Used by the wide BVH's tree only. Measured (session 6) and not adopted for the binary BVH's
-// FlatBvh (nodes, prim ids, leaf triangles) and the kd-tree's arrays: no trace gain on the
-// dragon (trace / Embree, interleaved, two A/B rounds, idle: bvh sah 2.25/2.08 -> 2.13/2.23,
-// median 2.82/2.80 -> 2.92/2.83, kdtree 3.44/3.32 -> 3.38/3.48), and the median build got
-// slower (0.58/0.54 -> 0.82/0.91; not profiled — its arrays grow by push_back, and each
-// regrowth past 2 MiB faults in fresh huge pages the kernel zeroes, the likely cause).
+// Used by the wide BVH's tree only (for the binary BVH and the kd-tree: measured and not
+// adopted, docs/decisions.md).
 #pragma once
 
 #include <cstddef>

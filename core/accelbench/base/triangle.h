@@ -101,7 +101,7 @@ inline bool intersect_triangle(const WatertightRay& r, const Vec3& p0, const Vec
     // test. Written with || and &&, GCC branched on each comparison in turn (3.3 branches
     // a test), and which edge function's sign decides is data-dependent (callgrind's branch
     // simulation: 0.76 mispredictions per test before, 0.30 after; bvh split=sah, bunny).
-    // Timed (session 9, old and new binary interleaved, trace / Embree, three rounds): bunny
+    // Timed (old and new binary interleaved, trace / Embree, three rounds): bunny
     // bvh sah 1.99 1.99 1.98 -> 1.84 1.78 1.73, kdtree 3.42 3.43 3.42 -> 3.17 3.10 3.09; igea
     // kdtree 3.64 3.59 3.75 -> 3.45 3.31 3.20; the conference within its noise.
     const bool some_negative = (e0 < 0.0f) | (e1 < 0.0f) | (e2 < 0.0f);

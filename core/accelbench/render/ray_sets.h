@@ -1,4 +1,4 @@
-// The standard ray workloads beyond the report's camera rays (issue 14; Aila and Laine
+// The standard ray workloads beyond the report's camera rays (Aila and Laine
 // 2009, "Understanding the efficiency of ray traversal on GPUs": primary, ambient
 // occlusion, diffuse), plus uniformly random rays as the incoherent worst case.
 //

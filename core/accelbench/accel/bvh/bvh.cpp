@@ -224,16 +224,11 @@ private:
 // (C_isect * N * A). The range is then partitioned out of place, the children's boxes taken
 // from the bins and their centroid boxes on the way (partition() below), so the builder
 // reads the references once for the bins and once to move them, and never to fit them.
-// Measured (session 12, accel_bench, build / Embree, three rounds, all_axes_min 1024) against
+// Measured (accel_bench, build / Embree, three rounds, all_axes_min 1024) against
 // std::partition in place and the builder's fit of both children: bunny 0.71-0.74 ->
 // 0.52-0.54, dragon 0.82-0.85 -> 0.72-0.78, conference 0.68-0.72 -> 0.73-0.74 (slower there,
 // not analysed; every reference is copied, where std::partition moves only those out of place).
-// Measured (session 11) and not adopted: Embree's block form of the counts, ceil(N / 4) for
-// N (a leaf costs its packet tests, bvh_packet_leaves.h), with traversal_cost 0.5-2 in place
-// of 4. At 2 (leaves of 6.4 triangles on the bunny) trace / Embree, interleaved with today's
-// default, five rounds (the bunny two): conference 1.79-2.06 against 1.92-2.12, dragon 1.44-1.64 against
-// 1.60-1.67, igea and the bunny level (1.52-1.62, 1.39-1.51 against 1.51-1.64, 1.36-1.46):
-// about 3% on two models, inside the noise, for a second cost model to explain.
+// (Embree's block form of the counts, ceil(N / 4): measured and not adopted, docs/decisions.md.)
 class SahSplit {
 public:
     static constexpr bool kMayStopEarly = true;

@@ -64,7 +64,7 @@ public:
         // three axes, smaller ones bin along `axis` only (0: none). Binning all three axes
         // costs about as much again per reference and level as the rest of the build, so it
         // is spent where a plane decides for the most rays: the top levels (1024: about 6 of
-        // the bunny's 16, 10 of the dragon's 23). Measured (session 12; accelbench render
+        // the bunny's 16, 10 of the dragon's 23). Measured (accelbench render
         // 320x240, primary + shadow; accel_bench, trace and build / Embree, two to six
         // rounds), all_axes_min 0 / 1 / 64 / 1024 / 4096: conference box tests 7.11M / 5.60M /
         // 5.88M / 5.91M / 5.96M, triangle tests 1.05M / 1.45M / 0.98M / 0.96M / 1.03M (at 1 the
@@ -79,7 +79,7 @@ public:
         // and only in the leaf decision (a plane's cost adds the same C_trav A to every plane).
         // 4, the ratio that fits this traversal: a binary node visit (two box tests, the
         // near/far choice, the stack) costs far more than the fourth of a packet test that one
-        // more triangle in a leaf adds. Measured (session 11, accel_bench, trace / Embree, two
+        // more triangle in a leaf adds. Measured (accel_bench, trace / Embree, two
         // or three rounds, packet leaves, bunny / igea / conference / dragon): 1 -> 1.56 /
         // 1.81-1.84 / 1.82-1.91 / 2.01-2.05, 3 -> 1.34-1.37 / 1.46-1.52 / 1.80-1.85 / 1.56-1.58,
         // 4 -> 1.32-1.51 / 1.41-1.46 / 1.83-2.00 / 1.47-1.50; 6 and max_prims 12-16 within the
@@ -92,7 +92,7 @@ public:
         // (packet, bvh_packet_leaves.h); auto = packet where a leaf may hold more than one
         // triangle (split=sah's default max_prims 8), scalar for one-triangle leaves (the
         // report's splits; Tables 4 and 5's sah row at max_prims 1), where three lanes of
-        // every packet would be empty. Measured there (session 11, trace / Embree, bvh
+        // every packet would be empty. Measured there (trace / Embree, bvh
         // split=sah max_prims=1, two rounds): packet 2.07-2.08 / 2.75-2.77 / 2.76-2.87,
         // scalar 2.00-2.03 / 2.62-2.70 / 2.35-2.41 (bunny / conference / dragon).
         enum class LeafTest { automatic, scalar, packet };

@@ -9,7 +9,7 @@
 // prefetcher follows). The report's BVH (section 2.2.2) keeps separate heap nodes with
 // child pointers; the tree is the same, only its storage differs. bvh v2's sibling-pair
 // order (both children in one 64-byte line) and a 64-byte-aligned array were measured
-// and did not pay on our rays (bvh_traversal.h, session 4): the traversal is bound by
+// and did not pay on our rays (docs/decisions.md): the traversal is bound by
 // instructions, not by cache misses.
 #pragma once
 

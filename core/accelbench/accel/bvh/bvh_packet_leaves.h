@@ -6,13 +6,13 @@
 //
 // Why: SAH leaves hold several triangles (4-5 on the scanned models at traversal_cost 4),
 // and the scalar loop tests them one after the other, each test a chain of data-dependent
-// branches; the packet test does four in one branch-free pass. Measured (session 11,
+// branches; the packet test does four in one branch-free pass. Measured (commit da52161,
 // accel_bench, trace / Embree, two rounds, bunny / igea / conference / dragon): bvh
 // split=sah traversal_cost=4 scalar 1.83 1.59 / 1.77 1.65 / 2.05 2.05 / 1.65 1.72, packet
 // 1.32 1.32 / 1.41 1.46 / 1.88 1.83 / 1.47 1.50. With traversal_cost 1 (1.8 triangles a
 // leaf, packets half empty) it gained on the bunny and the conference only (packet 1.56 /
 // 1.81-1.84 / 1.82-1.91 / 2.01-2.05, scalar 1.66-1.84 / 1.82-1.86 / 2.02-2.19 / 1.98-1.99;
-// session 10 had found no gain there): the packets pay where the SAH makes leaves to fill
+// without leaves sized to fill them there was no gain): the packets pay where the SAH makes leaves to fill
 // them (bvh.h, traversal_cost).
 //
 // Kept beside the tree rather than in it: FlatBvh's nodes and slots stay what the builders,

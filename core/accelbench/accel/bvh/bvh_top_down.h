@@ -280,13 +280,13 @@ inline void fit_bottom_up(FlatBvh& bvh) {
 // and above the median's plus the median bin's few references (fitted after
 // nth_element), the scatter reads the bin instead of recomputing it, and the result stays
 // in scratch (in_scratch: the builder swaps the two buffers for the children) instead of
-// being copied back. The references are moved in exactly the order of session 4's
-// in-place version (main 42f25d3) and nth_element sees the same sequence, so the tree is
-// the same byte for byte (bvh_test MedianBuildIsSessionFourTreeByteForByte) — except that
+// being copied back. The references are moved in exactly the order of the earlier
+// in-place version (42f25d3) and nth_element sees the same sequence, so the tree is
+// the same byte for byte (bvh_test MedianBuildIsInPlaceTreeByteForByte) — except that
 // a box coordinate that is zero may come out as +0 where the old fit gave -0 or the
 // reverse (min/max keep the first of two equal values, and the union runs in another
 // order), which no comparison can tell apart.
-// Measured (session 5, callgrind, one median build): session 4's version (28-byte
+// Measured (callgrind, one median build): the in-place version (28-byte
 // references, fit of each child in a separate pass, copy back from scratch) spent 110M
 // instructions on the bunny, 591M on the conference; with this one on 16-byte
 // BvhCentroidRef, the node boxes made bottom-up (fit_bottom_up) and no copy back, 99M and
@@ -295,23 +295,9 @@ inline void fit_bottom_up(FlatBvh& bvh) {
 // pay: fitting the children from per-bin boxes accumulated in the counting pass (on
 // 28-byte references: 113M instructions, no time gained), and taking a leaf's box from
 // Scene::prim_bounds through its index (a random read per leaf, the bunny 5% slower
-// than session 4) instead of from the triangles finalize() copies in leaf order.
-// Measured and not adopted (session 6, callgrind --branch-sim on an x86-64-v3 build, one
-// median build; base: bunny 98.1M instructions / 780k mispredicted branches, conference
-// 525M / 3.20M; build / Embree from accel_bench, load 11):
-//  - nth_element replaced by a copy of libstdc++'s introselect whose Hoare partition is
-//    branch-free (both scans' stop positions recorded in one pass, then the swaps; the
-//    same permutation as std::nth_element, checked on 300k random, sorted, reversed and
-//    tie-heavy inputs; bunny, igea and conference trees unchanged): bunny 101.8M /
-//    754k, conference 586M / 2.91M. The small ranges' loop exits still mispredict, and the
-//    recording pass costs ~10 instructions per element against ~4.
-//  - the scatter's position chosen by masks (GCC 12 compiles the `?:` chain below to a
-//    branch: 209k of the bunny's mispredictions), fit_bottom_up and FlatBvh::finalize's
-//    depth pass without a branch on leaf / inner node (both boxes computed, one kept):
-//    with the allocation change below, bunny 117.0M / 451k, conference 620M / 2.34M, but
-//    build / Embree bunny 0.46 -> 0.50, conference 0.64 -> 0.66 (one run each): the
-//    extra instructions (+44M scatter, +41M fit_bottom_up, +13M depth pass on the
-//    conference) cost more than the mispredictions they remove.
+// than the in-place version) instead of from the triangles finalize() copies in leaf order.
+// A branch-free introselect and a masked scatter were measured and not adopted:
+// docs/decisions.md, "Binary BVH build".
 template <class Ref>
 class EqualCountSplitter {
 public:
@@ -430,7 +416,7 @@ namespace detail {
 // reads it. std::vector<Ref>(n) constructs every reference first (Vec3's members have
 // initialisers: a loop of stores) for both buffers the build moves references between.
 // With these and FlatBvh::finalize appending its triangles instead of resize() then
-// overwrite (session 6, callgrind, one median build, x86-64-v3): bunny 98.1M -> 95.3M
+// overwrite (callgrind, one median build, x86-64-v3): bunny 98.1M -> 95.3M
 // instructions, L1 write misses 490k -> 417k; conference 525M -> 512M, 2.53M -> 2.18M
 // (LL write misses 2.14M -> 1.79M). Build / Embree (accel_bench, old and new binary back
 // to back twice, load 6-11): bunny 0.45, 0.46 -> 0.45, 0.45; conference 0.57, 0.60 ->

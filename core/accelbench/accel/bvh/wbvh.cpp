@@ -47,7 +47,7 @@ AcceleratorInfo Wbvh::info() {
                  0,
                  1000,
                  "binary build: nodes at this depth become leaves whatever their size"},
-                // 32, as Embree's binned builder (and, since session 8, `bvh split=sah`'s own
+                // 32, as Embree's binned builder (and `bvh split=sah`'s own
                 // default, bvh.h): finer planes near the root. Measured against 16 (width 8,
                 // accel_bench, 3 reps, idle machine): the
                 // conference's primary rays 2.85M -> 2.24M node visits, 22.0M -> 17.3M box
@@ -56,7 +56,7 @@ AcceleratorInfo Wbvh::info() {
                 // 1.05 -> 1.13, conference 0.90 -> 1.06, bunny 0.80 -> 0.96). 64: no better.
                 {"bins", ParamType::Int, "32", {}, 2, 1024, "binned SAH bins along the split axis"},
                 // 0 (none), unlike bvh split=sah's 1024 (bvh.h): all three axes in the top
-                // ranges. Measured (session 12, width 8, accel_bench, two rounds, 1024 against
+                // ranges. Measured (width 8, accel_bench, two rounds, 1024 against
                 // 0): trace / Embree conference 0.91-0.98 -> 0.84-0.92, bunny and dragon level;
                 // build / Embree conference 0.83-0.84 -> 0.91-0.96, bunny and dragon level, the
                 // dragon's already at 0.99-1.18 of the goal's 1.2. An option, not the default.
@@ -605,21 +605,7 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
                     continue;
                 }
                 // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
-                // Tried and measured (issue 12, width 8): a branch-free order instead — two hit
-                // children by one key compare, more by writing each straight to its stack slot by its
-                // rank among the hit keys (one AVX2 compare of signed order keys per child), the same
-                // visit order and counters. It ran 9-10% fewer closest-hit traversal instructions
-                // (callgrind, trace/<model>/wbvh8: bunny 147.2M -> 134.5M, conference 910.4M ->
-                // 816.2M) and 13% fewer simulated conditional mispredicts (bunny 433K -> 378K), but no
-                // time: interleaved, load ~1.5-3, ratio to Embree bunny 1.15-1.22x before vs 1.19-1.22x
-                // after, conference 1.25-1.32x vs 1.24-1.32x. Few nodes have 2+ hit children (bunny:
-                // 77% of nodes with a hit have one, 15% two, 8% more); the rest of the mispredicts are
-                // the inner/leaf, none/one/several-hit and pop branches, which it leaves as they are.
-                // Also tried (session 6), not adopted: a software prefetch (_mm_prefetch T0, every
-                // line) of the entry pushed last, the next one popped — its node's 4 lines or its
-                // leaf's packets. No gain, interleaved A/B twice with the tree in huge pages (load
-                // ~4, trace / Embree): dragon width 8 1.16/1.15 -> 1.16/1.13, width 4 1.37/1.35 ->
-                // 1.36/1.35, igea width 8 1.00/0.96 -> 1.05/1.02, width 4 1.20/1.25 -> 1.25/1.17.
+                // Other orders and a prefetch were measured and not adopted (docs/decisions.md).
                 uint32_t keys[W];
                 int n = 0;
                 keys[n++] = order_key(tnear[first], first);
@@ -638,19 +624,7 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
             }
         }
         // A leaf: its packets in turn, each against the interval shrunk by those before it.
-        // Tried and measured (session 5, branch s5-speed2): a leaf of 5-8 triangles as one
-        // 8-lane AVX2 test of its two packets (loaded as the halves of __m256 rows), the same
-        // IEEE operations lane for lane, the second packet's lanes compared again with the
-        // interval the first's nearest hit leaves, the same answers and counts. No gain:
-        // callgrind, trace/<model>/wbvh8, whole program 1062.2M -> 1065.0M instructions
-        // (bunny), 7781.3M -> 7780.7M (dragon) — the 9 insert loads, 6 broadcasts and the
-        // re-test cost what the second 4-lane test saved, and the any-hit search tests 8 lanes
-        // where the 4-lane tests stop after a hit in the first packet; timed (load 1.4-3.8,
-        // trace / Embree) bunny width 8 1.03-1.09x -> 1.09-1.12x, width 4 1.22-1.23x ->
-        // 1.28-1.29x, dragon 1.27-1.28x -> 1.28-1.29x. Also not adopted: 8-byte closest-hit
-        // stack entries (child and count packed by the tree's index bits): width 4 bunny
-        // 1.22x -> 1.19x, dragon 1.52x -> 1.50x, width 8 unchanged, within the noise, for a
-        // build that must refuse trees whose largest leaf does not fit beside the index.
+        // (An 8-lane test of two packets and 8-byte stack entries: docs/decisions.md.)
         if (wbvh_leaf_test<kAnyHit>(&tree.packets[cur.child], cur.count, r, tmin, tmax, hit, c) && kAnyHit) return true;
     pop:
         for (;;) {

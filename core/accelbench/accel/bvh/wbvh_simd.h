@@ -308,18 +308,7 @@ inline uint32_t widened_mask(uint32_t fast, uint32_t wide) {
 }
 
 // The 4 lanes planes[.][offset, offset + 4) of intersect_box, in SSE. Returns the hit mask.
-// Tried and measured (session 6, issue 12), not adopted: a 4-wide node's test as one 8-lane
-// AVX chain, the near row in lanes 0-3 and the far row in lanes 4-7 (its 16-byte load
-// inserted into the upper half), multiplied by [inv x4, -inv x4] so lanes 4-7 hold exactly
-// -f, one MAXPS chain from [tmin x4, -tmax x4] (-f > -tf is f < tf, and MAXPS keeps the
-// interval on NaN, so lanes 4-7 end as -tf bit for bit; wbvh_test's vector == scalar held).
-// Fewer instructions (callgrind, the 640x480 primary + shadow render, -march=native less
-// AVX-512, bunny width 4: closest hit 126.6M -> 120.4M, any hit 60.6M -> 57.8M), but slower:
-// the insert, the extract of the upper half and the negation back lengthen the node-to-node
-// dependency chain (the next node's address waits for the mask), which two independent
-// 4-lane chains do not. Interleaved A/B, trace / Embree width 4, load 11-14, two runs: bunny
-// 1.12/1.10 -> 1.18/1.20, igea 1.23/1.26 -> 1.32/1.33, conference 1.31/1.24 -> 1.31/1.31,
-// dragon 1.46/1.45 -> 1.52/1.51.
+// (One 8-lane AVX chain for a 4-wide node was slower: docs/decisions.md.)
 template <int W>
 inline uint32_t slab_test_sse(const WbvhNode<W>& node, int offset, const WbvhVectorRay<W>& r, float tmin, float tmax,
                               float* tnear) {
