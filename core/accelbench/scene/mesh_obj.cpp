@@ -7,7 +7,8 @@ namespace {
 // ---- OBJ (Wavefront, "Object Files (.obj)", Appendix B1 of the Advanced Visualizer
 // manual) -------------------------------------------------------------------------------
 //
-// A statement per line; a line ending in '\' continues on the next; '#' starts a comment
+// A statement per line; a line ending in '\' continues on the next (a '\' ending a
+// comment is the comment's); '#' starts a comment
 // to the end of the line. "v x y z [w]" (colour extensions: up to 7 numbers); "f" with 3
 // or more corners v, v/vt, v/vt/vn or v//vn, indices counting from 1, negative ones
 // relative to the last vertex defined so far. Other statements of the specification
@@ -40,9 +41,11 @@ void read_obj(std::string_view text, FlatMesh& mesh) {
     while (lines.next(physical)) {
         const uint64_t line_no = lines.number();
         std::string_view line = physical;
+        // A '\\' ending a line continues it, unless it ends a comment: it is then the comment's.
         const auto continued = [](std::string_view l) {
             const size_t last = l.find_last_not_of(" \t\v\f");
-            return last != std::string_view::npos && l[last] == '\\' ? last : std::string_view::npos;
+            return last != std::string_view::npos && l[last] == '\\' && l.find('#') > last ? last
+                                                                                           : std::string_view::npos;
         };
         if (size_t cut = continued(line); cut != std::string_view::npos) {
             joined.assign(line.substr(0, cut));

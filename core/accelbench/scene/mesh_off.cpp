@@ -5,7 +5,7 @@ namespace accelbench::mesh_reading {
 // ---- OFF (Geomview, "OFF Files", the OOGL file formats) ----------------------------------
 //
 // "[ST][C][N]OFF" (optional: files without it start with the counts), then "NVertices
-// NFaces NEdges" (NEdges must be present, its value is not used), NVertices vertices and
+// NFaces NEdges" on one line (NEdges must be present, its value is not used), NVertices vertices and
 // NFaces faces "N v1 ... vN [colour]"; '#' starts a comment to the end of the line. We read
 // one vertex per line: x y z, then 3 normal numbers with N, 3 or 4 colour numbers with C, 2
 // texture coordinates with ST, in that order. A face's colour is 0 to 4 numbers to the end
@@ -44,19 +44,24 @@ void read_off(std::string_view text, FlatMesh& mesh) {
         if (w < words.size() && words[w] == "BINARY")
             throw MeshError(line_at(lines.number()) + "binary OFF is not supported (ASCII OFF is)");
     }
+    // The three counts are one line (the keyword's or the next): a count missing is named
+    // on that line, not found on a vertex's.
+    if (w == words.size()) {
+        if (!next_words()) throw MeshError("the file ends in the header (expected 'NVertices NFaces NEdges')");
+        w = 0;
+    }
     int64_t counts[3];
     for (int k = 0; k < 3; ++k) {
-        if (w == words.size()) {
-            if (!next_words()) throw MeshError("the file ends in the header (expected 'NVertices NFaces NEdges')");
-            w = 0;
-        }
+        if (w == words.size())
+            throw MeshError(line_at(lines.number()) + "'NVertices NFaces NEdges' has " + number(uint64_t(k)) +
+                            " of its 3 numbers (" + (k == 2 ? "NEdges is missing; " : "") +
+                            "all three are one line, NEdges even when unused)");
         if (!parse_int(words[w], counts[k]) || counts[k] < 0)
             throw MeshError(line_at(lines.number()) +
                             (w == 0 && k == 0 && lines.number() == 1 ? "not an OFF file: " : "") +
                             "expected 'NVertices NFaces NEdges' (three integers), found " + shown(words[w]));
         ++w;
     }
-    if (w != words.size()) throw MeshError(line_at(lines.number()) + "more after 'NVertices NFaces NEdges'");
     const uint64_t vertices = uint64_t(counts[0]), faces = uint64_t(counts[1]);
     if (vertices > kMaxIndex) throw MeshError("the header declares more than 4294967295 vertices");
     mesh.vertices.reserve(std::min<uint64_t>(vertices, text.size() / 6));

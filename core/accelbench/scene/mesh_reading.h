@@ -227,8 +227,9 @@ void read_ply(std::string_view bytes, FlatMesh& mesh);
 void read_off(std::string_view text, FlatMesh& mesh);
 void read_stl(std::string_view bytes, FlatMesh& mesh);
 
-// The decompressed bytes of the gzip file at `path`; refuses (through fail) a file that
-// is not gzip, corrupt or truncated data, and more than kMaxMeshFileBytes.
-std::string gunzip(const std::string& path);
+// The decompressed bytes of the gzip file at `path`, every member in a row; refuses
+// (through fail) a file that is not gzip, corrupt or truncated data, bytes after the last
+// member, and more than `limit` bytes, as soon as the inflated size passes it.
+std::string gunzip(const std::string& path, uint64_t limit = kMaxMeshFileBytes);
 
 }  // namespace accelbench::mesh_reading

@@ -79,7 +79,19 @@ void read_ascii_stl(std::string_view text, FlatMesh& mesh, const std::string& bi
         }
         return words[w++];
     };
-    const auto rest_of_line = [&]() { w = words.size(); };
+    // A solid's name is the rest of its line, up to a facet on the same line ("facet
+    // normal", as one-line files write it) or, after 'endsolid', the next 'solid'.
+    const auto skip_name = [&](bool after_end) {
+        for (size_t k = w; k < words.size(); ++k) {
+            const std::string word_k = lowercase(words[k]);
+            if ((word_k == "facet" && k + 1 < words.size() && lowercase(words[k + 1]) == "normal") ||
+                (after_end && k > w && word_k == "solid")) {
+                w = k;
+                return;
+            }
+        }
+        w = words.size();
+    };
     const auto expect = [&](const char* keyword, uint64_t triangle) {
         const std::string_view got = word();
         if (lowercase(got) == keyword) return;
@@ -92,19 +104,19 @@ void read_ascii_stl(std::string_view text, FlatMesh& mesh, const std::string& bi
     std::vector<uint32_t> corners(3);
     uint64_t triangle = 0;
     expect("solid", 0);
-    rest_of_line();  // the name
+    skip_name(false);
     for (;;) {
         const std::string_view got = word();
         const std::string keyword = lowercase(got);
         if (!more) throw MeshError("the file ends without 'endsolid': it is cut short");
         if (keyword == "endsolid") {
-            rest_of_line();
+            skip_name(true);
             const std::string_view next = word();
             if (!more) return;
             if (lowercase(next) != "solid")
                 throw MeshError(line_at(lines.number()) +
                                 "expected 'solid' or the end of the file after 'endsolid', found " + shown(next));
-            rest_of_line();
+            skip_name(false);
             continue;
         }
         if (keyword != "facet")
@@ -141,21 +153,46 @@ void read_ascii_stl(std::string_view text, FlatMesh& mesh, const std::string& bi
 }  // namespace
 
 void read_stl(std::string_view bytes, FlatMesh& mesh) {
-    std::string hint;
+    uint64_t declared = 0;
     if (bytes.size() >= 84) {
-        uint32_t declared = 0;
-        std::memcpy(&declared, bytes.data() + 80, 4);
-        if constexpr (std::endian::native == std::endian::big) declared = byte_swapped(declared);
-        if (84 + 50 * uint64_t(declared) == bytes.size()) return read_binary_stl(bytes, declared, mesh);
-        hint = " (as binary STL it would declare " + number(declared) + " triangles, " +
-            number(84 + 50 * uint64_t(declared)) + " bytes, but the file has " + number(bytes.size()) + ")";
+        uint32_t count = 0;
+        std::memcpy(&count, bytes.data() + 80, 4);
+        if constexpr (std::endian::native == std::endian::big) count = byte_swapped(count);
+        declared = count;
+        if (84 + 50 * declared == bytes.size()) return read_binary_stl(bytes, declared, mesh);
+    }
+    const std::string sizes = bytes.size() >= 84 ? "declares " + number(declared) + " triangles, " +
+            number(84 + 50 * declared) + " bytes, but the file has " + number(bytes.size()) + " bytes"
+                                                 : "";
+    // ASCII STL is text: a byte that text does not hold (a NUL, a control character) makes
+    // it a binary STL of the wrong size, whatever its header begins with.
+    size_t binary_byte = std::string_view::npos;
+    for (size_t i = 0; i < bytes.size(); ++i) {
+        const unsigned char c = static_cast<unsigned char>(bytes[i]);
+        if (c < 0x20 && !std::isspace(c)) {
+            binary_byte = i;
+            break;
+        }
     }
     const size_t first = bytes.find_first_not_of(" \t\r\n\v\f");
-    if (first == std::string_view::npos || lowercase(bytes.substr(first, 5)) != "solid" ||
-        (bytes.size() > first + 5 && !std::isspace(static_cast<unsigned char>(bytes[first + 5]))))
-        throw MeshError("corrupt STL: it does not start with 'solid' as ASCII STL does" +
-                        (hint.empty() ? " and is too short for binary STL" : hint));
-    read_ascii_stl(bytes, mesh, hint);
+    const bool solid = first != std::string_view::npos && lowercase(bytes.substr(first, 5)) == "solid" &&
+        (bytes.size() == first + 5 || std::isspace(static_cast<unsigned char>(bytes[first + 5])));
+    if (binary_byte != std::string_view::npos || !solid) {
+        if (bytes.size() < 84)
+            throw MeshError(
+                "corrupt STL: it does not start with 'solid' as ASCII STL does and is too short for binary "
+                "STL (" +
+                number(bytes.size()) + " bytes, less than the 84 of its header)");
+        const std::string why = binary_byte != std::string_view::npos
+            ? "byte " + number(binary_byte) + " is " + shown(bytes.substr(binary_byte, 1)) +
+                ", which ASCII STL cannot hold"
+            : "it does not start with 'solid' as ASCII STL does";
+        const int64_t extra = int64_t(bytes.size()) - int64_t(84 + 50 * declared);
+        throw MeshError("binary STL (" + why + "): its header " + sizes + ": " +
+                        (extra < 0 ? "it is cut short or its count is corrupt"
+                                   : "it has bytes after its triangles or its count is corrupt"));
+    }
+    read_ascii_stl(bytes, mesh, sizes.empty() ? "" : " (as binary STL it would " + sizes + ")");
 }
 
 }  // namespace accelbench::mesh_reading
