@@ -130,6 +130,7 @@ public:
         if (auto* e = top.require("accelerators"))
             read_list(c_, e->value, "accelerators",
                       [&](const YAML::Node& n, const std::string& p) { read_accelerator(n, p); });
+        check_thread_counts();
         check_combination_count(top);
         check_reference_size();
         if (auto* e = top.find("skip"))
@@ -181,6 +182,8 @@ private:
             counts.push_back(int(*v));
         }
         if (counts.empty()) return;
+        threads_node_ = n;
+        threads_path_ = path;
         cfg_.thread_counts = counts;
         cfg_.render.threads = counts.front();
     }
@@ -583,6 +586,34 @@ private:
         }
     }
 
+    // A structure with a `threads` parameter of its own builds with the render thread
+    // count unless its entry gives one: a count outside that parameter's range is named
+    // here, at render.threads, not later as the structure's parameter without a place.
+    void check_thread_counts() {
+        if (!threads_node_) return;
+        for (const AcceleratorSpec& a : cfg_.accelerators) {
+            const AcceleratorInfo* info = find_accelerator(a.name);
+            if (!info) continue;
+            bool given = false;
+            for (const ParamAxis& axis : a.axes)
+                for (const std::string& name : axis.names) given |= name == "threads";
+            if (given) continue;
+            for (const ParamSpec& spec : info->params) {
+                if (spec.name != "threads") continue;
+                for (int t : cfg_.thread_counts)
+                    if (double(t) < spec.min || double(t) > spec.max) {
+                        c_.error(*threads_node_, threads_path_,
+                                 "thread count " + std::to_string(t) + " is outside the range of " + a.key_path +
+                                     " ('" + a.name + "')'s own `threads` parameter, [" + format_float(spec.min) +
+                                     ", " + format_float(spec.max) +
+                                     "], which takes the render thread count: fewer threads, or give that entry "
+                                     "params: {threads: N}");
+                        break;
+                    }
+            }
+        }
+    }
+
     // The number of combinations (models x the sum over accelerator entries of the product
     // of their axes x thread counts x ray sets) is bounded before anything is expanded: three ranges of 10,000 values
     // each would otherwise allocate 10^12 combinations, with --dry-run too.
@@ -955,6 +986,8 @@ private:
     const ModelRegistry& registry_;
     std::shared_ptr<const RaySet> default_rays_;
     std::map<std::string, std::shared_ptr<const RaySet>> ray_sets_;
+    std::optional<YAML::Node> threads_node_;  // render.threads, when given
+    std::string threads_path_;
 };
 
 }  // namespace

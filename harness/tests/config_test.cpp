@@ -406,5 +406,25 @@ accelerators: [{name: kdtree, params: {max_prims: 0x8, traversal_cost: 007.5}}]
         << all_issues(e);
 }
 
+// render.threads reaches a structure's own `threads` parameter: a count outside its range
+// is named at render.threads, with file and line.
+TEST_F(ConfigTest, ThreadCountsOutsideAStructuresThreadsParameterAreNamedAtRenderThreads) {
+    const ConfigError e = load_error(write("t.yaml", R"(render: {threads: 1024}
+models: [igea]
+accelerators: [{name: embree}, {name: lbvh}]
+)"));
+    EXPECT_EQ(e.issues().size(), 1u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 1, 19, "render.threads",
+                          "thread count 1024 is outside the range of accelerators[1] ('lbvh')'s own `threads` "
+                          "parameter, [0, 256]"))
+        << all_issues(e);
+    // Given on the entry, the render thread count does not reach it.
+    EXPECT_NO_THROW(load_config(write("u.yaml", R"(render: {threads: [1, 1024]}
+models: [igea]
+accelerators: [{name: lbvh, params: {threads: 0}}]
+)"),
+                                registry()));
+}
+
 }  // namespace
 }  // namespace accelbench

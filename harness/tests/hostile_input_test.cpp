@@ -260,6 +260,22 @@ accelerators: [{name: embree}]
                                 registry()));
 }
 
+// --benchmark_out to a file that takes no bytes is refused before anything is measured
+// (before: the JSON was lost silently), and the results file is not made.
+TEST_F(HostileInputTest, AnUnwritableBenchmarkOutIsRefusedUpFront) {
+    const std::string cfg = write_file(dir.path(), "j.yaml", R"(render: {width: 8, height: 6}
+models: [{procedural: soup, triangles: 50, seed: 1}]
+accelerators: [{name: bvh}]
+)");
+    const std::string out = (dir.path() / "j.csv").string();
+    for (const std::string& target : {std::string("/dev/full"), (dir.path() / "no" / "such.json").string()}) {
+        const Outcome o = run({cfg, "--out", out, "--benchmark_out=" + target});
+        EXPECT_EQ(o.code, 2) << o.err;
+        EXPECT_NE(o.err.find("'" + target + "' for --benchmark_out"), std::string::npos) << o.err;
+        EXPECT_FALSE(fs::exists(out)) << target;
+    }
+}
+
 // yaml-cpp 0.7.0's LoadAll never returns on these (its parser stuck on a token, an empty
 // document appended forever: the config fuzz test's process reached 24 GB): the loader must
 // refuse them as syntax errors. Loaded in a child under a 2 GB address-space limit and a
