@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -819,6 +820,23 @@ TEST_F(MeshIoTest, GzipBombIsRefusedWithoutBufferingToTheLimit) {
     const std::string zeros = mesh_reading::gunzip(path, uint64_t(256) << 20);
     EXPECT_EQ(zeros.size(), size_t(256) << 20);
     EXPECT_EQ(zeros.find_first_not_of('\0'), std::string::npos);
+}
+
+// One vertex policy: a NaN vertex no face uses is refused by the readers and by
+// Scene::finalize alike, each naming the vertex.
+TEST_F(MeshIoTest, AnUnusedNanVertexIsRefusedByReadersAndScenesAlike) {
+    const std::string error = load_error(write("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 0\nf 1 2 3\n"));
+    EXPECT_NE(error.find("line 4: vertex 4: a coordinate is not finite"), std::string::npos) << error;
+    Scene s;
+    s.name = "unused";
+    s.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {std::nanf(""), 0, 0}};
+    s.triangles = {{0, 1, 2}};
+    try {
+        s.finalize();
+        ADD_FAILURE() << "an unused NaN vertex was accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex 3 is not finite"), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace

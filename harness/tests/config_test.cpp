@@ -426,5 +426,27 @@ accelerators: [{name: lbvh, params: {threads: 0}}]
                                 registry()));
 }
 
+// A ray CSV saved by a spreadsheet starts with a UTF-8 byte-order mark: read; UTF-16 is
+// named; another invisible byte in the header is shown as \xNN.
+TEST_F(ConfigTest, RayFileWithAByteOrderMark) {
+    write_triangle_case(dir.path());
+    write("bom.rays.csv", "\xEF\xBB\xBFox,oy,oz,dx,dy,dz\r\n0,0,5,0,0,-1\r\n");
+    const Config c = load_config(write("a.yaml", R"(models: [{path: tri.obj, rays: {file: bom.rays.csv}}]
+accelerators: [{name: bvh}]
+)"),
+                                 registry());
+    ASSERT_TRUE(c.models[0].rays);
+    EXPECT_EQ(c.models[0].rays->rays.size(), 1u);
+    write("utf16.rays.csv", std::string("\xFF\xFEo\0x\0", 6));
+    write("nbsp.rays.csv", "ox,oy,oz,dx,dy,dz\xC2\xA0\n0,0,5,0,0,-1\n");
+    const ConfigError e = load_error(write("b.yaml", R"(models:
+  - {path: tri.obj, rays: {file: utf16.rays.csv}}
+  - {path: tri.obj, label: t2, rays: {file: nbsp.rays.csv}}
+accelerators: [{name: bvh}]
+)"));
+    EXPECT_NE(all_issues(e).find("the ray file is UTF-16"), std::string::npos) << all_issues(e);
+    EXPECT_NE(all_issues(e).find("got 'ox,oy,oz,dx,dy,dz\\xC2\\xA0'"), std::string::npos) << all_issues(e);
+}
+
 }  // namespace
 }  // namespace accelbench
