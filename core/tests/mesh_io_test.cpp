@@ -1,15 +1,18 @@
 // load_mesh on tiny files of every format, written here byte by byte, so the expected
 // counts, fan triangles and coordinates are known exactly.
 #include "accelbench/scene/mesh_io.h"
+#include "accelbench/scene/mesh_reading.h"
 
 #include "accelbench/base/temp_dir.h"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <zlib.h>
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -330,7 +333,8 @@ TEST_F(MeshIoTest, TruncationIsNamedWithItsPlace) {
     EXPECT_NE(error.find("line 5: vertex 2: 2 numbers on the line"), std::string::npos) << error;
     const std::string stl = binary_stl();
     error = load_error(write("cut.stl", stl.substr(0, stl.size() - 10)));
-    EXPECT_NE(error.find("as binary STL it would declare 2 triangles, 184 bytes, but the file has 174"),
+    EXPECT_NE(error.find("binary STL (byte 80 is '\\x02', which ASCII STL cannot hold): its header declares 2 "
+                         "triangles, 184 bytes, but the file has 174 bytes: it is cut short"),
               std::string::npos)
         << error;
     error = load_error(write("cut.stl", ascii_stl().substr(0, ascii_stl().find("vertex 1 1 0") + 10)));
@@ -565,7 +569,7 @@ TEST_F(MeshIoTest, MalformedInputIsRefusedWithPlaceAndCause) {
         {"a.off", "OFF\n3 1 0\n0 0 0\n1 -inf 0\n0 1 0\n3 0 1 2\n", "line 4: vertex 1: a coordinate is not finite"},
         {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0 0\n0 1 0\n3 0 1 2\n",
          "line 4: vertex 1: 4 numbers on the line, 'OFF' vertices have 3"},
-        {"a.off", "OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "line 3: more after 'NVertices NFaces NEdges'"},
+        {"a.off", "OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "line 2: 'NVertices NFaces NEdges' has 2 of its 3"},
         {"a.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n", "line 7: more data after the last face"},
         {"a.off", "XOFF\n3 1 0\n", "line 1: not an OFF header keyword 'XOFF'"},
         {"a.off", "hello\n", "line 1: not an OFF file: expected 'NVertices NFaces NEdges'"},
@@ -694,6 +698,145 @@ TEST_F(MeshIoTest, DegenerateFacesAreKept) {
                                       "endsolid flat\n"));
     EXPECT_EQ(stl.triangles, (std::vector<Tri>{{0, 1, 1}, {0, 2, 2}}));
     EXPECT_EQ(stl.vertex_count(), 3u);
+}
+
+// ---- no face dropped silently -------------------------------------------------------
+
+// A backslash at the end of a comment is the comment's: the next line is a statement.
+TEST_F(MeshIoTest, ObjCommentEndingInBackslashDoesNotContinue) {
+    const Scene s = load_mesh(write("c.obj",
+                                    "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 0.5 2.25\n"
+                                    "# a path C:\\models\\\n"
+                                    "f 1 2 3 4\n"
+                                    "g x # another \\\n"
+                                    "f 1 2 5\n"));
+    expect_same_mesh(load_mesh(write("plain.obj", kObj)), s, "OBJ with comments ending in '\\'");
+}
+
+// One-line ASCII STL: the facets on the solid line are facets, not the solid's name.
+TEST_F(MeshIoTest, StlFacetsOnTheSolidLineAreRead) {
+    std::string one_line = ascii_stl();
+    std::replace(one_line.begin(), one_line.end(), '\n', ' ');
+    const Scene s = load_mesh(write("one.stl", one_line));
+    expect_same_mesh(load_mesh(write("plain.stl", ascii_stl())), s, "one-line STL");
+    // Unnamed, and a second solid on the endsolid line (after the first one's name).
+    std::string unnamed =
+        "solid facet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 0 0 vertex 1 1 0 endloop "
+        "endfacet endsolid a solid b facet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 1 0 "
+        "vertex 0 1 0.5 endloop endfacet endsolid b";
+    expect_same_mesh(load_mesh(write("plain2.stl", ascii_stl())), load_mesh(write("unnamed.stl", unnamed)),
+                     "unnamed one-line STL of two solids");
+}
+
+// A binary STL whose header starts with "solid" and whose count does not match its size
+// is named as the binary file it is, with the size and count.
+TEST_F(MeshIoTest, BinaryStlWithSolidHeaderAndWrongCountNamesTheCount) {
+    std::string b = binary_stl();
+    b.replace(0, 12, "solid binary");
+    put_at(b, 80, uint32_t(3));
+    const std::string error = load_error(write("wrong.stl", b));
+    EXPECT_NE(error.find("binary STL"), std::string::npos) << error;
+    EXPECT_NE(error.find("declares 3 triangles"), std::string::npos) << error;
+    EXPECT_NE(error.find("the file has 184 bytes"), std::string::npos) << error;
+    EXPECT_EQ(error.find("expected"), std::string::npos) << error;
+    // Cut inside a triangle, header "solid", too.
+    b = binary_stl();
+    b.replace(0, 5, "solid");
+    const std::string cut = load_error(write("cut.stl", b.substr(0, b.size() - 7)));
+    EXPECT_NE(cut.find("binary STL"), std::string::npos) << cut;
+    EXPECT_NE(cut.find("declares 2 triangles"), std::string::npos) << cut;
+}
+
+// OFF with NEdges missing: the counts line is named, not the first vertex.
+TEST_F(MeshIoTest, OffMissingNEdgesIsNamedOnTheCountsLine) {
+    const std::string error = load_error(write("e.off", "OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+    EXPECT_NE(error.find("line 2: 'NVertices NFaces NEdges' has 2 of its 3 numbers"), std::string::npos) << error;
+    const std::string inline_error = load_error(write("f.off", "OFF 3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+    EXPECT_NE(inline_error.find("line 1: 'NVertices NFaces NEdges' has 2 of its 3 numbers"), std::string::npos)
+        << inline_error;
+}
+
+std::string gzip_bytes(const std::string& bytes) {
+    uLongf size = compressBound(uLong(bytes.size())) + 32;
+    std::string out(size, '\0');
+    z_stream s{};
+    deflateInit2(&s, 6, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY);
+    s.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+    s.avail_in = uInt(bytes.size());
+    s.next_out = reinterpret_cast<Bytef*>(out.data());
+    s.avail_out = uInt(out.size());
+    deflate(&s, Z_FINISH);
+    out.resize(s.total_out);
+    deflateEnd(&s);
+    return out;
+}
+
+// Members of a gzip file in a row are one file (RFC 1952, as gzip -d reads them); bytes
+// after the last member that are not a member are refused, with their offset.
+TEST_F(MeshIoTest, GzipMembersAreReadAndTrailingBytesRefused) {
+    const std::string ply = kAsciiPly;
+    const size_t half = ply.find("end_header");
+    const std::string two = gzip_bytes(ply.substr(0, half)) + gzip_bytes(ply.substr(half));
+    expect_same_mesh(load_mesh(write("a.ply", ply)), load_mesh(write("two.ply.gz", two)), "two gzip members");
+    const std::string one = gzip_bytes(ply);
+    for (const std::string& tail : {std::string("junk"), std::string(8, '\0'), std::string("\x1f")}) {
+        const std::string error = load_error(write("tail.ply.gz", one + tail));
+        EXPECT_NE(error.find("tail.ply.gz': gzip: " + std::to_string(tail.size()) + " bytes after the gzip data"),
+                  std::string::npos)
+            << error;
+        EXPECT_NE(error.find("byte " + std::to_string(one.size())), std::string::npos) << error;
+    }
+}
+
+// A gzip of `size` zero bytes, written in pieces (the inflated bytes are never held).
+void write_zeros_gz(const std::string& path, uint64_t size) {
+    gzFile out = gzopen(path.c_str(), "wb9");
+    const std::string piece(1u << 20, '\0');
+    for (uint64_t done = 0; done < size; done += piece.size()) gzwrite(out, piece.data(), unsigned(piece.size()));
+    gzclose(out);
+}
+
+long max_rss_kib() {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return usage.ru_maxrss;
+}
+
+// A gzip bomb is refused as soon as its inflated size passes the limit, without holding
+// the inflated bytes: the process's peak memory grows far less than the limit.
+TEST_F(MeshIoTest, GzipBombIsRefusedWithoutBufferingToTheLimit) {
+    const std::string path = (dir_ / "bomb.ply.gz").string();
+    write_zeros_gz(path, uint64_t(256) << 20);
+    const long before = max_rss_kib();
+    try {
+        mesh_reading::gunzip(path, uint64_t(64) << 20);
+        ADD_FAILURE() << "a 256 MiB inflation passed a 64 MiB limit";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("decompresses to more than 67108864 bytes"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_LT(max_rss_kib() - before, 32 * 1024) << "KiB of peak memory grown while refusing the bomb";
+    // Under the limit it is read whole and exactly.
+    const std::string zeros = mesh_reading::gunzip(path, uint64_t(256) << 20);
+    EXPECT_EQ(zeros.size(), size_t(256) << 20);
+    EXPECT_EQ(zeros.find_first_not_of('\0'), std::string::npos);
+}
+
+// One vertex policy: a NaN vertex no face uses is refused by the readers and by
+// Scene::finalize alike, each naming the vertex.
+TEST_F(MeshIoTest, AnUnusedNanVertexIsRefusedByReadersAndScenesAlike) {
+    const std::string error = load_error(write("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 0\nf 1 2 3\n"));
+    EXPECT_NE(error.find("line 4: vertex 4: a coordinate is not finite"), std::string::npos) << error;
+    Scene s;
+    s.name = "unused";
+    s.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {std::nanf(""), 0, 0}};
+    s.triangles = {{0, 1, 2}};
+    try {
+        s.finalize();
+        ADD_FAILURE() << "an unused NaN vertex was accepted";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("vertex 3 is not finite"), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace

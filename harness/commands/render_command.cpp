@@ -62,8 +62,10 @@ LoadedModel resolve_model(const std::string& text, const ModelRegistry& registry
         spec.name = rest.substr(0, rest.find(','));
         for (size_t pos = rest.find(','); pos != std::string::npos;) {
             size_t next = rest.find(',', pos + 1);
-            spec.procedural_params.insert(
-                split_kv(rest.substr(pos + 1, next == std::string::npos ? std::string::npos : next - pos - 1)));
+            auto kv = split_kv(rest.substr(pos + 1, next == std::string::npos ? std::string::npos : next - pos - 1));
+            if (auto [it, fresh] = spec.procedural_params.insert(kv); !fresh)
+                throw ParamError("--model " + text + ": parameter '" + kv.first + "' is given twice (" + kv.first +
+                                 "=" + it->second + ", then " + kv.first + "=" + kv.second + ")");
             pos = next;
         }
     } else if (registry.find(text)) {

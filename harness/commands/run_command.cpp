@@ -66,12 +66,14 @@ int run(const RunOptions& opt) {
             print_dry_run(plan);
             return 0;
         }
+        initialize_google_benchmark(opt.benchmark_args);
+        // The JSON file first: one that cannot be written is refused before the results
+        // file is made (or locked) or anything measured.
+        std::optional<JsonOutput> json;
+        if (!opt.json_out.empty()) json.emplace(opt.json_out);
         choose_output(plan, opt);
         ResultsCsv results(plan.out);
         RepetitionsCsv repetitions(repetitions_path(plan.out));
-        initialize_google_benchmark(opt.benchmark_args);
-        std::optional<JsonOutput> json;
-        if (!opt.json_out.empty()) json.emplace(opt.json_out);
         VerdictTable verdicts;
         Progress progress;
         std::vector<RunSink*> sinks;

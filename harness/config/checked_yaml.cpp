@@ -11,6 +11,7 @@
 #include <map>
 #include <sstream>
 
+#include "accelbench/base/params.h"
 #include "accelbench/base/unknown_name.h"
 #include "util/text.h"
 
@@ -125,7 +126,8 @@ const char* kind_of(const YAML::Node& n) {
     }
 }
 
-bool quoted(const YAML::Node& n) { return n.Tag() == "!"; }
+// A string by its form: quoted ("4", '4', tag "!") or tagged `!!str 4`.
+bool quoted(const YAML::Node& n) { return n.Tag() == "!" || n.Tag() == "tag:yaml.org,2002:str"; }
 
 Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::vector<std::string>& allowed)
     : c_(c), map_(map), path_(std::move(path)) {
@@ -135,6 +137,7 @@ Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::v
     }
     ok_ = true;
     std::map<std::string, YAML::Mark> seen;
+    std::vector<YAML::Node> merges;
     // Range-for, not `it->first`: yaml-cpp's iterator::operator-> returns a proxy that
     // holds the key/value pair by value, so a reference to `it->first` dangles as soon
     // as the statement ends (ASan: stack-use-after-scope). `*it` yields the pair by
@@ -146,6 +149,10 @@ Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::v
         else if (k.IsSequence()) key = flow_key(k);  // [max_prims, max_depth]: ...
         else {
             c.error(k, path_, std::string("a key must be a name, got ") + kind_of(k));
+            continue;
+        }
+        if (key == "<<" && k.IsScalar() && !quoted(k)) {  // a merge key: read after the mapping's own keys
+            merges.push_back(entry.second);
             continue;
         }
         if (auto s = seen.find(key); s != seen.end()) {
@@ -162,6 +169,42 @@ Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::v
             continue;
         }
         entries_.push_back({key, k, entry.second});
+    }
+    // YAML merge keys (`<<: *defaults`, or a list of aliases): the merged mapping's keys
+    // that this mapping does not give itself, the first of a list winning (the YAML 1.1
+    // merge key type, which yaml-cpp leaves to its user).
+    for (const YAML::Node& merged : merges) {
+        std::vector<YAML::Node> sources;
+        if (merged.IsMap()) sources.push_back(merged);
+        else if (merged.IsSequence())
+            for (const auto& item : merged) sources.push_back(item);
+        for (const YAML::Node& source : sources) {
+            if (!source.IsMap()) {
+                c.error(source, child("<<"),
+                        std::string("a merge key ('<<') takes a mapping (an alias such as *defaults) or a list of "
+                                    "them, got ") +
+                            kind_of(source));
+                continue;
+            }
+            for (const auto& entry : source) {
+                const YAML::Node& k = entry.first;
+                if (!k.IsScalar() || seen.count(k.Scalar())) continue;
+                const std::string& key = k.Scalar();
+                seen.emplace(key, k.Mark());
+                if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+                    c.error(k, child(key),
+                            "unknown key '" + key + "' (merged with '<<')" + did_you_mean(key, allowed) +
+                                "; allowed here: " + join_names(allowed));
+                    continue;
+                }
+                entries_.push_back({key, k, entry.second});
+            }
+        }
+        if (sources.empty())
+            c.error(merged, child("<<"),
+                    std::string("a merge key ('<<') takes a mapping (an alias such as *defaults) or a list of them, "
+                                "got ") +
+                        kind_of(merged));
     }
 }
 
@@ -207,6 +250,10 @@ std::optional<int64_t> read_int(Checker& c, const YAML::Node& n, const std::stri
         return std::nullopt;
     }
     const std::string& t = n.Scalar();
+    if (const std::string why = number_form_problem(t); !why.empty()) {
+        c.error(n, path, why);
+        return std::nullopt;
+    }
     int64_t v = 0;
     auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     if (ec != std::errc() || p != t.data() + t.size()) {
@@ -232,6 +279,10 @@ std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::st
         return std::nullopt;
     }
     const std::string& t = n.Scalar();
+    if (const std::string why = number_form_problem(t); !why.empty()) {
+        c.error(n, path, why);
+        return std::nullopt;
+    }
     char* end = nullptr;
     double v = std::strtod(t.c_str(), &end);
     if (t.empty() || end != t.c_str() + t.size() || !std::isfinite(v)) {
@@ -246,15 +297,22 @@ std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::st
 }
 
 std::optional<bool> read_bool(Checker& c, const YAML::Node& n, const std::string& path) {
-    if (n.IsScalar() && !quoted(n)) {
-        const std::string& t = n.Scalar();
-        if (t == "true" || t == "yes" || t == "on") return true;
-        if (t == "false" || t == "no" || t == "off") return false;
-    }
+    if (bool v = false; n.IsScalar() && !quoted(n) && parse_bool_text(n.Scalar(), v)) return v;
     c.error(n, path,
             std::string("expected true or false, got ") +
                 (n.IsScalar() ? "'" + n.Scalar() + "'" : std::string(kind_of(n))));
     return std::nullopt;
+}
+
+std::optional<float> read_float(Checker& c, const YAML::Node& n, const std::string& path, double lo, double hi,
+                                bool lo_open) {
+    const auto v = read_number(c, n, path, lo, hi, lo_open);
+    if (!v) return std::nullopt;
+    if (const std::string why = float_conversion_problem(*v, n.Scalar()); !why.empty()) {
+        c.error(n, path, why);
+        return std::nullopt;
+    }
+    return float(*v);
 }
 
 std::optional<Vec3> read_vec3(Checker& c, const YAML::Node& n, const std::string& path) {
@@ -266,7 +324,7 @@ std::optional<Vec3> read_vec3(Checker& c, const YAML::Node& n, const std::string
     }
     Vec3 v;
     for (int i = 0; i < 3; ++i) {
-        auto x = read_number(c, n[i], path + "[" + std::to_string(i) + "]", -1e30, 1e30, false);
+        auto x = read_float(c, n[i], path + "[" + std::to_string(i) + "]", -1e30, 1e30, false);
         if (!x) return std::nullopt;
         v[i] = float(*x);
     }

@@ -113,7 +113,12 @@ std::optional<int64_t> read_int(Checker& c, const YAML::Node& n, const std::stri
 // A finite number in (lo, hi] when lo_open, else [lo, hi].
 std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::string& path, double lo, double hi,
                                   bool lo_open);
-std::optional<bool> read_bool(Checker& c, const YAML::Node& n, const std::string& path);  // true/yes/on, false/no/off
+// A number as read_number, that is also a float: refused when it does not survive the
+// conversion (float_conversion_problem: 1e-50 would become 0).
+std::optional<float> read_float(Checker& c, const YAML::Node& n, const std::string& path, double lo, double hi,
+                                bool lo_open);
+// true/yes/on, false/no/off, each also Capitalised and in CAPITALS (YAML 1.2 core: True, TRUE).
+std::optional<bool> read_bool(Checker& c, const YAML::Node& n, const std::string& path);
 std::optional<Vec3> read_vec3(Checker& c, const YAML::Node& n, const std::string& path);  // [x, y, z]
 
 // A list: `each(item, "path[i]")` for every item; an issue when `n` is not a list or is

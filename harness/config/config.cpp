@@ -130,6 +130,7 @@ public:
         if (auto* e = top.require("accelerators"))
             read_list(c_, e->value, "accelerators",
                       [&](const YAML::Node& n, const std::string& p) { read_accelerator(n, p); });
+        check_thread_counts();
         check_combination_count(top);
         check_reference_size();
         if (auto* e = top.find("skip"))
@@ -181,6 +182,8 @@ private:
             counts.push_back(int(*v));
         }
         if (counts.empty()) return;
+        threads_node_ = n;
+        threads_path_ = path;
         cfg_.thread_counts = counts;
         cfg_.render.threads = counts.front();
     }
@@ -209,7 +212,7 @@ private:
             if (auto* s = ao.find("samples"))
                 if (auto v = read_int(c_, s->value, ao.child("samples"), 1, 1024)) r.ao_samples = int(*v);
             if (auto* s = ao.find("distance"))
-                if (auto v = read_number(c_, s->value, ao.child("distance"), 0, 1e3, true)) r.ao_distance = float(*v);
+                if (auto v = read_float(c_, s->value, ao.child("distance"), 0, 1e3, true)) r.ao_distance = *v;
         }
         if (auto* e = f.find("diffuse")) {
             Fields d(c_, e->value, f.child("diffuse"), {"bounces"});
@@ -224,7 +227,49 @@ private:
         if (auto* e = f.find("seed"))
             if (auto v = read_int(c_, e->value, f.child("seed"), 0, std::numeric_limits<int64_t>::max()))
                 r.seed = uint64_t(*v);
+        check_ray_set_bytes(spec, f, n);
         cfg_.ray_sets = std::move(spec);
+    }
+
+    // Each set's rays and the reference's answers for them (and the measurement's second
+    // counting trace) are held in memory: a set larger than kMaxRaySetBytes is refused
+    // here, naming the key that makes it, not as std::bad_alloc in its rows.
+    void check_ray_set_bytes(const RaySetsSpec& spec, const Fields& f, const YAML::Node& n) {
+        const RenderSettings& r = cfg_.render;
+        const uint64_t primary = uint64_t(r.width) * uint64_t(r.height) * uint64_t(r.spp);
+        const auto node_of = [&](const char* group, const char* key) -> std::pair<YAML::Node, std::string> {
+            if (auto* e = f.find(group))
+                if (e->value.IsMap() && e->value[key]) return {e->value[key], f.child(group) + "." + key};
+            return {n, "ray_sets"};
+        };
+        for (RaySetKind kind : spec.sets) {
+            uint64_t rays = primary;
+            std::string why = "render: width x height x spp = " + std::to_string(primary) + " primary rays";
+            std::pair<YAML::Node, std::string> at = {n, "ray_sets"};
+            if (kind == RaySetKind::Ao) {
+                rays = primary * uint64_t(spec.params.ao_samples);
+                at = node_of("ao", "samples");
+                why = "ray_sets.ao.samples x width x height x spp = " + std::to_string(spec.params.ao_samples) + " x " +
+                    std::to_string(primary) + " = " + std::to_string(rays) + " rays";
+            } else if (kind == RaySetKind::Diffuse) {
+                rays = primary * uint64_t(spec.params.diffuse_bounces);
+                at = node_of("diffuse", "bounces");
+                why =
+                    "ray_sets.diffuse.bounces x width x height x spp = " + std::to_string(spec.params.diffuse_bounces) +
+                    " x " + std::to_string(primary) + " = " + std::to_string(rays) + " rays";
+            } else if (kind == RaySetKind::Random) {
+                rays = spec.params.random_rays;
+                at = node_of("random", "rays");
+                why = "ray_sets.random.rays = " + std::to_string(rays) + " rays";
+            }
+            const uint64_t bytes = rays * kRaySetBytesPerRay;
+            if (bytes <= kMaxRaySetBytes) continue;
+            c_.error(at.first, at.second,
+                     "ray set '" + std::string(ray_set_name(kind)) + "': " + why + ", " + std::to_string(bytes) +
+                         " bytes with their answers (" + std::to_string(kRaySetBytesPerRay) + " a ray); at most " +
+                         std::to_string(kMaxRaySetBytes) + " bytes (" +
+                         std::to_string(kMaxRaySetBytes / kRaySetBytesPerRay) + " rays) a set");
+        }
     }
 
     std::shared_ptr<const RaySet> read_rays(const YAML::Node& n, const std::string& path) {
@@ -271,7 +316,7 @@ private:
         vec("look_at", cam.look_at, true);
         vec("up", cam.up, false);
         if (auto* e = f.find("fov")) {
-            if (auto v = read_number(c_, e->value, f.child("fov"), 0, 179, true)) cam.fov_deg = float(*v);
+            if (auto v = read_float(c_, e->value, f.child("fov"), 0, 179, true)) cam.fov_deg = *v;
             else ok = false;
         }
         if (!ok) return std::nullopt;
@@ -541,8 +586,36 @@ private:
         }
     }
 
+    // A structure with a `threads` parameter of its own builds with the render thread
+    // count unless its entry gives one: a count outside that parameter's range is named
+    // here, at render.threads, not later as the structure's parameter without a place.
+    void check_thread_counts() {
+        if (!threads_node_) return;
+        for (const AcceleratorSpec& a : cfg_.accelerators) {
+            const AcceleratorInfo* info = find_accelerator(a.name);
+            if (!info) continue;
+            bool given = false;
+            for (const ParamAxis& axis : a.axes)
+                for (const std::string& name : axis.names) given |= name == "threads";
+            if (given) continue;
+            for (const ParamSpec& spec : info->params) {
+                if (spec.name != "threads") continue;
+                for (int t : cfg_.thread_counts)
+                    if (double(t) < spec.min || double(t) > spec.max) {
+                        c_.error(*threads_node_, threads_path_,
+                                 "thread count " + std::to_string(t) + " is outside the range of " + a.key_path +
+                                     " ('" + a.name + "')'s own `threads` parameter, [" + format_float(spec.min) +
+                                     ", " + format_float(spec.max) +
+                                     "], which takes the render thread count: fewer threads, or give that entry "
+                                     "params: {threads: N}");
+                        break;
+                    }
+            }
+        }
+    }
+
     // The number of combinations (models x the sum over accelerator entries of the product
-    // of their axes) is bounded before anything is expanded: three ranges of 10,000 values
+    // of their axes x thread counts x ray sets) is bounded before anything is expanded: three ranges of 10,000 values
     // each would otherwise allocate 10^12 combinations, with --dry-run too.
     void check_combination_count(const Fields& top) {
         uint64_t per_model = 0;
@@ -553,16 +626,23 @@ private:
                 over |= __builtin_mul_overflow(product, uint64_t(axis.values.size()), &product);
             over |= __builtin_add_overflow(per_model, product, &per_model);
         }
+        // Every model, thread count and ray set is a combination of each setting.
+        const uint64_t sets = cfg_.ray_sets ? std::max<uint64_t>(1, cfg_.ray_sets->sets.size()) : 1;
+        const uint64_t threads = std::max<uint64_t>(1, cfg_.thread_counts.size());
         uint64_t total = 0;
         over |= __builtin_mul_overflow(per_model, uint64_t(cfg_.models.size()), &total);
+        over |= __builtin_mul_overflow(total, threads, &total);
+        over |= __builtin_mul_overflow(total, sets, &total);
         if (over || total > kMaxCombinations) {
             const auto* e = top.find("accelerators");
             c_.error(e ? e->value : top.node(), "accelerators",
                      "the config expands to " + (over ? std::string("more than 2^64") : std::to_string(total)) +
                          " combinations (" + std::to_string(cfg_.models.size()) +
                          (cfg_.models.size() == 1 ? " model x " : " models x ") +
-                         (over ? std::string("too many") : std::to_string(per_model)) +
-                         " accelerator settings); at most " + std::to_string(kMaxCombinations) +
+                         (over ? std::string("too many") : std::to_string(per_model)) + " accelerator settings x " +
+                         std::to_string(threads) + (threads == 1 ? " thread count x " : " thread counts x ") +
+                         std::to_string(sets) + (sets == 1 ? " ray set" : " ray sets") + "); at most " +
+                         std::to_string(kMaxCombinations) +
                          " in one config: split it, or use grid.mode: successive_halving");
         }
     }
@@ -906,6 +986,8 @@ private:
     const ModelRegistry& registry_;
     std::shared_ptr<const RaySet> default_rays_;
     std::map<std::string, std::shared_ptr<const RaySet>> ray_sets_;
+    std::optional<YAML::Node> threads_node_;  // render.threads, when given
+    std::string threads_path_;
 };
 
 }  // namespace

@@ -115,9 +115,13 @@ struct Config {
 };
 
 // Limits that load_config enforces (docs/configs.md "Limits"): the combinations of one
-// config, and the primary rays of a model when error columns are measured.
+// config, the primary rays of a model when error columns are measured, and a ray set's
+// bytes.
 inline constexpr uint64_t kMaxCombinations = 100000;
 inline constexpr uint64_t kMaxReferenceRays = uint64_t(1) << 25;  // 33,554,432: 512 MiB of hits
+// A ray set's rays and answers: the ray, the reference's hit and the measurement's.
+inline constexpr uint64_t kRaySetBytesPerRay = sizeof(Ray) + 2 * sizeof(Hit);  // 64
+inline constexpr uint64_t kMaxRaySetBytes = uint64_t(1) << 31;                 // 2 GiB: 33,554,432 rays
 
 // Reads and validates the config at `path` against the accelerator registry, the
 // procedural scene registry and the model registry. Throws ConfigError listing every

@@ -1,5 +1,6 @@
 #include "config/ray_file.h"
 
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 
@@ -30,6 +31,22 @@ std::vector<std::pair<std::string, int>> split_fields(const std::string& line) {
     }
 }
 
+// Text as a message shows it: bytes that are not printable ASCII as \xNN, so that an
+// invisible character in a header is seen.
+std::string visible(const std::string& s) {
+    std::string out;
+    for (unsigned char c : s) {
+        if (c >= 0x20 && c < 0x7f) {
+            out += char(c);
+        } else {
+            char hex[8];
+            std::snprintf(hex, sizeof hex, "\\x%02X", unsigned(c));
+            out += hex;
+        }
+    }
+    return out;
+}
+
 }  // namespace
 
 RayFileContents read_ray_file(const std::string& path, const std::string& display) {
@@ -47,14 +64,22 @@ RayFileContents read_ray_file(const std::string& path, const std::string& displa
     size_t fields = 0;  // 6 or 7 once the header is read
     while (std::getline(in, line)) {
         ++line_no;
+        // A UTF-8 byte-order mark, as spreadsheet programs write it, is not part of the
+        // header; UTF-16 (whose mark starts FF FE or FE FF) is another encoding, named.
+        if (line_no == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
+        if (line_no == 1 && (line.rfind("\xFF\xFE", 0) == 0 || line.rfind("\xFE\xFF", 0) == 0)) {
+            issue(1, 1, "the ray file is UTF-16 (it starts with a UTF-16 byte-order mark): save it as UTF-8 or ASCII");
+            return result;
+        }
         const std::string text = trim(line);
         if (text.empty()) continue;
         if (fields == 0) {
             if (text == "ox,oy,oz,dx,dy,dz") fields = 6;
             else if (text == "ox,oy,oz,dx,dy,dz,tmax") fields = 7;
             else {
-                issue(line_no, 1,
-                      "expected the header 'ox,oy,oz,dx,dy,dz' or 'ox,oy,oz,dx,dy,dz,tmax', got '" + text + "'");
+                issue(
+                    line_no, 1,
+                    "expected the header 'ox,oy,oz,dx,dy,dz' or 'ox,oy,oz,dx,dy,dz,tmax', got '" + visible(text) + "'");
                 return result;
             }
             continue;

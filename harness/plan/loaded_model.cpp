@@ -82,8 +82,27 @@ void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySet
     auto reference = make_accelerator("reference", {});
     reference->build(model.scene);
     const std::vector<Ray> primary = camera_rays(model.camera, render);
-    auto sets = std::make_shared<std::vector<GeneratedRaySet>>(
-        make_ray_sets(*reference, model.scene, primary, model.light.position, spec.sets, spec.params));
+    auto sets = std::make_shared<std::vector<GeneratedRaySet>>();
+    try {
+        *sets = make_ray_sets(*reference, model.scene, primary, model.light.position, spec.sets, spec.params);
+    } catch (const std::exception& all) {
+        // One set at a time, so that the one that fails takes only its own rows with it.
+        sets->clear();
+        for (RaySetKind kind : spec.sets) {
+            try {
+                const RaySetKind one[] = {kind};
+                auto made = make_ray_sets(*reference, model.scene, primary, model.light.position, one, spec.params);
+                sets->push_back(std::move(made.front()));
+            } catch (const std::bad_alloc&) {
+                model.ray_set_errors[kind] = "out of memory (std::bad_alloc) making it";
+            } catch (const std::exception& e) {
+                model.ray_set_errors[kind] = e.what();
+            }
+        }
+        for (const auto& [kind, why] : model.ray_set_errors)
+            std::fprintf(stderr, "accelbench run: ray set %s of %s cannot be made: %s\n",
+                         std::string(ray_set_name(kind)).c_str(), model.scene.name.c_str(), why.c_str());
+    }
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (const GeneratedRaySet& set : *sets)
         std::fprintf(stderr, "accelbench run: ray set %s of %s: %zu rays, hash %016llx\n",
@@ -238,6 +257,11 @@ std::string loaded_model_bytes(const LoadedModel& m) {
         w.put(uint64_t(m.ray_sets->size()));
         for (const GeneratedRaySet& s : *m.ray_sets) put_ray_set(w, s);
     }
+    w.put(uint64_t(m.ray_set_errors.size()));
+    for (const auto& [kind, why] : m.ray_set_errors) {
+        w.put(kind);
+        w.put_string(why);
+    }
     return w.take();
 }
 
@@ -258,6 +282,12 @@ LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spe
         auto sets = std::make_shared<std::vector<GeneratedRaySet>>(n);
         for (GeneratedRaySet& s : *sets) s = take_ray_set(r);
         m.ray_sets = std::move(sets);
+    }
+    const uint64_t errors = r.take<uint64_t>();
+    if (errors > ray_set_names().size()) throw std::runtime_error("prepared model: corrupt ray set errors");
+    for (uint64_t i = 0; i < errors; ++i) {
+        const auto kind = r.take<RaySetKind>();
+        m.ray_set_errors[kind] = r.take_string();
     }
     if (!r.at_end()) throw std::runtime_error("prepared model: bytes after the end");
     m.rays = spec.rays;  // the config's ray file, read by the parent when it read the config

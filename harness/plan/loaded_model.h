@@ -3,6 +3,7 @@
 // accelerator measured on it.
 #pragma once
 
+#include <map>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -41,6 +42,9 @@ struct LoadedModel {
     std::shared_ptr<const ReferenceAnswers> reference;  // set by add_reference_answers
     // The config's ray sets, with the reference's answers; set by add_ray_sets.
     std::shared_ptr<const std::vector<GeneratedRaySet>> ray_sets;
+    // The sets that could not be made (std::bad_alloc, a bad parameter), with why: their
+    // rows are errors, the model's other sets still run.
+    std::map<RaySetKind, std::string> ray_set_errors;
 
     // The set of that kind; throws std::logic_error if it was not made.
     const GeneratedRaySet& ray_set(RaySetKind kind) const;
@@ -58,7 +62,9 @@ void add_reference_answers(LoadedModel& model, const RenderSettings& render);
 
 // Makes the config's ray sets for the model (make_ray_sets: from its camera's rays, the
 // reference's hits and its light), once per model when it is prepared, outside anything
-// timed, so every accelerator traces the same rays. Prints each set's size and hash.
+// timed, so every accelerator traces the same rays. Prints each set's size and hash. A set
+// that cannot be made is left out with its reason in model.ray_set_errors; the others
+// are made all the same.
 void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySetsSpec& spec);
 
 // A prepared model (loaded, with its reference answers and ray sets when made) as bytes

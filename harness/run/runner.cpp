@@ -190,6 +190,11 @@ public:
             r.measurement.message = model.timeout;
         } else if (!loaded) {
             r.load_error = model.load_error;
+        } else if (auto failed = c.ray_set ? loaded->ray_set_errors.find(*c.ray_set) : loaded->ray_set_errors.end();
+                   failed != loaded->ray_set_errors.end()) {
+            r.measurement.status = "error";
+            r.measurement.message =
+                "ray set '" + std::string(ray_set_name(*c.ray_set)) + "' cannot be made: " + failed->second;
         } else if (!model.reference_error.empty()) {
             r.measurement.status = "error";
             r.measurement.message =

@@ -12,6 +12,11 @@ JsonOutput::JsonOutput(const std::string& path) : file_(path, std::ios::trunc) {
     benchmark::BenchmarkReporter::Context context;
     context.name_field_width = 0;
     reporter_.ReportContext(context);
+    // Written through at once, so a file that takes no bytes (a full disk, /dev/full) is
+    // refused before anything is measured, not found empty afterwards.
+    file_.flush();
+    if (!file_) throw std::runtime_error("cannot write '" + path + "' for --benchmark_out");
+    path_ = path;
 }
 
 void JsonOutput::report(const CombinationResult& result) {
@@ -20,6 +25,7 @@ void JsonOutput::report(const CombinationResult& result) {
     if (!first_) file_ << ",\n";
     file_ << runs;
     file_.flush();
+    if (!file_) throw std::runtime_error("writing '" + path_ + "' for --benchmark_out failed");
     first_ = false;
 }
 

@@ -21,6 +21,7 @@ public:
 
 private:
     std::ofstream file_;
+    std::string path_;
     benchmark::JSONReporter reporter_;
     bool first_ = true, finalized_ = false;
 };

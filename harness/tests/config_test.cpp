@@ -343,5 +343,110 @@ TEST_F(ConfigTest, RayFileNeedsItsHeader) {
     EXPECT_TRUE(has_issue(e, 1, 1, "models[0].rays.file", "expected the header 'ox,oy,oz,dx,dy,dz'"));
 }
 
+// ---- YAML forms people write: accepted, or refused naming the form ----------------------
+
+TEST_F(ConfigTest, Yaml12CoreBooleansAreAccepted) {
+    const Config c = load_config(write("b.yaml", R"(errors: False
+render: {light: TRUE, shading: True}
+models: [igea]
+accelerators: [{name: embree, params: {robust: FALSE}}]
+)"),
+                                 registry());
+    EXPECT_FALSE(c.errors);
+    EXPECT_TRUE(c.render.light);
+    EXPECT_TRUE(c.render.shading);
+    ASSERT_EQ(c.accelerators.size(), 1u);
+}
+
+TEST_F(ConfigTest, MergeKeysAreAccepted) {
+    const Config c = load_config(write("m.yaml", R"(models:
+  - &bunny {name: stanford-bunny, repetitions: 2}
+  - {<<: *bunny, label: bunny-3, repetitions: 3, camera: {eye: [0, 0, 5], look_at: [0, 0, 0]}}
+accelerators:
+  - &kd {name: kdtree, repetitions: 4}
+  - {<<: [*kd], params: {max_prims: 8}}
+)"),
+                                 registry());
+    ASSERT_EQ(c.models.size(), 2u);
+    EXPECT_EQ(c.models[1].name, "stanford-bunny");
+    EXPECT_EQ(c.models[1].label, "bunny-3");
+    EXPECT_EQ(c.models[1].repetitions, 3);  // its own key wins over the merged one
+    ASSERT_EQ(c.accelerators.size(), 2u);
+    EXPECT_EQ(c.accelerators[1].name, "kdtree");
+    EXPECT_EQ(c.accelerators[1].repetitions, 4);
+    // A merged key that is not allowed is named as merged; a merge of a scalar is named.
+    const ConfigError e = load_error(write("n.yaml", R"(models: [igea]
+accelerators:
+  - &x {name: kdtree, colour: red}
+  - {<<: 3}
+)"));
+    EXPECT_TRUE(has_issue(e, 3, 23, "accelerators[0].colour", "unknown key 'colour'")) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 4, 10, "accelerators[1].<<", "a merge key ('<<') takes a mapping")) << all_issues(e);
+}
+
+TEST_F(ConfigTest, AmbiguousNumberFormsAreRefusedNamingThem) {
+    const ConfigError e = load_error(write("z.yaml", R"(repetitions: 010
+warmup: 0x1
+timeout_s: 0x10
+render: {width: !!str 64, height: 08}
+ray_sets: {ao: {distance: 1e-50}}
+models: [igea]
+accelerators: [{name: kdtree, params: {max_prims: 0x8, traversal_cost: 007.5}}]
+)"));
+    EXPECT_TRUE(has_issue(e, 1, 14, "repetitions", "'010' has a leading zero")) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 2, 9, "warmup", "'0x1' is hexadecimal")) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 3, 12, "timeout_s", "'0x10' is hexadecimal")) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 4, 17, "render.width", "expected an integer in [1, 16384], got the string '64'"))
+        << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 4, 35, "render.height", "'08' has a leading zero")) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 5, 27, "ray_sets.ao.distance", "value 1e-50 does not survive conversion to float"))
+        << all_issues(e);
+    EXPECT_NE(all_issues(e).find("kdtree.max_prims: '0x8' is hexadecimal"), std::string::npos) << all_issues(e);
+    EXPECT_NE(all_issues(e).find("kdtree.traversal_cost: '007.5' has a leading zero"), std::string::npos)
+        << all_issues(e);
+}
+
+// render.threads reaches a structure's own `threads` parameter: a count outside its range
+// is named at render.threads, with file and line.
+TEST_F(ConfigTest, ThreadCountsOutsideAStructuresThreadsParameterAreNamedAtRenderThreads) {
+    const ConfigError e = load_error(write("t.yaml", R"(render: {threads: 1024}
+models: [igea]
+accelerators: [{name: embree}, {name: lbvh}]
+)"));
+    EXPECT_EQ(e.issues().size(), 1u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 1, 19, "render.threads",
+                          "thread count 1024 is outside the range of accelerators[1] ('lbvh')'s own `threads` "
+                          "parameter, [0, 256]"))
+        << all_issues(e);
+    // Given on the entry, the render thread count does not reach it.
+    EXPECT_NO_THROW(load_config(write("u.yaml", R"(render: {threads: [1, 1024]}
+models: [igea]
+accelerators: [{name: lbvh, params: {threads: 0}}]
+)"),
+                                registry()));
+}
+
+// A ray CSV saved by a spreadsheet starts with a UTF-8 byte-order mark: read; UTF-16 is
+// named; another invisible byte in the header is shown as \xNN.
+TEST_F(ConfigTest, RayFileWithAByteOrderMark) {
+    write_triangle_case(dir.path());
+    write("bom.rays.csv", "\xEF\xBB\xBFox,oy,oz,dx,dy,dz\r\n0,0,5,0,0,-1\r\n");
+    const Config c = load_config(write("a.yaml", R"(models: [{path: tri.obj, rays: {file: bom.rays.csv}}]
+accelerators: [{name: bvh}]
+)"),
+                                 registry());
+    ASSERT_TRUE(c.models[0].rays);
+    EXPECT_EQ(c.models[0].rays->rays.size(), 1u);
+    write("utf16.rays.csv", std::string("\xFF\xFEo\0x\0", 6));
+    write("nbsp.rays.csv", "ox,oy,oz,dx,dy,dz\xC2\xA0\n0,0,5,0,0,-1\n");
+    const ConfigError e = load_error(write("b.yaml", R"(models:
+  - {path: tri.obj, rays: {file: utf16.rays.csv}}
+  - {path: tri.obj, label: t2, rays: {file: nbsp.rays.csv}}
+accelerators: [{name: bvh}]
+)"));
+    EXPECT_NE(all_issues(e).find("the ray file is UTF-16"), std::string::npos) << all_issues(e);
+    EXPECT_NE(all_issues(e).find("got 'ox,oy,oz,dx,dy,dz\\xC2\\xA0'"), std::string::npos) << all_issues(e);
+}
+
 }  // namespace
 }  // namespace accelbench

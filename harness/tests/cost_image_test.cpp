@@ -69,5 +69,17 @@ TEST(CostImage, RenderCommandWritesThem) {
     EXPECT_EQ(render_command(int(argv.size()), argv.data()), 2);
 }
 
+// A parameter given twice in --model is refused naming both values, not resolved silently.
+TEST(CostImage, RenderModelWithARepeatedParameterIsRefused) {
+    try {
+        resolve_model("procedural:soup,triangles=5,triangles=6", registry(), RenderSettings{});
+        ADD_FAILURE() << "a repeated parameter was accepted";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("parameter 'triangles' is given twice (triangles=5, then triangles=6)"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
 }  // namespace
 }  // namespace accelbench

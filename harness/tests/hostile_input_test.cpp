@@ -199,6 +199,83 @@ accelerators:
     EXPECT_TRUE(has_issue(load_error(over), 3, 3, "accelerators", "expands to 100002 combinations (2 models x 50001"));
 }
 
+// Thread lists and ray sets are axes of the product too: 400 settings x 2 models x 64
+// thread counts x 5 ray sets x ... is counted before anything is expanded, and --dry-run of
+// about 1.3M combinations is refused with the count, not std::bad_alloc.
+TEST_F(HostileInputTest, ThreadListsAndRaySetsCountTowardTheCombinationLimit) {
+    std::string threads = "[";
+    for (int t = 1; t <= 64; ++t) threads += (t > 1 ? ", " : "") + std::to_string(t);
+    threads += "]";
+    const std::string big = write_file(dir.path(), "threads.yaml", "render: {threads: " + threads + R"(}
+ray_sets: {sets: [primary, shadow, ao, diffuse, random]}
+models: [stanford-bunny, igea]
+accelerators:
+  - {name: kdtree, params: {max_prims: {from: 1, to: 2000, step: 1}}}
+)");
+    EXPECT_TRUE(has_issue(load_error(big), 5, 3, "accelerators",
+                          "expands to 1280000 combinations (2 models x 2000 accelerator settings x 64 thread counts "
+                          "x 5 ray sets)"))
+        << all_issues(load_error(big));
+    const Outcome dry = run({"--dry-run", big});
+    EXPECT_EQ(dry.code, 2) << dry.err;
+    EXPECT_NE(dry.err.find("expands to 1280000 combinations"), std::string::npos) << dry.err;
+    // 50,000 settings x 2 thread counts: one over the limit's double, refused; 50,000 x 2 is at it.
+    const std::string at = write_file(dir.path(), "at2.yaml", R"(render: {threads: [1, 2]}
+models: [stanford-bunny]
+accelerators:
+  - {name: kdtree, params: {max_prims: {from: 1, to: 200, step: 1}, traversal_cost: {from: 1, to: 250, step: 1}}}
+)");
+    EXPECT_NO_THROW(load_config(at, registry()));
+    const std::string over = write_file(dir.path(), "over2.yaml", read_file(at) + "  - {name: embree}\n");
+    EXPECT_TRUE(has_issue(load_error(over), 4, 3, "accelerators", "expands to 100002 combinations"));
+}
+
+// A ray set's bytes are bounded at load, naming the key that makes it large.
+TEST_F(HostileInputTest, RaySetsTooLargeForMemoryAreRefusedNamingTheirKey) {
+    const ConfigError random = load_error(write_file(dir.path(), "random.yaml", R"(ray_sets:
+  sets: [primary, random]
+  random: {rays: 1073741824}
+models: [stanford-bunny]
+accelerators: [{name: embree}]
+)"));
+    EXPECT_EQ(random.issues().size(), 1u) << all_issues(random);
+    EXPECT_TRUE(has_issue(random, 3, 18, "ray_sets.random.rays",
+                          "ray set 'random': ray_sets.random.rays = 1073741824 rays, 68719476736 bytes"))
+        << all_issues(random);
+    const ConfigError ao = load_error(write_file(dir.path(), "ao.yaml", R"(render: {width: 4096, height: 4096}
+ray_sets:
+  ao: {samples: 1024}
+models: [stanford-bunny]
+accelerators: [{name: embree}]
+)"));
+    EXPECT_TRUE(has_issue(ao, 3, 17, "ray_sets.ao.samples",
+                          "ray set 'ao': ray_sets.ao.samples x width x height x spp = 1024 x 16777216"))
+        << all_issues(ao);
+    EXPECT_TRUE(has_issue(ao, 3, 17, "ray_sets.ao.samples", "at most 2147483648 bytes (33554432 rays) a set"))
+        << all_issues(ao);
+    // The default sets of a 640 x 480 image are far inside the bound.
+    EXPECT_NO_THROW(load_config(write_file(dir.path(), "ok.yaml",
+                                           "ray_sets: {}\nmodels: [stanford-bunny]\n"
+                                           "accelerators: [{name: embree}]\n"),
+                                registry()));
+}
+
+// --benchmark_out to a file that takes no bytes is refused before anything is measured
+// (before: the JSON was lost silently), and the results file is not made.
+TEST_F(HostileInputTest, AnUnwritableBenchmarkOutIsRefusedUpFront) {
+    const std::string cfg = write_file(dir.path(), "j.yaml", R"(render: {width: 8, height: 6}
+models: [{procedural: soup, triangles: 50, seed: 1}]
+accelerators: [{name: bvh}]
+)");
+    const std::string out = (dir.path() / "j.csv").string();
+    for (const std::string& target : {std::string("/dev/full"), (dir.path() / "no" / "such.json").string()}) {
+        const Outcome o = run({cfg, "--out", out, "--benchmark_out=" + target});
+        EXPECT_EQ(o.code, 2) << o.err;
+        EXPECT_NE(o.err.find("'" + target + "' for --benchmark_out"), std::string::npos) << o.err;
+        EXPECT_FALSE(fs::exists(out)) << target;
+    }
+}
+
 // yaml-cpp 0.7.0's LoadAll never returns on these (its parser stuck on a token, an empty
 // document appended forever: the config fuzz test's process reached 24 GB): the loader must
 // refuse them as syntax errors. Loaded in a child under a 2 GB address-space limit and a

@@ -1,5 +1,6 @@
 // Seeded random-mutation fuzzing of the two readers of user input: the mesh readers
-// (every format, plain and gzip) and the config loader. Valid files are mutated (bytes
+// (every format, plain and gzip: one member, two, or one with bytes after it) and the
+// config loader. Valid files are mutated (bytes
 // flipped, inserted, deleted, duplicated, cut; words replaced by hostile numbers; line
 // endings changed) for a bounded time, and every result must be one of two things: a
 // refusal of the documented kind (std::runtime_error "cannot load mesh 'PATH': ...",
@@ -124,8 +125,9 @@ public:
         return s;
     }
 
-private:
     size_t pick(size_t n) { return n ? size_t(rng_() % n) : 0; }
+
+private:
     char interesting_byte() {
         static const char bytes[] = "\n\r \t#\\/-+.e0123456789nNaAiIfF:[]{},'\"\x00\xff";
         return bytes[pick(sizeof bytes - 1)];
@@ -165,6 +167,7 @@ std::vector<Seed> mesh_seeds() {
         {"obj",
          "# tiny\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0 1\nv 0.5 0.5 2.25\nvt 0 0\nvn 0 0 1\n"
          "f 1/1/1 2/1/1 3/1/1 4/1/1\nf -5 -4 \\\n -1\ng g\nusemtl m\n"},
+        {"obj", "v 0 0 0\nv 1 0 0 \\\n\nv 1 1 0 # a comment ending in \\\nf 1 2 3 \\\n   # \\\nf 3 2 1\n"},
         {"ply",
          "ply\nformat ascii 1.0\ncomment c\nelement vertex 5\nproperty float x\nproperty float y\n"
          "property float z\nproperty uchar red\nelement face 2\nproperty list uchar int vertex_indices\n"
@@ -175,6 +178,10 @@ std::vector<Seed> mesh_seeds() {
          "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\nendloop\n"
          "endfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 1 0\nvertex 0 1 0.5\n"
          "endloop\nendfacet\nendsolid s\n"},
+        {"stl",
+         "solid one facet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 0 0 vertex 1 1 0 endloop endfacet "
+         "endsolid one solid two facet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 1 0 vertex 0 1 0.5 endloop "
+         "endfacet endsolid two"},
     };
     for (const char* format : {"binary_little_endian", "binary_big_endian"}) {
         std::string b = std::string("ply\nformat ") + format +
@@ -256,14 +263,37 @@ TEST(InputFuzz, MeshReadersRefuseOrLoadConsistently) {
             Scene s;
             if (runs % 64 == 0) {
                 // Through a file, gzip-compressed, the compressed bytes mutated too: gunzip's
-                // refusals and the file checks get their share.
-                std::string packed;
-                {
+                // refusals and the file checks get their share. The input is one member,
+                // two members split at a random byte (the same file), or one member and
+                // bytes after it that are not a member (always refused).
+                const auto pack = [&](const std::string& bytes) {
                     const std::string gz = (dir.path() / "p.gz").string();
                     gzFile out = gzopen(gz.c_str(), "wb");
-                    gzwrite(out, input.data(), unsigned(input.size()));
+                    gzwrite(out, bytes.data(), unsigned(bytes.size()));
                     gzclose(out);
-                    packed = testing_util::read_file(gz);
+                    return testing_util::read_file(gz);
+                };
+                const uint64_t form = (runs / 64) % 3;
+                std::string packed;
+                if (form == 1) {
+                    const size_t cut = size_t(mutator.pick(input.size() + 1));
+                    packed = pack(input.substr(0, cut)) + pack(input.substr(cut));
+                } else {
+                    packed = pack(input);
+                }
+                if (form == 2) {
+                    std::string tail = mutator.mutate("trailing bytes");
+                    if (tail.empty() || uint8_t(tail[0]) == 0x1f) tail.insert(0, 1, 'x');
+                    const std::string path = write_file(dir.path(), name + ".gz", packed + tail);
+                    ++gz_runs;
+                    try {
+                        load_mesh(path);
+                        FAIL() << "bytes after the gzip data were not refused\ninput: " << escaped(input);
+                    } catch (const std::runtime_error& e) {
+                        ASSERT_NE(std::string(e.what()).find("bytes after the gzip data"), std::string::npos)
+                            << e.what();
+                    }
+                    continue;
                 }
                 if (runs % 128 == 0) packed = mutator.mutate(packed);
                 const std::string path = write_file(dir.path(), name + ".gz", packed);

@@ -13,6 +13,7 @@
 #include "csv/results.h"
 #include "harness_test_util.h"
 #include "plan/combinations.h"
+#include "plan/loaded_model.h"
 
 namespace accelbench {
 namespace {
@@ -86,6 +87,34 @@ accelerators:
         EXPECT_EQ(h.size(), 1u) << set << ": every structure and thread count traces the same rays";
         EXPECT_EQ(h.begin()->size(), 16u) << set;
     }
+}
+
+// A set that cannot be made takes only its own rows: the model's other sets are made (and
+// reach the parent process from the preparing child) and are measured.
+TEST(RaySetsRun, ASetThatCannotBeMadeLeavesTheOtherSets) {
+    TempDir dir("accelbench-ray-sets-fail-");
+    const std::string cfg = write_file(dir.path(), "f.yaml", R"(errors: false
+render: {width: 16, height: 12}
+ray_sets: {sets: [primary, ao, random], random: {rays: 100}}
+models:
+  - {procedural: soup, triangles: 200, seed: 3}
+accelerators: [{name: bvh}]
+)");
+    const Config config = load_config(cfg, registry());
+    LoadedModel model = load_model(config.models[0], registry(), config.render);
+    RaySetsSpec spec = *config.ray_sets;
+    spec.params.ao_samples = 0;  // what the config refuses: make_ray_sets throws for it
+    add_ray_sets(model, config.render, spec);
+    ASSERT_TRUE(model.ray_sets);
+    ASSERT_EQ(model.ray_sets->size(), 2u);
+    EXPECT_EQ((*model.ray_sets)[0].kind, RaySetKind::Primary);
+    EXPECT_EQ((*model.ray_sets)[1].kind, RaySetKind::Random);
+    ASSERT_EQ(model.ray_set_errors.count(RaySetKind::Ao), 1u);
+    EXPECT_NE(model.ray_set_errors.at(RaySetKind::Ao).find("ao samples must be at least 1"), std::string::npos);
+    // Through the bytes that bring a prepared model from its child process.
+    const LoadedModel back = loaded_model_from_bytes(loaded_model_bytes(model), config.models[0]);
+    EXPECT_EQ(back.ray_set_errors, model.ray_set_errors);
+    EXPECT_EQ(back.ray_sets->size(), 2u);
 }
 
 TEST(RaySetsRun, AConfigWithoutRaySetsWritesTheCameraRow) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 
 namespace accelbench {
 
@@ -46,11 +47,48 @@ std::string format_param(const ParamValue& v) {
     return std::get<std::string>(v);
 }
 
+std::string number_form_problem(const std::string& text) {
+    size_t i = text.size() > 0 && (text[0] == '-' || text[0] == '+') ? 1 : 0;
+    if (text.size() >= i + 2 && text[i] == '0') {
+        const char c = char(text[i + 1] | 0x20);
+        if (c == 'x' || c == 'o' || c == 'b')
+            return "'" + text + "' is " +
+                (c == 'x'       ? "hexadecimal"
+                     : c == 'o' ? "octal"
+                                : "binary") +
+                ", which configs and parameters do not take (YAML readers disagree on it): write it in decimal";
+        if (text[i + 1] >= '0' && text[i + 1] <= '9')
+            return "'" + text + "' has a leading zero, which YAML readers read differently (010 is 8 in PyYAML, " +
+                "10 in yaml-cpp): write it without the leading zero";
+    }
+    return "";
+}
+
+std::string float_conversion_problem(double value, const std::string& text) {
+    const double magnitude = std::fabs(value);
+    if (magnitude > double(std::numeric_limits<float>::max()))
+        return "value " + text + " is beyond the float range (at most 3.4e38)";
+    if (value != 0 && magnitude < double(std::numeric_limits<float>::min()))
+        return "value " + text + " does not survive conversion to float (it becomes " +
+            (float(value) == 0.0f ? std::string("0") : std::string("a subnormal")) +
+            "; the smallest normal float is 1.2e-38)";
+    return "";
+}
+
+bool parse_bool_text(const std::string& text, bool& value) {
+    for (const char* t : {"true", "True", "TRUE", "yes", "Yes", "YES", "on", "On", "ON"})
+        if (text == t) return value = true, true;
+    for (const char* f : {"false", "False", "FALSE", "no", "No", "NO", "off", "Off", "OFF"})
+        if (text == f) return value = false, true;
+    return false;
+}
+
 ParamValue parse_param(const std::string& owner, const ParamSpec& spec, const std::string& text,
                        const char* owner_kind) {
     const std::string where = std::string(owner_kind) + " '" + owner + "', parameter '" + spec.name + "': ";
     switch (spec.type) {
         case ParamType::Int: {
+            if (const std::string why = number_form_problem(text); !why.empty()) throw ParamError(where + why);
             int64_t v = 0;
             auto [p, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
             if (ec != std::errc() || p != text.data() + text.size())
@@ -60,10 +98,12 @@ ParamValue parse_param(const std::string& owner, const ParamSpec& spec, const st
             return v;
         }
         case ParamType::Float: {
+            if (const std::string why = number_form_problem(text); !why.empty()) throw ParamError(where + why);
             char* end = nullptr;
             double v = std::strtod(text.c_str(), &end);
             if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v))
                 throw ParamError(where + "expected a finite number, got '" + text + "'");
+            if (const std::string why = float_conversion_problem(v, text); !why.empty()) throw ParamError(where + why);
             if (v < spec.min || v > spec.max)
                 throw ParamError(where + "value " + text + " is out of range " + range_text(spec));
             return v;
@@ -73,8 +113,8 @@ ParamValue parse_param(const std::string& owner, const ParamSpec& spec, const st
                 if (c == text) return text;
             throw ParamError(where + "'" + text + "' is not one of {" + join(spec.choices) + "}");
         case ParamType::Bool:
-            if (text == "true" || text == "1" || text == "on" || text == "yes") return true;
-            if (text == "false" || text == "0" || text == "off" || text == "no") return false;
+            if (bool b = false; parse_bool_text(text, b)) return b;
+            if (text == "1" || text == "0") return text == "1";
             throw ParamError(where + "expected true or false, got '" + text + "'");
     }
     throw ParamError(where + "unknown type");

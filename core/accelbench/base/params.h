@@ -69,6 +69,21 @@ ParamValue parse_param(const std::string& owner, const ParamSpec& spec, const st
 ParamSet resolve_params(const std::string& owner, const std::vector<ParamSpec>& specs,
                         const std::map<std::string, std::string>& given, const char* owner_kind = "accelerator");
 
+// The one rule for how a number is written, in configs, CLI "k=v" and parameters alike:
+// why `text` is refused before it is read as a number, or "" when it is not. Refused:
+// hexadecimal, octal and binary prefixes (0x10 is 16 in YAML 1.2, a string in YAML 1.1
+// readers, and was taken by some keys and not others), and an integer part with a leading
+// zero (010 is 8 in PyYAML and 10 in yaml-cpp).
+std::string number_form_problem(const std::string& text);
+
+// Why `value`, written as `text`, cannot be used as a float, or "": a non-zero value that
+// rounds to zero or to a subnormal float (1e-50 becomes 0), or one beyond the float range.
+std::string float_conversion_problem(double value, const std::string& text);
+
+// True for the YAML 1.2 core schema's booleans (true True TRUE), and the YAML 1.1 forms
+// configs already use (yes on, in the same three cases); `value` receives it.
+bool parse_bool_text(const std::string& text, bool& value);
+
 // Canonical text of a value (integers without decimals, floats round-trippable).
 std::string format_param(const ParamValue& v);
 

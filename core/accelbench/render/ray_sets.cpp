@@ -1,5 +1,7 @@
 #include "accelbench/render/ray_sets.h"
 
+#include <algorithm>
+
 #include <array>
 #include <bit>
 #include <cmath>
@@ -141,10 +143,16 @@ Vec3 cosine_hemisphere(Vec3 n, float u1, float u2) {
 std::vector<GeneratedRaySet> make_ray_sets(const Accelerator& reference, const Scene& scene,
                                            std::span<const Ray> primary_rays, Vec3 light,
                                            std::span<const RaySetKind> kinds, const RaySetParams& params) {
-    if (params.ao_samples < 1) throw std::invalid_argument("ray sets: ao samples must be at least 1");
-    if (!(params.ao_distance > 0.0f)) throw std::invalid_argument("ray sets: ao distance must be positive");
-    if (params.diffuse_bounces < 1) throw std::invalid_argument("ray sets: diffuse bounces must be at least 1");
-    if (params.random_rays < 1) throw std::invalid_argument("ray sets: random rays must be at least 1");
+    // Only the parameters of the sets asked for: one set's bad parameter is no other's.
+    const auto wanted = [&](RaySetKind k) { return std::find(kinds.begin(), kinds.end(), k) != kinds.end(); };
+    if (wanted(RaySetKind::Ao) && params.ao_samples < 1)
+        throw std::invalid_argument("ray sets: ao samples must be at least 1");
+    if (wanted(RaySetKind::Ao) && !(params.ao_distance > 0.0f))
+        throw std::invalid_argument("ray sets: ao distance must be positive");
+    if (wanted(RaySetKind::Diffuse) && params.diffuse_bounces < 1)
+        throw std::invalid_argument("ray sets: diffuse bounces must be at least 1");
+    if (wanted(RaySetKind::Random) && params.random_rays < 1)
+        throw std::invalid_argument("ray sets: random rays must be at least 1");
     const float size = scene_size(scene);
     // Every set but random starts from the reference's primary hits.
     std::vector<Hit> primary_hits;

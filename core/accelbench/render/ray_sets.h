@@ -76,7 +76,8 @@ struct GeneratedRaySet {
 // (camera_rays), `light` the position shadow rays aim at, `reference` the built
 // `reference` accelerator on `scene`, through which every set's answers are traced (and
 // the primary hits and diffuse bounces the sets start from). Throws
-// std::invalid_argument for parameters out of range (samples, bounces < 1, distance <= 0).
+// std::invalid_argument for parameters out of range (samples, bounces < 1, distance <= 0)
+// of the sets in `kinds` only.
 std::vector<GeneratedRaySet> make_ray_sets(const Accelerator& reference, const Scene& scene,
                                            std::span<const Ray> primary_rays, Vec3 light,
                                            std::span<const RaySetKind> kinds, const RaySetParams& params);

@@ -6,6 +6,17 @@
 namespace accelbench {
 
 void Scene::finalize() {
+    // Every vertex, used by a face or not: one policy with the mesh readers (a vertex that
+    // is not finite is a corrupt input, whether or not a face refers to it).
+    for (size_t vi = 0; vi < vertices.size(); ++vi) {
+        if (!is_finite(vertices[vi]))
+            throw std::runtime_error("scene '" + name + "': vertex " + std::to_string(vi) +
+                                     " is not finite (used by a face or not, such a vertex is refused)");
+        if (!within_coordinate_limit(vertices[vi]))
+            throw std::runtime_error("scene '" + name + "': vertex " + std::to_string(vi) +
+                                     " has a coordinate of magnitude 1.844e18 or more "
+                                     "(the limit kMaxCoordinate, Embree's FLT_LARGE)");
+    }
     const size_t n = triangles.size();
     prim_bounds.resize(n);
     centroids.resize(n);

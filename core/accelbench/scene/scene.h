@@ -27,10 +27,11 @@ struct Scene {
     Vec3 vertex(uint32_t prim, int corner) const { return vertices[triangles[prim][corner]]; }
 
     // Checks the input and computes the derived arrays. Bad input is rejected, not
-    // repaired: an index out of range, or a vertex used by a face that is not finite or
-    // has a coordinate of magnitude kMaxCoordinate or more, throws std::runtime_error
-    // naming the face, so every accelerator (Embree included, which would silently drop
-    // such faces) sees exactly the same triangles. Vertices no face uses are not checked.
+    // repaired: a vertex that is not finite or has a coordinate of magnitude
+    // kMaxCoordinate or more, used by a face or not (the mesh readers' policy too:
+    // docs/configs.md, "Mesh files"), throws std::runtime_error naming the vertex; an
+    // index out of range names the face. So every accelerator (Embree included, which
+    // would silently drop such faces) sees exactly the same triangles.
     void finalize();
 };
 
