@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
 from ..inputs.schema import Results
-from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow
+from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow, summary_line
 from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
 from .figures import FIGURES, Skipped
 from .formatting import md_escape
@@ -59,14 +59,19 @@ def claims_lines(rows: list[ClaimRow] | None) -> list[str]:
         return ["- [The report's claims, checked](tables/claims.md)"]
     n = {v: sum(r.ours.verdict == v for r in rows) for v in (HOLDS, FAILS, NOT_COMPARABLE)}
     out = [
-        f"- [The report's claims, checked](tables/claims.md): each claim of sections 5.1-6 "
-        f"evaluated on the report's numbers and on ours. Ours: **{n[HOLDS]} hold, "
-        f"{n[FAILS]} do not hold, {n[NOT_COMPARABLE]} not comparable**."
+        f"- [The report's claims, checked](tables/claims.md) ([CSV](tables/claims.csv)): each "
+        f"claim of sections 5.1-6 evaluated on the report's numbers and on ours, with a class "
+        f"and a measured reason for each that does not hold. Ours: **{n[HOLDS]} hold, "
+        f"{n[FAILS]} do not hold, {n[NOT_COMPARABLE]} not comparable**. {summary_line(rows)}"
     ]
     fails = [r for r in rows if r.ours.verdict == FAILS]
     if fails:
         out.append(
-            "  Not holding here: " + "; ".join(f"{r.claim.id} {md_escape(r.claim.text)}" for r in fails) + "."
+            "  Not holding here: "
+            + "; ".join(
+                f"{r.claim.id} {md_escape(r.claim.text)} [{r.cls}: {md_escape(r.reason)}]" for r in fails
+            )
+            + "."
         )
     dependent = [r for r in rows if r.machine_dependent]
     if dependent:
