@@ -283,11 +283,12 @@ def run(args: argparse.Namespace) -> list[Path]:
         results = replace(results, rows=results.rows[~beyond])
     # Ablation rows (configs/ablations.yaml) are judged by the claims only: the tables and
     # figures show the run at the report's settings.
-    from .outputs.claims import without_ablations
+    from .outputs.claims import is_ablation, without_ablations
 
     with_ablations, results = results, without_ablations(results)
     if args.command in ("tables", "all"):
-        written += write_tables(results, report_nums, out / "tables")
+        ablation_rows = with_ablations.rows[is_ablation(with_ablations.rows)]
+        written += write_tables(results, report_nums, out / "tables", ablation_rows)
         if not results.case_rows().empty:
             from .outputs.robustness import write_robustness
 

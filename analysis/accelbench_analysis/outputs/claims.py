@@ -22,6 +22,7 @@ import pandas as pd
 from ..inputs.report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
 from ..inputs.schema import Results
 from ..mapping.selection import Picker, setting_spec
+from .cost_model import FlooredSource, cost_model_lines, fit_all, write_cost_model
 from .formatting import fmt_sig, md_escape
 from .tables import METRIC, preferred_variant
 
@@ -100,15 +101,28 @@ def without_ablations(results: Results) -> Results:
 class OurSource:
     name = "ours"
 
-    def __init__(self, results: Results, report_nums: pd.DataFrame, extra: dict | None = None):
+    def __init__(
+        self,
+        results: Results,
+        report_nums: pd.DataFrame,
+        extra: dict | None = None,
+        traversal: str | None = None,
+    ):
         """extra: structure -> ((param, value), ...) every row of that structure must also
-        have (an ablation's setting); without it, the run's non-ablation rows."""
+        have (an ablation's setting): those structures are read from the ablation configs'
+        rows, every other structure from the run at the report's settings, so an ablation
+        changes one structure and compares it with the others as measured. Without extra,
+        the run's non-ablation rows. traversal: the BVH/LBVH traversal variant to read
+        (default: the report's own order where both were measured)."""
         self.extra = extra or {}
-        self.results = (
-            replace(results, rows=results.rows[is_ablation(results.rows)])
-            if extra
-            else without_ablations(results)
-        )
+        self.traversal = traversal
+        rows = results.rows
+        if extra:
+            ablated = rows["accel"].isin(list(extra)) if "accel" in rows else False
+            rows = rows[is_ablation(rows) == ablated]
+        else:
+            rows = rows[~is_ablation(rows)]
+        self.results = replace(results, rows=rows)
         results = self.results
         self.picker = Picker(results)
         self.depths = [
@@ -143,7 +157,8 @@ class OurSource:
         spec = setting_spec(setting, structure, self.picker, ours, self.depths)
         if structure in self.extra:
             spec = replace(spec, required=spec.required + tuple(self.extra[structure]))
-        variant = preferred_variant(self.picker.variants([ours], spec))
+        variants = self.picker.variants([ours], spec)
+        variant = self.traversal if self.traversal in variants else preferred_variant(variants)
         pick = self.picker.pick(ours, spec, variant)
         what = f"{STRUCTURE_SHORT.get(structure, structure)} ({setting}) on {ours}"
         if not pick.ok:
@@ -517,17 +532,36 @@ CLAIMS.sort(key=lambda c: (c.section, c.id))  # ids follow the report's sections
 
 @dataclass(frozen=True)
 class Ablation:
-    """One measured cause: the claims it tests, judged again on the ablation configs' rows
-    that have these parameters."""
+    """One measured cause: the claims it tests, judged again on the rows of the ablation
+    configs that have these parameters (the other structures as measured at the report's
+    settings), or, for `cost_model`, on our rows with the report's render floor
+    (outputs/cost_model.py)."""
 
     name: str
     params: dict[str, tuple[tuple[str, str], ...]]
     claims: tuple[str, ...]
     why: str
+    config: str = "configs/ablations.yaml"
+    cost_model: bool = False
 
     def describe(self) -> str:
+        if self.cost_model:
+            return "tables/cost_model.csv: render − a_ours + b_ours × a_report / b_report per Table 2 sweep"
         settings = "; ".join(f"{s} " + ",".join(f"{k}={v}" for k, v in ps) for s, ps in self.params.items())
-        return f"configs/ablations.yaml: {settings}"
+        return f"{self.config}: {settings}"
+
+    def source(self, results: Results, report_nums: pd.DataFrame, fits) -> OurSource | FlooredSource | None:
+        """The numbers to judge its claims on, or None where this run has no such rows."""
+        if self.cost_model:
+            report_fits, our_fits = fits
+            try:
+                return FlooredSource(OurSource(results, report_nums), our_fits, report_fits)
+            except ValueError:
+                return None
+        rows = results.rows
+        if "accel" not in rows or not (is_ablation(rows) & rows["accel"].isin(list(self.params))).any():
+            return None
+        return OurSource(results, report_nums, self.params)
 
 
 TABLE2_CLAIMS = ("5.1-a", "5.1-b", "5.1-c", "5.1-d", "5.1-e", "5.1-f", "5.1-g", "5.1-h", "5.1-i", "5.1-j")
@@ -543,6 +577,14 @@ ABLATIONS = [
         {"kdtree": (("build", "pbrt"),)},
         ("5.1-a",),
         "pbrt-v3's build (edges sorted at every node), as the report's kd-tree follows pbrt",
+    ),
+    Ablation(
+        "the report's render floor",
+        {},
+        ("5.1-d", "5.1-g", "5.1-h"),
+        "the report's renderer pays a fixed floor of tens of millions of primitive tests' worth "
+        "per render, which compresses its render ratios; ours replayed with that floor",
+        cost_model=True,
     ),
 ]
 
@@ -610,11 +652,12 @@ class PerturbedSource:
         return v * self.factors[key]
 
 
-def holds_within(c: Claim, base: OurSource, spread: float) -> bool:
+def holds_within(c: Claim, base: OurSource, spread: float, verdict: str = HOLDS) -> bool:
+    """Whether some draw of the timed values within the run's spread gives `verdict`."""
     if spread <= 0:
         return False
     return any(
-        evaluate(c, PerturbedSource(base, spread, seed)).verdict == HOLDS for seed in range(NOISE_DRAWS)
+        evaluate(c, PerturbedSource(base, spread, seed)).verdict == verdict for seed in range(NOISE_DRAWS)
     )
 
 
@@ -671,6 +714,12 @@ class ClaimRow:
     ablation: str = ""
     ablation_finding: Finding | None = None
     models_used: set[str] = field(default_factory=set)
+    # The same claim on our BVH/LBVH rows with ordered traversal (nearer child first), where
+    # the run measured both and the verdict differs from the report's traversal's.
+    ordered: Finding | None = None
+    # Machine-dependent claims only: whether this run's spread reaches the reference run's
+    # verdict (then the difference between the runs is noise).
+    flip_within_noise: bool | None = None
 
     @property
     def machine_dependent(self) -> bool:
@@ -767,17 +816,38 @@ def evaluate_all(
     rsrc, osrc = ReportSource(report_nums), RecordingSource(results, report_nums)
     refsrc = OurSource(reference, report_nums) if reference is not None else None
     spread, how = timing_spread(results)
-    abl_srcs = [(a, OurSource(results, report_nums, a.params)) for a in ABLATIONS]
+    fits = fit_all(rsrc, Missing), fit_all(osrc, Missing)
+    ordered = OurSource(results, report_nums, traversal="ordered")
+    abl_srcs = [(a, s) for a in ABLATIONS if (s := a.source(results, report_nums, fits)) is not None]
     rows = []
     for c in CLAIMS:
         osrc.models_read = set()
         row = ClaimRow(c, evaluate(c, rsrc), evaluate(c, osrc))
         row.models_used = set(osrc.models_read)
         row.reference = evaluate(c, refsrc) if refsrc is not None else None
-        ablated = [(a, evaluate(c, s)) for a, s in abl_srcs if c.id in a.claims and not s.results.rows.empty]
+        ablated = [(a, evaluate(c, s)) for a, s in abl_srcs if c.id in a.claims]
         classify(row, osrc, spread, how, ablated)
+        note_traversal(row, evaluate(c, ordered))
+        if row.machine_dependent:
+            row.flip_within_noise = holds_within(c, osrc, spread, row.reference.verdict)
         rows.append(row)
     return rows, osrc
+
+
+def note_traversal(row: ClaimRow, ordered: Finding) -> None:
+    """Our verdicts read the BVH/LBVH rows with the report's traversal (its Algorithm 1: every
+    hit collected, then the nearest taken). A claim whose verdict changes with ordered
+    traversal holds only because of that traversal: say so beside it."""
+    if ordered.verdict not in (HOLDS, FAILS) or ordered.verdict == row.ours.verdict:
+        return
+    row.ordered = ordered
+    note = (
+        f"with ordered traversal (nearer child first, early exit) it {'holds' if ordered.verdict == HOLDS else 'does not hold'}: "
+        f"{ordered.evidence}"
+    )
+    if row.verdict == HOLDS:
+        note = "holds only with the report's traversal (Algorithm 1, every hit collected); " + note
+    row.reason = f"{row.reason}; {note}" if row.reason else note
 
 
 def summary_line(rows: list[ClaimRow]) -> str:
@@ -879,9 +949,31 @@ def write_claims(
 ) -> tuple[Path, list[ClaimRow]]:
     out_dir.mkdir(parents=True, exist_ok=True)
     rows, osrc = evaluate_all(results, report_nums, reference)
+    write_cost_model_files(results, report_nums, rows, out_dir)
     path = out_dir / "claims.md"
     path.write_text(claims_markdown(rows, results, osrc, reference))
     pd.DataFrame([r.csv_row() for r in rows], columns=list(CSV_COLUMNS)).to_csv(
         out_dir / "claims.csv", index=False
     )
     return path, rows
+
+
+def write_cost_model_files(
+    results: Results, report_nums: pd.DataFrame, rows: list[ClaimRow], out_dir: Path
+) -> None:
+    """tables/cost_model.csv (both sides' fits, point by point) and cost_model.md (its text,
+    which REPORT.md's cost model section shows)."""
+    report_fits = fit_all(ReportSource(report_nums), Missing)
+    our_fits = fit_all(OurSource(results, report_nums), Missing)
+    if not report_fits or not our_fits:
+        return
+    decided = [
+        r.claim.id
+        for r in rows
+        if r.ablation.startswith("tables/cost_model")
+        and r.ablation_finding
+        and r.ablation_finding.verdict == HOLDS
+    ]
+    write_cost_model(report_fits, our_fits, out_dir)
+    text = ["# A cost model of render time", ""] + cost_model_lines(report_fits, our_fits, decided)
+    (out_dir / "cost_model.md").write_text("\n".join(text) + "\n")

@@ -78,7 +78,12 @@ def claims_lines(rows: list[ClaimRow] | None) -> list[str]:
         out.append(
             "  Machine-dependent (the verdict differs on the committed reference run): "
             + "; ".join(
-                f"{r.claim.id} (here {r.ours.verdict}, reference run {r.reference.verdict})"
+                f"{r.claim.id} (here {r.ours.verdict}, reference run {r.reference.verdict}: "
+                + (
+                    "within this run's timing spread, so noise)"
+                    if r.flip_within_noise
+                    else "beyond this run's timing spread)"
+                )
                 for r in dependent
             )
             + "."
@@ -95,6 +100,19 @@ def claims_lines(rows: list[ClaimRow] | None) -> list[str]:
             + "."
         )
     return out
+
+
+def cost_model_section(out_dir: Path) -> list[str]:
+    """The claims' cost model (tables/cost_model.md, written with the claims), shown here
+    with its links made relative to REPORT.md."""
+    path = out_dir / "tables" / "cost_model.md"
+    if not path.is_file():
+        return []
+    body = [line for line in path.read_text().splitlines() if not line.startswith("# ")]
+    body = [line.replace("](cost_model.csv)", "](tables/cost_model.csv)") for line in body]
+    while body and not body[0]:
+        body = body[1:]
+    return ["", "## Cost model", ""] + body
 
 
 def figure_lines(out_dir: Path, figures: dict | None) -> list[str]:
@@ -209,6 +227,7 @@ def report_markdown(
             out.append(f"- {caption} Not generated yet.")
     out += claims_lines(claims)
     out += ["- [The report's numbers](report/report-tables.csv) as printed ([provenance](report/README.md))."]
+    out += cost_model_section(out_dir)
     out += ["", "## Figures", ""] + figure_lines(out_dir, figures)
     out += beyond_report_lines(out_dir)
     out += [

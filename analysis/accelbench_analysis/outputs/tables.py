@@ -7,7 +7,7 @@ setting, metrics as column groups.
 
 The traps in the report's numbers are stated in each table's notes, computed from the data
 rather than asserted: its "#Primitives" are vertex counts, its BVH node counts are
-2 x #Primitives - 1, its "#int. tests" cannot be totals over all rays, and its times come
+2 x #Primitives - 1, its "#int. tests" are never defined, and its times come
 from another machine (so the ratio column of a time says more about the machines than
 about the structures; the "relative to BVH" table is the comparison that carries over).
 """
@@ -38,6 +38,7 @@ from ..mapping.selection import (
     Picker,
     Spec,
     Structure,
+    kd_auto_depth_report,
     setting_spec,
     variant_label,
 )
@@ -213,7 +214,9 @@ def note_prim_tests(report_nums: pd.DataFrame, models: list[str], table: int) ->
             f"; {len(below)} of its {len(sub)} values in this table lie below the "
             f"{REPORT_PRIMARY_RAYS:,} primary rays of its 640x480 image (e.g. "
             f"{below.iloc[0]['accelerator']} on {below.iloc[0]['model']}: "
-            f"{int(below.iloc[0]['prim_tests']):,}), so they cannot be totals over all rays"
+            f"{int(below.iloc[0]['prim_tests']):,}). Totals over all rays can be that low, since a "
+            f"ray that misses the model's bounds tests no primitive, so the size of a count does "
+            f"not say what was counted"
         )
     return text + ". Compare how the counts move between structures and settings, not their size."
 
@@ -265,6 +268,104 @@ def note_bvh_nodes(report_nums: pd.DataFrame, report_models: list[str]) -> str |
         f"{int(odd['primitives']):,} primitives), so there its trees did not have one "
         f"primitive per leaf or its #Primitives counts something else."
     )
+
+
+def note_complete_trees(
+    report_nums: pd.DataFrame, report_models: list[str], ablations: pd.DataFrame | None
+) -> str | None:
+    """A BVH with exactly 2^(d+1) - 1 nodes is complete: every path has length d. The report's
+    City BVH has 65,535 = 2^16 - 1 nodes; the ablation rows (configs/ablations.yaml) measure
+    our median BVH at max_depth 15 and 16 on the Table 5 stand-ins to show what gives it."""
+    sub = report_nums[
+        (report_nums["accelerator"] == "bvh")
+        & report_nums["model"].isin(report_models)
+        & (report_nums["setting"] == "default")
+    ]
+    parts = []
+    for _, r in sub.iterrows():
+        n = int(r["nodes"])
+        full = (1 << n.bit_length()) - 1 if n > 0 else 0  # the smallest 2^k - 1 >= n
+        depth = full.bit_length() - 1
+        name = REPORT_MODEL[r["model"]].short
+        if n > 0 and n == full:
+            parts.append(
+                f"the report's {name} BVH has {n:,} = 2^{depth + 1} - 1 nodes, a complete tree of depth {depth}"
+            )
+        elif n > 0 and full - n <= full // 1000:  # within 0.1% of complete
+            parts.append(
+                f"the report's {name} BVH has {n:,} nodes, {full - n:,} short of the complete 2^{depth + 1} - 1 of depth {depth}"
+            )
+    if not any("a complete tree" in p for p in parts):
+        return None
+    text = "; ".join(parts)
+    text = text[0].upper() + text[1:]
+    if ablations is None or ablations.empty or "param_dict" not in ablations:
+        return (
+            text
+            + ". Our median BVH at that max_depth is not in this run (configs/ablations.yaml measures it)."
+        )
+    models = {our_model(rm, set(ablations["model"])) for rm in report_models}
+    ours = ablations[
+        (ablations["accel"] == "bvh") & (ablations["status"] == "ok") & ablations["model"].isin(models)
+    ]
+    seen = []
+    for _, r in ours.sort_values(["model", "nodes"]).iterrows():
+        p = r["param_dict"]
+        if p.get("split") != "median" or not str(p.get("max_depth", "")).isdigit():
+            continue
+        depth = int(p["max_depth"])
+        nodes = int(r["nodes"])
+        full = nodes == 2 ** (depth + 1) - 1
+        seen.append(f"{r['model']} at max_depth {depth}: {nodes:,}{' (complete)' if full else ''}")
+    if not seen:
+        return text + "."
+    return (
+        text
+        + ". Our median BVH, max_prims 1, in the ablation rows: "
+        + "; ".join(seen)
+        + (
+            ". A median split stops only at max_depth or one primitive, so a complete tree means the depth "
+            "limit ended every path: the report's tree was cut at that depth."
+        )
+    )
+
+
+def note_what_n(report_nums: pd.DataFrame, results: Results, ablations: pd.DataFrame | None) -> str | None:
+    """Which N the report's Equation 5 (kd-tree depth 8 + 1.3 log2 N) and its BVH node counts
+    use: its #Primitives (the bunny's vertex count), not the triangle count we build over.
+    The ablation rows hold a bunny decimated to that many triangles."""
+    prims = report_nums.loc[
+        (report_nums["table"] == 2) & (report_nums["model"] == TABLE2_MODEL), "primitives"
+    ]
+    tri, _ = model_counts(results, our_model(TABLE2_MODEL, set(results.rows["model"])))
+    if prims.empty or tri is None:
+        return None
+    n = int(prims.iloc[0])
+    text = (
+        f"What N is: the report's Equation 5 gives max_depth {kd_auto_depth_report(n)} for its N = "
+        f"{n:,}; our max_depth auto is {kd_auto_depth_report(tri)}, from the bunny's {int(tri):,} triangles"
+    )
+    if ablations is None or ablations.empty:
+        return text + "."
+    same_n = ablations[(ablations["triangles"] == n) & (ablations["status"] == "ok")]
+    found = []
+    for _, r in same_n.iterrows():
+        if r["accel"] == "kdtree":
+            found.append(
+                f"its kd-tree (max_depth auto) is {kd_auto_depth_report(n)} deep at most and has {int(r['nodes']):,} nodes"
+            )
+        elif r["accel"] == "bvh" and r["param_dict"].get("split") == "median":
+            rep = report_value(report_nums, TABLE2_MODEL, "bvh", "default", "nodes")
+            found.append(
+                f"its median BVH has {int(r['nodes']):,} nodes"
+                + (f" (the report's Table 4: {int(rep):,})" if rep is not None else "")
+            )
+    if found:
+        text += (
+            f". A bunny decimated to {n:,} triangles (the ablation rows, {same_n['model'].iloc[0]}): "
+            + "; ".join(found)
+        )
+    return text + "."
 
 
 def note_stand_ins(report_models: list[str], present: set[str]) -> list[str]:
@@ -331,7 +432,11 @@ def structure_rows(picker: Picker, models: list[str]) -> list[StructureRow]:
 
 
 def model_table(
-    results: Results, report_nums: pd.DataFrame, number: int, report_models: list[str]
+    results: Results,
+    report_nums: pd.DataFrame,
+    number: int,
+    report_models: list[str],
+    ablations: pd.DataFrame | None = None,
 ) -> list[TableDoc]:
     picker = Picker(results)
     present = picker.models
@@ -393,6 +498,7 @@ def model_table(
     fixed = [
         note_primitives(report_nums, results, report_models),
         note_bvh_nodes(report_nums, report_models),
+        note_complete_trees(report_nums, report_models, ablations),
         note_prim_tests(report_nums, report_models, number),
         note_times(),
     ]
@@ -512,7 +618,9 @@ def relative_table(
 # ---- Table 2 ----------------------------------------------------------------------------
 
 
-def table2(results: Results, report_nums: pd.DataFrame) -> list[TableDoc]:
+def table2(
+    results: Results, report_nums: pd.DataFrame, ablations: pd.DataFrame | None = None
+) -> list[TableDoc]:
     picker = Picker(results)
     present = picker.models
     model = our_model(TABLE2_MODEL, present)
@@ -595,6 +703,7 @@ def table2(results: Results, report_nums: pd.DataFrame) -> list[TableDoc]:
         )
     fixed += [
         note_prim_tests(report_nums, [TABLE2_MODEL], 2),
+        note_what_n(report_nums, results, ablations),
         note_times(),
         note_errors(picked_rows(row_picks)),
     ] + note_tags(results)
@@ -605,7 +714,7 @@ def table2(results: Results, report_nums: pd.DataFrame) -> list[TableDoc]:
         groups,
         header,
         rows,
-        notes=fixed + notes,
+        notes=[n for n in fixed if n] + notes,
         warnings=list(results.warnings),
         show_tags=results.mixed,
     )
@@ -636,18 +745,24 @@ def kd_params_text(pick: Pick, spec: Spec) -> str:
 # ---- output -----------------------------------------------------------------------------
 
 
-def build_tables(results: Results, report_nums: pd.DataFrame) -> dict[str, list[TableDoc]]:
+def build_tables(
+    results: Results, report_nums: pd.DataFrame, ablations: pd.DataFrame | None = None
+) -> dict[str, list[TableDoc]]:
+    """ablations: the ablation configs' rows, which only notes read (the tables show the run
+    at the report's settings)."""
     return {
-        "table2": table2(results, report_nums),
+        "table2": table2(results, report_nums, ablations),
         "table4": model_table(results, report_nums, 4, TABLE4_MODELS),
-        "table5": model_table(results, report_nums, 5, TABLE5_MODELS),
+        "table5": model_table(results, report_nums, 5, TABLE5_MODELS, ablations),
     }
 
 
-def write_tables(results: Results, report_nums: pd.DataFrame, out_dir: Path) -> list[Path]:
+def write_tables(
+    results: Results, report_nums: pd.DataFrame, out_dir: Path, ablations: pd.DataFrame | None = None
+) -> list[Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, docs in build_tables(results, report_nums).items():
+    for name, docs in build_tables(results, report_nums, ablations).items():
         md = out_dir / f"{name}.md"
         md.write_text("\n".join(to_markdown(d) for d in docs))
         tex = out_dir / f"{name}.tex"

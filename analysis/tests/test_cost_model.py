@@ -1,0 +1,145 @@
+"""The cost model of render time (outputs/cost_model.py): the fit recovers a known floor and
+cost per test, the floored source replaces exactly the floor, and the claims notes that
+read the ablation rows (complete trees, what N is) and the ordered traversal."""
+
+import pandas as pd
+import pytest
+
+from accelbench_analysis.outputs import claims as cl
+from accelbench_analysis.outputs import cost_model as cm
+from accelbench_analysis.outputs.tables import note_complete_trees
+
+
+def test_fit_recovers_a_known_floor_and_cost_per_test():
+    a, b = 9.5, 0.2e-6
+    tests = [683_669.0, 10_571_611.0, 140_964_745.0, 2_000_000.0]
+    f = cm.fit(tests, [a + b * t for t in tests])
+    assert f.a == pytest.approx(a, rel=1e-9)
+    assert f.b == pytest.approx(b, rel=1e-9)
+    assert f.floor_tests == pytest.approx(a / b, rel=1e-9)
+    assert f.r2 == pytest.approx(1.0)
+    assert max(abs(r) for r in f.residuals) < 1e-9
+    # A point off the line shows up in its residual, with the sign of the deviation.
+    noisy = [a + b * t for t in tests]
+    noisy[1] += 0.5
+    g = cm.fit(tests, noisy)
+    assert g.residuals[1] > 0 and g.r2 < 1
+
+
+def test_fit_refuses_what_cannot_be_fitted():
+    with pytest.raises(ValueError):
+        cm.fit([1.0], [2.0])
+    with pytest.raises(ValueError):
+        cm.fit([5.0, 5.0], [1.0, 2.0])
+
+
+class Sweep:
+    """A claims source over the Table 2 sweeps: render = a + b * tests exactly."""
+
+    name = "ours"
+
+    def __init__(self, a, b, tests):
+        self.a, self.b, self.tests = a, b, tests
+
+    def begin(self):
+        pass
+
+    def groups(self):
+        return set()
+
+    def primitives(self, model):
+        return 1.0
+
+    def get(self, model, structure, metric, setting="default"):
+        if (model, structure) != (cm.SWEEP_MODEL, cm.SWEEP_STRUCTURE) or setting not in self.tests:
+            raise cl.Missing(setting)
+        t = self.tests[setting]
+        return {"prim_tests": t, "render": self.a + self.b * t, "build": 1.0}[metric]
+
+
+TESTS = {s: 1e6 * (i + 1) ** 2 for i, s in enumerate(cm.SWEEPS["maxPrims"] + cm.SWEEPS["maxDepth"])}
+
+
+def test_floored_source_swaps_our_floor_for_the_reports_in_tests_worth():
+    report = Sweep(9.0, 0.2e-6, TESTS)  # floor: 45M tests' worth
+    ours = Sweep(0.05, 5e-9, TESTS)  # floor: 10M tests' worth
+    fr, fo = cm.fit_all(report, cl.Missing), cm.fit_all(ours, cl.Missing)
+    assert set(fr) == {"maxPrims", "maxDepth", "Table 2"}
+    floored = cm.FlooredSource(ours, fo, fr)
+    s = "maxDepth=10"
+    # render' = b_ours * (tests + a_report / b_report): our cost per test, the report's floor.
+    assert floored.get(cm.SWEEP_MODEL, "kdtree", "render", s) == pytest.approx(5e-9 * (TESTS[s] + 45e6))
+    # Everything else is ours, unchanged.
+    assert floored.get(cm.SWEEP_MODEL, "kdtree", "prim_tests", s) == TESTS[s]
+    assert floored.get(cm.SWEEP_MODEL, "kdtree", "build", s) == 1.0
+    # A sweep that cannot be fitted on one side gives no floored source.
+    with pytest.raises(ValueError):
+        cm.FlooredSource(ours, {"maxPrims": fo["maxPrims"]}, fr)
+    rows = cm.cost_model_rows(list(fr.values()) + list(fo.values()))
+    assert list(rows.columns) == list(cm.CSV_COLUMNS)
+    assert len(rows) == 2 * (3 + 4 + 7)
+
+
+def test_the_floor_decides_a_ratio_claim():
+    # 5.1-d, "maxPrims 1 -> 100 raises render time ~1.2x": with a negligible floor our ratio
+    # is the ratio of tests; with the report's floor in tests' worth it compresses to ~1.2x.
+    tests = dict(TESTS, **{"maxPrims=1": 1e6, "maxPrims=10": 2e6, "maxPrims=100": 12e6})
+    ours, report = Sweep(0.001, 5e-9, tests), Sweep(20.0, 0.4e-6, tests)  # report floor 50M
+    claim = next(c for c in cl.CLAIMS if c.id == "5.1-d")
+    assert cl.evaluate(claim, ours).verdict == cl.FAILS
+    floored = cm.FlooredSource(ours, cm.fit_all(ours, cl.Missing), cm.fit_all(report, cl.Missing))
+    assert cl.evaluate(claim, floored).verdict == cl.HOLDS  # (50M + 12M) / (50M + 1M) = 1.22
+
+
+def test_ordered_traversal_verdict_is_noted_where_it_differs():
+    c = cl.Claim("t-1", "5.3", "kd-tree renders fastest", lambda src: (True, "x"))
+    r = cl.ClaimRow(c, cl.Finding(cl.HOLDS, "r"), cl.Finding(cl.HOLDS, "ours"))
+    r.verdict = cl.HOLDS
+    cl.note_traversal(r, cl.Finding(cl.FAILS, "BVH 0.27 < kd-tree 0.32"))
+    assert r.ordered is not None and "holds only with the report's traversal" in r.reason
+    assert "BVH 0.27 < kd-tree 0.32" in r.reason
+    same = cl.ClaimRow(c, cl.Finding(cl.HOLDS, "r"), cl.Finding(cl.HOLDS, "ours"))
+    cl.note_traversal(same, cl.Finding(cl.HOLDS, "ours"))
+    assert same.ordered is None and same.reason == ""
+
+
+def test_complete_trees_note_reads_the_ablation_rows():
+    report_nums = pd.DataFrame(
+        [
+            {"table": 5, "model": "sci-fi-city", "accelerator": "bvh", "setting": "default", "nodes": 65535},
+            {"table": 5, "model": "trees", "accelerator": "bvh", "setting": "default", "nodes": 131047},
+        ]
+    )
+    abl = pd.DataFrame(
+        [
+            {
+                "model": "city",
+                "accel": "bvh",
+                "status": "ok",
+                "nodes": 65535,
+                "param_dict": {"split": "median", "max_depth": "15"},
+            },
+            {
+                "model": "city",
+                "accel": "bvh",
+                "status": "ok",
+                "nodes": 90000,
+                "param_dict": {"split": "median", "max_depth": "50"},
+            },
+            {
+                "model": "city",
+                "accel": "bvh",
+                "status": "ok",
+                "nodes": 65535,
+                "param_dict": {"split": "sah", "max_depth": "15"},
+            },
+        ]
+    )
+    text = note_complete_trees(report_nums, ["trees", "sci-fi-city"], abl)
+    assert "65,535 = 2^16 - 1 nodes, a complete tree of depth 15" in text
+    assert "131,047 nodes, 24 short of the complete 2^17 - 1 of depth 16" in text
+    assert "city at max_depth 15: 65,535 (complete)" in text
+    assert "city at max_depth 50: 90,000" in text
+    assert "sah" not in text  # only median-split rows
+    # No complete tree in the report's numbers: no note.
+    assert note_complete_trees(report_nums[report_nums["model"] == "trees"], ["trees"], abl) is None
