@@ -1,10 +1,12 @@
 // accelbench: the command line. A thin dispatcher; each subcommand lives in its own file.
 #include <cstdio>
 #include <cstring>
+#include <exception>
 
 #include "commands/cli.h"
 #include "commands/run_command.h"
 #include "csv/provenance.h"
+#include "csv/results.h"
 
 namespace {
 
@@ -21,17 +23,27 @@ const Command kCommands[] = {
     {"list", accelbench::list_command, "accelerators with their parameters and defaults; procedural scenes"},
     {"models", accelbench::models_command, "the model registry: where each file was found (--fetch: download missing)"},
     {"provenance", accelbench::provenance_command, "the provenance columns this build writes into every results row"},
+    {"columns", accelbench::columns_command, "the results CSV's columns: name, kind, unit and what each holds"},
+    {"convert-csv", accelbench::convert_csv_command, "rename an old results file's columns (OLD NEW), checked"},
 };
 
 int usage(FILE* to) {
     std::fprintf(to, "usage: accelbench COMMAND [ARGS]\n\ncommands:\n");
-    for (const auto& c : kCommands) std::fprintf(to, "  %-10s %s\n", c.name, c.help);
+    for (const auto& c : kCommands) std::fprintf(to, "  %-11s %s\n", c.name, c.help);
     return to == stdout ? 0 : 2;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+    // A column name twice would be read wrongly by every CSV reader but ours: refuse to
+    // start rather than write such a file.
+    try {
+        accelbench::check_column_names(accelbench::result_column_table());
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "accelbench: %s\n", e.what());
+        return 2;
+    }
     if (argc < 2) return usage(stderr);
     if (!std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help"))
         return usage(stdout);

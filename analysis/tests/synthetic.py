@@ -44,7 +44,7 @@ PROVENANCE = {
     "compiler": "gcc 12.2.0",
     "build_type": "RelWithDebInfo",
     "cpu": "Test CPU @ 2.0GHz",
-    "threads": "1",
+    "render_threads": "1",
     "embree_version": "3.13.5",
     "isa": "sse2+sse4.2+avx+avx2+fma",
     "timestamp": "2024-01-01T00:00:00Z",
@@ -136,7 +136,7 @@ def row(
             "mrays_per_s": (rays + shadow_rays) / render / 1e6 if ok and render else "",
             "nodes": "" if nodes is None else nodes,
             "leaves": "" if nodes is None else (nodes + 1) // 2,
-            "stat_max_depth": "" if tree_depth is None else tree_depth,
+            "tree_depth": "" if tree_depth is None else tree_depth,
             "memory_bytes": "" if nodes is None else nodes * 32,
             "sah_cost": "" if sah_cost is None else repr(sah_cost),
             "prim_tests": "" if prim_tests is None else prim_tests,
@@ -158,7 +158,7 @@ def write_csv(
     drop: tuple[str, ...] = (),
     extra_columns: tuple[str, ...] = (),
 ) -> Path:
-    """Writes rows in the harness's column order (duplicate names included); extra columns
+    """Writes rows in the harness's column order (every name once); extra columns
     go before the provenance."""
     cols = header(with_errors)
     cols = cols[: -len(PROVENANCE_TAIL)] + list(extra_columns) + cols[-len(PROVENANCE_TAIL) :]
@@ -167,7 +167,7 @@ def write_csv(
         vals = [r[c] for c in IDENTITY_COLUMNS]
         vals += [r["param"][p] for p in PARAM_NAMES]
         vals += [r[c] for c in STATUS_COLUMNS + TIMING_COLUMNS]
-        vals += [r["stat_max_depth"] if c == "max_depth" else r[c] for c in COUNT_COLUMNS]
+        vals += [r[c] for c in COUNT_COLUMNS]
         if with_errors:
             vals += [r["errors"].get(c, "") for c in ERROR_MEMORY_VERDICT_COLUMNS]
         vals += [r["extra"].get(c, "") for c in extra_columns]
@@ -192,7 +192,7 @@ KD = {
     "isect_cost": "80",
     "traversal_cost": "1",
     "empty_bonus": "0.5",
-    "threads": "1",
+    "render_threads": "1",
 }
 SAH = {"split": "sah", "max_prims": "4", "max_depth": "64", "bins": "16", "threads": "1"}
 EMBREE = {"threads": "1", "quality": "medium", "robust": "false"}

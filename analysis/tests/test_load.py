@@ -29,11 +29,11 @@ def minimal(tmp_path, name="run.csv", **prov):
     return write_csv(tmp_path / name, rows)
 
 
-def test_loads_and_resolves_duplicate_column_names(tmp_path):
+def test_loads_the_parameter_and_the_measured_depth_by_name(tmp_path):
     df = read_csv(minimal(tmp_path))
-    # max_depth is both a parameter and a statistic in the harness's header.
+    # The max_depth parameter (the limit) and tree_depth (the depth reached).
     assert df.loc[0, "param.max_depth"] == "50"
-    assert df.loc[0, "max_depth"] == 17.0
+    assert df.loc[0, "tree_depth"] == 17.0
     assert df.loc[0, "param_dict"] == {"split": "median", "max_prims": "1", "max_depth": "50", "threads": "1"}
     assert df.loc[0, "build_s_median"] == 0.5
 
@@ -282,3 +282,21 @@ def test_check_refuses_with_exit_2_and_names_the_cell(tmp_path, capsys):
     path.write_bytes(data[:-3])
     assert main(["check", str(path)]) == 2
     assert f"{path}: line 3 (the last row) has no line break at its end" in capsys.readouterr().err
+
+
+def test_a_file_with_the_old_repeated_names_says_how_to_convert_it(tmp_path):
+    # Before the renames the header held max_depth, width and threads twice: the
+    # parameter's between params and status, the measured or global one after.
+    old = tmp_path / "old.csv"
+    old.write_text(
+        "config,accel,params,max_depth,status,max_depth,width,height,threads\nc,bvh,,50,ok,17,64,48,1\n"
+    )
+    with pytest.raises(ContractError) as e:
+        read_csv(old)
+    for part in (
+        "max_depth -> tree_depth",
+        "width -> image_width",
+        "threads -> render_threads",
+        "convert-csv",
+    ):
+        assert part in str(e.value)

@@ -103,7 +103,7 @@ def test_embree_answers_are_shown_not_failed(run, capsys):
 
 
 @pytest.mark.parametrize(
-    "metric", ["leaves", "stat_max_depth", "hits", "shadow_hits", "rays", "shadow_rays", "node_visits"]
+    "metric", ["leaves", "tree_depth", "hits", "shadow_hits", "rays", "shadow_rays", "node_visits"]
 )
 def test_every_exact_count_is_checked(run, metric):
     def bump(rows):
@@ -278,12 +278,12 @@ def test_embree_denominator_is_same_model_and_render_settings(tmp_path):
     robust["extra"]["combo_id"] = "eeeeeeeeeeeeeeee"
     rows.append(robust)
     wide = copy.deepcopy(find(rows, "stanford-bunny", "bvh"))
-    wide["extra"].update(combo_id="dddddddddddddddd", width="1024")
+    wide["extra"].update(combo_id="dddddddddddddddd", image_width="1024")
     rows.append(wide)
-    cols = ("combo_id", "instructions", "width")
+    cols = ("combo_id", "instructions", "image_width")
     for r in rows:
-        r["extra"].setdefault("width", "640")
-    # "width" differs between the two bvh rows, so their (config, model, accel, params) key
+        r["extra"].setdefault("image_width", "640")
+    # "image_width" differs between the two bvh rows, so their (config, model, accel, params) key
     # repeats; the harness's combo_id tells them apart. Load through a renamed config.
     rows_by_config = [dict(r, config="ci-wide") if r is wide else r for r in rows]
     path = write_csv(tmp_path / "run.csv", rows_by_config, extra_columns=cols)

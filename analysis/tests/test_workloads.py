@@ -63,7 +63,7 @@ def thread_csv(path):
                 build=0.1,
                 render=s,
                 config="thread-scaling",
-                threads=str(t),
+                render_threads=str(t),
                 extra={"ray_set": "camera", "render_cpu_s_median": s * t},
             )
         )
@@ -98,7 +98,7 @@ def test_ranking_marks_where_the_order_changes(tmp_path):
 
 def test_thread_scaling_speedup_and_efficiency(tmp_path):
     ts = thread_scaling_rows(load_results([thread_csv(tmp_path / "ts.csv")]))
-    t = ts.set_index(["structure", "threads"])
+    t = ts.set_index(["structure", "render_threads"])
     assert t.loc[("bvh", 2), "speedup"] == pytest.approx(1.6)
     assert t.loc[("bvh", 2), "efficiency"] == pytest.approx(0.8)
     assert t.loc[("embree", 2), "speedup"] == pytest.approx(2.0)

@@ -16,6 +16,8 @@ class ModelRegistry;
 int render_command(int argc, char** argv);
 int list_command(int argc, char** argv);
 int models_command(int argc, char** argv);
+int columns_command(int argc, char** argv);
+int convert_csv_command(int argc, char** argv);
 
 // NAME (registry), PATH (a mesh file) or procedural:KIND[,k=v...], loaded the way the
 // harness loads a config's model (load_model: the registry's or procedural scene's own

@@ -19,72 +19,91 @@ namespace accelbench {
 namespace {
 const std::string kParamKey = "param:";
 
-// The columns after the parameters, in order, and what each holds: merge refuses a row
-// whose Number column is neither empty (not measured) nor a finite number.
-enum class ColumnKind { Text, Number };
-struct MeasuredColumn {
-    const char* name;
-    ColumnKind kind;
+// The results CSV's columns, in order, each once: what it is called, holds and measures.
+// The parameters' columns go between `params` and `status` (result_column_table). Merge
+// refuses a row whose Number column is neither empty (not measured) nor a finite number.
+// A column is one line here plus its value in the row (sinks/results_csv.cpp).
+const ColumnSpec kIdentificationColumns[] = {
+    {"config", ColumnKind::Text, "", "the config's name"},
+    {"combo_id", ColumnKind::Text, "", "the combination's id, unique within a config"},
+    {"model", ColumnKind::Text, "", "the model's label (registry name, path or procedural:KIND)"},
+    {"triangles", ColumnKind::Number, "count", "triangles of the model"},
+    {"vertices", ColumnKind::Number, "count", "vertices of the model"},
+    {"ray_source", ColumnKind::Text, "", "camera, a ray file, or robustness-case"},
+    {"ray_set", ColumnKind::Text, "", "the timed ray set (camera: primary + shadow rays)"},
+    {"ray_set_hash", ColumnKind::Text, "", "hash of the ray set's rays"},
+    {"accel", ColumnKind::Text, "", "the structure's registry name"},
+    {"params", ColumnKind::Text, "", "the parameters given, canonical k=v;k=v"},
 };
-const MeasuredColumn kMeasuredColumns[] = {
-    {"status", ColumnKind::Text},
-    {"message", ColumnKind::Text},
-    {"repetitions", ColumnKind::Number},
-    {"build_s_median", ColumnKind::Number},
-    {"build_s_mean", ColumnKind::Number},
-    {"build_s_stddev", ColumnKind::Number},
-    {"build_s_ci_lo", ColumnKind::Number},
-    {"build_s_ci_hi", ColumnKind::Number},
-    {"render_s_median", ColumnKind::Number},
-    {"render_s_mean", ColumnKind::Number},
-    {"render_s_stddev", ColumnKind::Number},
-    {"render_s_ci_lo", ColumnKind::Number},
-    {"render_s_ci_hi", ColumnKind::Number},
-    {"ci_coverage", ColumnKind::Number},
-    {"render_cpu_s_median", ColumnKind::Number},
-    {"rays", ColumnKind::Number},
-    {"hits", ColumnKind::Number},
-    {"shadow_rays", ColumnKind::Number},
-    {"shadow_hits", ColumnKind::Number},
-    {"mrays_per_s", ColumnKind::Number},
-    {"nodes", ColumnKind::Number},
-    {"leaves", ColumnKind::Number},
-    {"max_depth", ColumnKind::Number},
-    {"memory_bytes", ColumnKind::Number},
-    {"sah_cost", ColumnKind::Number},
-    {"avg_leaf_size", ColumnKind::Number},
-    {"build_extra", ColumnKind::Text},
-    {"prim_tests", ColumnKind::Number},
-    {"node_visits", ColumnKind::Number},
-    {"box_tests", ColumnKind::Number},
-    {"prim_tests_per_ray", ColumnKind::Number},
-    {"node_visits_per_ray", ColumnKind::Number},
-    {"instructions", ColumnKind::Number},
-    {"false_misses", ColumnKind::Number},
-    {"false_hits", ColumnKind::Number},
-    {"prim_mismatches", ColumnKind::Number},
-    {"t_err_ulp_p50", ColumnKind::Number},
-    {"t_err_ulp_max", ColumnKind::Number},
-    {"nan_results", ColumnKind::Number},
-    {"image_rmse", ColumnKind::Number},
-    {"hole_pixels", ColumnKind::Number},
-    {"peak_rss_bytes", ColumnKind::Number},
-    {"verdict", ColumnKind::Text},
-    {"verdict_counts", ColumnKind::Text},
-    {"width", ColumnKind::Number},
-    {"height", ColumnKind::Number},
-    {"spp", ColumnKind::Number},
-    {"light", ColumnKind::Text},
-    {"shading", ColumnKind::Text},
-    {"git_sha", ColumnKind::Text},
-    {"git_dirty", ColumnKind::Text},
-    {"compiler", ColumnKind::Text},
-    {"build_type", ColumnKind::Text},
-    {"cpu", ColumnKind::Text},
-    {"threads", ColumnKind::Text},
-    {"embree_version", ColumnKind::Text},
-    {"timestamp", ColumnKind::Text},
-    {"isa", ColumnKind::Text},
+const ColumnSpec kMeasuredColumns[] = {
+    {"status", ColumnKind::Text, "", "ok, skipped, error or timeout"},
+    {"message", ColumnKind::Text, "", "why a row is not ok"},
+    {"repetitions", ColumnKind::Number, "count", "timed repetitions counted"},
+    {"build_s_median", ColumnKind::Number, "s", "build time, median"},
+    {"build_s_mean", ColumnKind::Number, "s", "build time, mean"},
+    {"build_s_stddev", ColumnKind::Number, "s", "build time, standard deviation"},
+    {"build_s_ci_lo", ColumnKind::Number, "s", "build time median, 95% CI low end"},
+    {"build_s_ci_hi", ColumnKind::Number, "s", "build time median, 95% CI high end"},
+    {"render_s_median", ColumnKind::Number, "s", "render time, median"},
+    {"render_s_mean", ColumnKind::Number, "s", "render time, mean"},
+    {"render_s_stddev", ColumnKind::Number, "s", "render time, standard deviation"},
+    {"render_s_ci_lo", ColumnKind::Number, "s", "render time median, 95% CI low end"},
+    {"render_s_ci_hi", ColumnKind::Number, "s", "render time median, 95% CI high end"},
+    {"ci_coverage", ColumnKind::Number, "fraction", "exact coverage of the median CIs"},
+    {"render_cpu_s_median", ColumnKind::Number, "s", "render CPU time, median"},
+    {"rays", ColumnKind::Number, "count", "primary (or the set's) rays traced"},
+    {"hits", ColumnKind::Number, "count", "rays that hit"},
+    {"shadow_rays", ColumnKind::Number, "count", "shadow rays traced"},
+    {"shadow_hits", ColumnKind::Number, "count", "shadow rays occluded"},
+    {"mrays_per_s", ColumnKind::Number, "Mrays/s", "all rays / median render time"},
+    {"nodes", ColumnKind::Number, "count", "nodes of the built structure"},
+    {"leaves", ColumnKind::Number, "count", "leaves of the built structure"},
+    {"tree_depth", ColumnKind::Number, "levels", "depth of the built tree (the measured depth)"},
+    {"memory_bytes", ColumnKind::Number, "bytes", "memory of the built structure"},
+    {"sah_cost", ColumnKind::Number, "", "SAH cost of the built structure"},
+    {"avg_leaf_size", ColumnKind::Number, "primitives", "mean primitives per leaf"},
+    {"build_extra", ColumnKind::Text, "", "structure-specific build figures, k=v;k=v"},
+    {"prim_tests", ColumnKind::Number, "count", "ray/primitive tests"},
+    {"node_visits", ColumnKind::Number, "count", "nodes visited"},
+    {"box_tests", ColumnKind::Number, "count", "ray/box tests"},
+    {"prim_tests_per_ray", ColumnKind::Number, "count", "prim_tests / all rays"},
+    {"node_visits_per_ray", ColumnKind::Number, "count", "node_visits / all rays"},
+    {"instructions", ColumnKind::Number, "count", "instructions of the render (callgrind Ir)"},
+    {"false_misses", ColumnKind::Number, "count", "misses where the reference hits"},
+    {"false_hits", ColumnKind::Number, "count", "hits where the reference misses"},
+    {"prim_mismatches", ColumnKind::Number, "count", "hits on another primitive than the reference's"},
+    {"t_err_ulp_p50", ColumnKind::Number, "ulp", "hit distance error vs the reference, median"},
+    {"t_err_ulp_max", ColumnKind::Number, "ulp", "hit distance error vs the reference, maximum"},
+    {"nan_results", ColumnKind::Number, "count", "hits with a NaN distance"},
+    {"image_rmse", ColumnKind::Number, "", "RMSE of the image vs the reference's"},
+    {"hole_pixels", ColumnKind::Number, "count", "pixels that miss where the reference hits"},
+    {"peak_rss_bytes", ColumnKind::Number, "bytes", "peak resident memory of the measuring process"},
+    {"verdict", ColumnKind::Text, "", "robustness case: pass or fail"},
+    {"verdict_counts", ColumnKind::Text, "", "robustness case: the counts behind the verdict"},
+    {"image_width", ColumnKind::Number, "pixels", "rendered image width"},
+    {"image_height", ColumnKind::Number, "pixels", "rendered image height"},
+    {"spp", ColumnKind::Number, "count", "samples per pixel"},
+    {"light", ColumnKind::Text, "", "shadow rays to the light: true or false"},
+    {"shading", ColumnKind::Text, "", "shading on: true or false"},
+    {"git_sha", ColumnKind::Text, "", "provenance: the commit built"},
+    {"git_dirty", ColumnKind::Text, "", "provenance: code differs from the commit"},
+    {"compiler", ColumnKind::Text, "", "provenance: compiler and version"},
+    {"build_type", ColumnKind::Text, "", "provenance: CMake build type"},
+    {"cpu", ColumnKind::Text, "", "provenance: CPU model"},
+    {"render_threads", ColumnKind::Number, "count", "threads the render ran on"},
+    {"embree_version", ColumnKind::Text, "", "provenance: Embree version"},
+    {"timestamp", ColumnKind::Text, "", "when the row was measured (UTC)"},
+    {"isa", ColumnKind::Text, "", "provenance: vector extensions compiled in"},
+};
+
+// Measured and global columns that once had the name of a parameter (the limit and the
+// depth reached, the wide BVH's width and the image's, the build's threads and the
+// render's); the old header had both names, the parameter's between params and status.
+const RenamedColumn kRenamedColumns[] = {
+    {"max_depth", "tree_depth"},
+    {"width", "image_width"},
+    {"height", "image_height"},
+    {"threads", "render_threads"},
 };
 }  // namespace
 
@@ -100,16 +119,97 @@ std::vector<std::string> column_headers(const std::vector<std::string>& keys) {
     return h;
 }
 
-std::vector<std::string> result_columns() {
-    std::vector<std::string> c = {"config",     "combo_id", "model",        "triangles", "vertices",
-                                  "ray_source", "ray_set",  "ray_set_hash", "accel",     "params"};
-    // Every accelerator's parameters, in registry then declaration order, each once.
-    std::set<std::string> seen;
+const char* column_kind_name(ColumnKind kind) {
+    switch (kind) {
+        case ColumnKind::Text: return "text";
+        case ColumnKind::Number: return "number";
+        case ColumnKind::Parameter: return "parameter";
+    }
+    return "?";
+}
+
+std::vector<ColumnSpec> result_column_table() {
+    std::vector<ColumnSpec> t(std::begin(kIdentificationColumns), std::end(kIdentificationColumns));
+    // Every accelerator's parameters, in registry then declaration order, each once; the
+    // text names the structures that have it.
+    std::map<std::string, size_t> at;  // parameter name -> its entry in t
     for (const auto& info : accelerator_registry())
-        for (const auto& p : info.params)
-            if (seen.insert(p.name).second) c.push_back(param_column(p.name));
-    for (const MeasuredColumn& col : kMeasuredColumns) c.push_back(col.name);
+        for (const auto& p : info.params) {
+            if (auto it = at.find(p.name); it != at.end()) {
+                std::string& text = t[it->second].text;
+                text.insert(text.find(':'), ", ").insert(text.find(':'), info.name);
+                continue;
+            }
+            at.emplace(p.name, t.size());
+            t.push_back({p.name, ColumnKind::Parameter, "", "parameter of " + info.name + ": " + p.help});
+        }
+    t.insert(t.end(), std::begin(kMeasuredColumns), std::end(kMeasuredColumns));
+    return t;
+}
+
+void check_column_names(const std::vector<ColumnSpec>& table) {
+    std::map<std::string, std::vector<size_t>> where;  // header text -> 1-based positions
+    for (size_t i = 0; i < table.size(); ++i) where[table[i].name].push_back(i + 1);
+    std::string twice;
+    for (const auto& [name, at] : where) {
+        if (at.size() < 2) continue;
+        twice.append("\n  '").append(name).append("' at columns");
+        for (size_t a : at) twice.append(" ").append(std::to_string(a));
+    }
+    if (!twice.empty())
+        throw std::logic_error(
+            "the results column table holds a name more than once (a CSV reader would keep only "
+            "one of them, or rename it):" +
+            twice);
+}
+
+std::vector<std::string> result_columns() {
+    std::vector<std::string> c;
+    for (const ColumnSpec& col : result_column_table()) c.push_back(col.key());
     return c;
+}
+
+const std::vector<RenamedColumn>& renamed_columns() {
+    static const std::vector<RenamedColumn> r(std::begin(kRenamedColumns), std::end(kRenamedColumns));
+    return r;
+}
+
+namespace {
+
+// The position of `status` in a results header: the columns after it are measured or
+// global, those between `params` and it are parameters (the layout every version of the
+// harness wrote).
+std::optional<size_t> status_position(const std::vector<std::string>& header) {
+    const auto it = std::find(header.begin(), header.end(), "status");
+    if (it == header.end() || std::find(header.begin(), it, "params") == it) return std::nullopt;
+    return size_t(it - header.begin());
+}
+
+const RenamedColumn* renamed_from(const std::string& name) {
+    for (const RenamedColumn& r : renamed_columns())
+        if (name == r.old_name) return &r;
+    return nullptr;
+}
+
+}  // namespace
+
+bool is_old_results_header(const std::vector<std::string>& header) {
+    const auto status = status_position(header);
+    if (!status) return false;
+    for (size_t i = *status + 1; i < header.size(); ++i)
+        if (renamed_from(header[i])) return true;
+    return false;
+}
+
+std::string old_header_message(const std::string& path, const std::vector<std::string>& header) {
+    if (!is_old_results_header(header)) return "";
+    std::string renames;
+    for (const RenamedColumn& r : renamed_columns()) {
+        if (!renames.empty()) renames.append(", ");
+        renames.append(r.old_name).append(" -> ").append(r.new_name);
+    }
+    return path + ": written before the measured and global columns were renamed so that no name repeats (" + renames +
+        "; the parameter columns keep their names); convert it with `accelbench convert-csv " + path + " NEW`";
 }
 
 std::vector<std::string> repetition_columns() {
@@ -132,6 +232,8 @@ namespace {
 
 std::string header_mismatch(const std::string& path, const std::vector<std::string>& have,
                             const std::vector<std::string>& want) {
+    if (have != want && !is_old_results_header(want))
+        if (auto m = old_header_message(path, have); !m.empty()) return m;
     for (size_t i = 0; i < std::max(have.size(), want.size()); ++i) {
         const std::string a = i < have.size() ? have[i] : "(none)";
         const std::string b = i < want.size() ? want[i] : "(none)";
@@ -265,8 +367,8 @@ namespace {
 void check_result_rows(const CsvData& d, const std::string& path) {
     static const std::set<std::string> statuses = {"ok", "skipped", "error", "timeout"};
     static const std::set<std::string> numeric = [] {
-        std::set<std::string> n = {"triangles", "vertices"};
-        for (const MeasuredColumn& col : kMeasuredColumns)
+        std::set<std::string> n;
+        for (const ColumnSpec& col : result_column_table())
             if (col.kind == ColumnKind::Number) n.insert(col.name);
         return n;
     }();
@@ -276,8 +378,7 @@ void check_result_rows(const CsvData& d, const std::string& path) {
         return it == d.header.end() ? std::optional<size_t>() : size_t(it - d.header.begin());
     };
     const std::optional<size_t> status = optional_column("status"), params = optional_column("params");
-    // Parameter columns (between params and status) may share a name with a measured
-    // column (max_depth): only the measured one is checked here.
+    // Parameter columns (between params and status) hold what the config gave.
     std::vector<size_t> checked;
     for (size_t c = 0; c < d.header.size(); ++c)
         if (!(params && status && c > *params && c < *status) && numeric.count(d.header[c])) checked.push_back(c);
@@ -332,6 +433,7 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
     std::vector<CsvData> data;
     for (const auto& in : inputs) {
         data.push_back(read_csv(in));
+        if (auto m = old_header_message(in, data.back().header); !m.empty()) throw std::runtime_error(m);
         if (data.back().incomplete_tail)
             throw std::runtime_error(in + ": the last line is incomplete (an interrupted run?); resume it first");
         if (auto m = header_mismatch(in, data.back().header, data.front().header); !m.empty())
@@ -368,6 +470,8 @@ size_t take_column(const std::string& out, const std::string& in, const std::str
     if (fs::exists(out) && fs::exists(in) && fs::equivalent(out, in))
         throw std::runtime_error("the output '" + out + "' is also an input");
     std::vector<CsvData> data = {read_csv(in), read_csv(from)};
+    for (size_t f = 0; f < 2; ++f)
+        if (auto m = old_header_message(f == 0 ? in : from, data[f].header); !m.empty()) throw std::runtime_error(m);
     if (auto m = header_mismatch(from, data[1].header, data[0].header); !m.empty())
         throw std::runtime_error(m + " (compared with " + in + ")");
     if (!allow_mixed) check_same_provenance(data, {in, from});
@@ -386,6 +490,52 @@ size_t take_column(const std::string& out, const std::string& in, const std::str
     if (fs::exists(repetitions_path(in))) reps.push_back(read_csv(repetitions_path(in)));
     write_output(out, {data[0]}, reps.empty() ? nullptr : &reps);
     return taken;
+}
+
+size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
+    if (fs::exists(new_csv) && fs::equivalent(old_csv, new_csv))
+        throw std::runtime_error("the output '" + new_csv + "' is the input: the check needs the old file");
+    const CsvData old = read_csv(old_csv);
+    if (old.incomplete_tail)
+        throw std::runtime_error(old_csv + ": the last line is incomplete (an interrupted run?); resume it first");
+    if (!status_position(old.header)) throw std::runtime_error(old_csv + ": not a results file (no params and status)");
+    if (!is_old_results_header(old.header))
+        throw std::runtime_error(old_csv + ": already has the current column names; nothing to convert");
+    std::vector<std::string> header = old.header;
+    for (size_t i = *status_position(header) + 1; i < header.size(); ++i)
+        if (const RenamedColumn* r = renamed_from(header[i])) header[i] = r->new_name;
+    for (const RenamedColumn& r : renamed_columns())
+        if (std::count(header.begin(), header.end(), r.new_name) > 1)
+            throw std::runtime_error(old_csv + ": column " + r.new_name + " would be there twice");
+
+    const std::string old_reps = repetitions_path(old_csv), new_reps = repetitions_path(new_csv);
+    const bool reps = fs::exists(old_reps);
+    {
+        OutputLock lock({new_csv, new_reps});
+        if (reps) {
+            // Written first, as a run writes a combination's repetitions before its row.
+            if (!fs::path(new_reps).parent_path().empty()) fs::create_directories(fs::path(new_reps).parent_path());
+            fs::copy_file(old_reps, new_reps, fs::copy_options::overwrite_existing);
+        } else {
+            fs::remove(new_reps);
+        }
+        write_parts(new_csv, {CsvData{header, old.rows, 0, false}});
+    }
+
+    // The check: the file as a reader sees it, against the old one cell by cell.
+    const CsvData got = read_csv(new_csv);
+    auto fail = [&](const std::string& what) {
+        throw std::runtime_error(new_csv + ": the conversion check failed: " + what);
+    };
+    if (got.incomplete_tail) fail("the last line is incomplete");
+    if (got.header != header) fail(header_mismatch(new_csv, got.header, header));
+    if (got.rows.size() != old.rows.size())
+        fail(std::to_string(got.rows.size()) + " rows, " + old_csv + " has " + std::to_string(old.rows.size()));
+    for (size_t i = 0; i < old.rows.size(); ++i)
+        if (got.rows[i] != old.rows[i]) fail("row " + std::to_string(i + 1) + " differs from " + old_csv + "'s");
+    if (reps && read_csv(new_reps).rows.size() != read_csv(old_reps).rows.size())
+        fail(new_reps + " has another row count than " + old_reps);
+    return got.rows.size();
 }
 
 }  // namespace accelbench

@@ -14,19 +14,62 @@ using Row = std::map<std::string, std::string>;
 
 // Columns are named by keys. A parameter's column has the key "param:<name>" and the
 // header text <name>: the CSV's documented layout (docs/configs.md, analysis/README.md)
-// puts one column per parameter name between `params` and `status`, so a parameter may
-// share its header text with a measured column (`max_depth`, the limit vs the depth
-// reached) or provenance (`threads`); readers tell them apart by position, the harness by
-// key.
+// puts one column per parameter name between `params` and `status`. Every header text
+// is in the file once (check_column_names), so pandas, csv.DictReader, R and spreadsheets
+// read every column by its name.
 std::string param_column(const std::string& param);
 // The header text of a column key.
 std::string column_header(const std::string& key);
 std::vector<std::string> column_headers(const std::vector<std::string>& keys);
 
-// One row per combination: identification, one column per parameter name of every
-// accelerator in the registry (so the header is the same for every config), status,
-// timing statistics, counters, render settings and provenance. Keys, in order.
+// What a column holds. Merge refuses a Number cell that is neither empty (not measured)
+// nor a finite number; a Parameter cell holds the value given in the config.
+enum class ColumnKind { Text, Number, Parameter };
+const char* column_kind_name(ColumnKind kind);  // "text", "number", "parameter"
+
+// One column of the results CSV: its header text, kind, unit ("" for none) and what it is.
+struct ColumnSpec {
+    std::string name;
+    ColumnKind kind = ColumnKind::Text;
+    std::string unit;
+    std::string text;
+    std::string key() const { return kind == ColumnKind::Parameter ? param_column(name) : name; }
+};
+
+// The results CSV's columns in order: identification, one column per parameter name of
+// every accelerator in the registry (so the header is the same for every config), status,
+// timing statistics, counters, render settings and provenance. The one definition of the
+// columns: result_columns, merge's number checks and `accelbench columns` read it.
+std::vector<ColumnSpec> result_column_table();
+
+// Throws std::logic_error naming every header text that `table` holds more than once (a
+// parameter named like a measured column, say): the harness refuses to start with one.
+void check_column_names(const std::vector<ColumnSpec>& table);
+
+// The keys of result_column_table(), in order.
 std::vector<std::string> result_columns();
+
+// A measured or global column renamed so that no header text repeats: the old name was
+// also a parameter's (max_depth, width, threads) or went with one (height).
+struct RenamedColumn {
+    const char* old_name;
+    const char* new_name;
+};
+const std::vector<RenamedColumn>& renamed_columns();
+
+// Whether `header` is a results header from before the renames: an old name after
+// `status`, where only measured and global columns are.
+bool is_old_results_header(const std::vector<std::string>& header);
+// For an old header: "<path>: written before ... renamed: max_depth -> tree_depth, ...;
+// convert it with `accelbench convert-csv <path> NEW`". Empty for any other header.
+std::string old_header_message(const std::string& path, const std::vector<std::string>& header);
+
+// `old_csv` rewritten to `new_csv` with the renamed columns' new names, every value kept,
+// and its .reps.csv (unchanged: no renamed column) copied beside when there is one. Then
+// checks `new_csv`: re-read, same header but the renames, same rows, every value equal.
+// Throws std::runtime_error for a file that is not an old results file (a current one
+// included) or a failed check. Returns the row count.
+size_t convert_results(const std::string& old_csv, const std::string& new_csv);
 
 // One row per counted repetition (<results>.reps.csv).
 std::vector<std::string> repetition_columns();

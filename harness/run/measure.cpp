@@ -27,9 +27,9 @@ namespace accelbench {
 
 const std::vector<BuildStatField>& build_stat_fields() {
     static const std::vector<BuildStatField> fields = {
-        {"nodes", &BuildStats::nodes, nullptr},         {"leaves", &BuildStats::leaves, nullptr},
-        {"max_depth", &BuildStats::max_depth, nullptr}, {"memory_bytes", &BuildStats::memory_bytes, nullptr},
-        {"sah_cost", nullptr, &BuildStats::sah_cost},   {"avg_leaf_size", nullptr, &BuildStats::avg_leaf_size},
+        {"nodes", &BuildStats::nodes, nullptr},          {"leaves", &BuildStats::leaves, nullptr},
+        {"tree_depth", &BuildStats::max_depth, nullptr}, {"memory_bytes", &BuildStats::memory_bytes, nullptr},
+        {"sah_cost", nullptr, &BuildStats::sah_cost},    {"avg_leaf_size", nullptr, &BuildStats::avg_leaf_size},
     };
     return fields;
 }

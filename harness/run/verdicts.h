@@ -18,8 +18,8 @@ namespace accelbench {
 // and any-hit, compared with the case's expectations and the reference). The result is
 // status ok with the columns verdict (pass/fail), verdict_counts, the error columns
 // against the reference and peak_rss_bytes; the failure detail is the message. Build
-// and depth statistics go to max_depth and memory_bytes. Errors a harness must report
-// (an invalid parameter) throw.
+// and depth statistics go to the tree_depth and memory_bytes columns. Errors a harness
+// must report (an invalid parameter) throw.
 // `given` are the parameters as the config gives them (the rest take their defaults,
 // resolved for the case's scene).
 Measurement judge_measurement(const std::string& accel, const std::map<std::string, std::string>& given,

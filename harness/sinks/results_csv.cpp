@@ -27,8 +27,8 @@ Row identification_row(const Config& config, const CombinationResult& result) {
     r["params"] = c.params.canonical();
     for (const auto& [k, v] : c.params.items()) r[param_column(k)] = v;
     if (!model.rays && !judged) {
-        r["width"] = std::to_string(config.render.width);
-        r["height"] = std::to_string(config.render.height);
+        r["image_width"] = std::to_string(config.render.width);
+        r["image_height"] = std::to_string(config.render.height);
         r["spp"] = std::to_string(config.render.spp);
     }
     if (!judged) {
@@ -36,7 +36,7 @@ Row identification_row(const Config& config, const CombinationResult& result) {
         r["shading"] = config.render.shading ? "true" : "false";
     }
     for (const auto& [name, value] : provenance_values()) r[name] = value;
-    r["threads"] = std::to_string(c.threads);
+    r["render_threads"] = std::to_string(c.threads);
     r["timestamp"] = result.timestamp;
     return r;
 }

@@ -158,8 +158,8 @@ TEST_F(HostileInputTest, MergeRefusesRowsThatAreNotResults) {
         }
         EXPECT_FALSE(fs::exists(path("m.csv")));
     }
-    // A parameter column named like a measured one (kdtree max_depth "auto") is not a number.
-    const std::string with_param = "combo_id,params,max_depth,status,max_depth\n";
+    // A parameter column holds what the config gave (kdtree max_depth "auto"), not a number.
+    const std::string with_param = "combo_id,params,max_depth,status,tree_depth\n";
     write_file(dir.path(), "p.csv", with_param + "a1,,auto,ok,12\n");
     EXPECT_EQ(merge_results(path("p-out.csv"), {path("p.csv")}, true), 1u);
     // A repetition whose combination has no results row.

@@ -46,9 +46,9 @@ TEST(ResultsTest, TheIssueColumnsAndOneColumnPerParameterOfEveryAccelerator) {
                           "build_s_mean",  "build_s_stddev",  "build_s_ci_lo",  "build_s_ci_hi",  "render_s_median",
                           "render_s_mean", "render_s_stddev", "render_s_ci_lo", "render_s_ci_hi", "rays",
                           "hits",          "shadow_rays",     "shadow_hits",    "mrays_per_s",    "nodes",
-                          "leaves",        "max_depth",       "memory_bytes",   "sah_cost",       "prim_tests",
+                          "leaves",        "tree_depth",      "memory_bytes",   "sah_cost",       "prim_tests",
                           "node_visits",   "git_sha",         "git_dirty",      "compiler",       "build_type",
-                          "cpu",           "threads",         "embree_version", "timestamp",      "isa",
+                          "cpu",           "render_threads",  "embree_version", "timestamp",      "isa",
                           "combo_id"})
         EXPECT_NE(std::find(cols.begin(), cols.end(), c), cols.end()) << c;
     // One column per parameter name of every accelerator, between `params` and `status`,
@@ -64,8 +64,97 @@ TEST(ResultsTest, TheIssueColumnsAndOneColumnPerParameterOfEveryAccelerator) {
         EXPECT_EQ(column_header(param_column(n)), n);
     }
     EXPECT_EQ(std::set<std::string>(cols.begin(), cols.end()).size(), cols.size()) << "a column key appears twice";
-    EXPECT_EQ(column_header("max_depth"), "max_depth");
+    EXPECT_EQ(column_header("tree_depth"), "tree_depth");
+    EXPECT_EQ(column_header(param_column("max_depth")), "max_depth");
     EXPECT_EQ(repetitions_path("results/runs/x-1.csv"), "results/runs/x-1.reps.csv");
+}
+
+// Every header text once, so that pandas (which renames a repeat `name.1`), csv.DictReader
+// (which keeps the last) and spreadsheets read each column by its name.
+TEST(ColumnTableTest, EveryHeaderTextIsThereOnce) {
+    const auto table = result_column_table();
+    EXPECT_NO_THROW(check_column_names(table));
+    std::set<std::string> names;
+    for (const auto& c : table) EXPECT_TRUE(names.insert(c.name).second) << c.name;
+    EXPECT_EQ(column_headers(result_columns()).size(), names.size());
+    for (const auto& c : table) {
+        EXPECT_FALSE(c.text.empty()) << c.name;
+        EXPECT_EQ(c.key() == c.name, c.kind != ColumnKind::Parameter) << c.name;
+    }
+    // The parameters keep their names; the measured and global columns took new ones.
+    for (const char* kept : {"max_depth", "threads", "width"})
+        EXPECT_EQ(std::count(names.begin(), names.end(), kept), 1) << kept;
+    for (const auto& r : renamed_columns()) EXPECT_TRUE(names.count(r.new_name)) << r.new_name;
+    // An old name after `status` marks a file from before the renames: no measured or global
+    // column may take one again.
+    for (const auto& c : table) {
+        if (c.kind == ColumnKind::Parameter) continue;
+        for (const auto& r : renamed_columns()) EXPECT_NE(c.name, r.old_name);
+    }
+}
+
+TEST(ColumnTableTest, ATableWithANameTwiceIsRefusedNamingIt) {
+    auto table = result_column_table();
+    // A parameter named like a measured column: what the old header had.
+    table.push_back({"tree_depth", ColumnKind::Number, "levels", "a second depth"});
+    table.insert(table.begin() + 3, {"status", ColumnKind::Parameter, "", "parameter of x: y"});
+    try {
+        check_column_names(table);
+        FAIL() << "a table with two names twice passed";
+    } catch (const std::logic_error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("'tree_depth' at columns"), std::string::npos) << what;
+        EXPECT_NE(what.find("'status' at columns 4 "), std::string::npos) << what;
+    }
+}
+
+// The header the harness wrote before the renames: each of max_depth, width and threads
+// twice, the parameter's between params and status and the measured or global one after.
+const std::string kOldHeader =
+    "config,combo_id,accel,params,max_depth,threads,width,status,rays,max_depth,width,height,threads,isa\n";
+const std::string kNewHeader =
+    "config,combo_id,accel,params,max_depth,threads,width,status,rays,tree_depth,image_width,image_height,"
+    "render_threads,isa\n";
+
+TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
+    TempDir dir("accelbench-convert-test-");
+    const std::string rows =
+        "t,1,kdtree,max_depth=5,5,,,ok,10,5,64,48,2,sse2\n"
+        "t,2,wbvh,width=4,,,4,ok,10,17,64,48,2,\"a,b\"\n"
+        "t,3,lbvh,threads=3,,3,,skipped,,,,,1,sse2\n";
+    const auto old_csv = write_file(dir.path(), "old.csv", kOldHeader + rows);
+    write_file(dir.path(), "old.reps.csv", "combo_id,repetition\n1,1\n2,1\n");
+    EXPECT_TRUE(is_old_results_header(read_csv(old_csv).header));
+    const std::string new_csv = (dir.path() / "sub" / "new.csv").string();
+    EXPECT_EQ(convert_results(old_csv, new_csv), 3u);
+    EXPECT_EQ(read_file(new_csv), kNewHeader + rows);
+    EXPECT_EQ(read_file(repetitions_path(new_csv)), "combo_id,repetition\n1,1\n2,1\n");
+    EXPECT_FALSE(is_old_results_header(read_csv(new_csv).header));
+    // A file already new, and the output being the input, are refused.
+    EXPECT_THROW(convert_results(new_csv, (dir.path() / "again.csv").string()), std::runtime_error);
+    EXPECT_THROW(convert_results(old_csv, old_csv), std::runtime_error);
+    EXPECT_EQ(read_file(old_csv), kOldHeader + rows);
+}
+
+TEST(ConvertTest, ResumeAndMergeOfAnOldFileSayWhatWasRenamedAndHowToConvert) {
+    TempDir dir("accelbench-convert-test-");
+    const auto old_csv = write_file(dir.path(), "old.csv", kOldHeader + "t,1,bvh,,,,,ok,1,3,8,8,1,sse2\n");
+    std::vector<std::string> current = read_csv(write_file(dir.path(), "n.csv", kNewHeader)).header;
+    auto expect_message = [&](auto&& f) {
+        try {
+            f();
+            FAIL() << "an old header was accepted";
+        } catch (const std::runtime_error& e) {
+            const std::string what = e.what();
+            for (const char* part : {"max_depth -> tree_depth", "width -> image_width", "height -> image_height",
+                                     "threads -> render_threads", "accelbench convert-csv "})
+                EXPECT_NE(what.find(part), std::string::npos) << part << " in: " << what;
+            EXPECT_NE(what.find(old_csv), std::string::npos) << what;
+        }
+    };
+    expect_message([&] { prepare_resume(old_csv, current, {"combo_id"}); });
+    expect_message([&] { CsvAppender(old_csv, current); });
+    expect_message([&] { merge_results((dir.path() / "m.csv").string(), {old_csv}, true); });
 }
 
 TEST(ResultsTest, AppenderWritesTheHeaderOnceAndRejectsUnknownColumns) {

@@ -76,18 +76,18 @@ TEST_F(RunTest, WritesOneRowPerCombination) {
     EXPECT_EQ(bf.at("repetitions"), "2");
     EXPECT_EQ(bf.at("rays"), std::to_string(24 * 16));
     EXPECT_EQ(bf.at("ray_source"), "camera");
-    EXPECT_EQ(bf.at("width"), "24");
+    EXPECT_EQ(bf.at("image_width"), "24");
     EXPECT_FALSE(bf.at("build_s_median").empty());
     EXPECT_FALSE(bf.at("render_s_ci_hi").empty());
     EXPECT_EQ(bf.at("ci_coverage"), "0.5");  // two repetitions: [min, max] covers the median half the time
     EXPECT_FALSE(bf.at("prim_tests").empty());
     EXPECT_FALSE(bf.at("mrays_per_s").empty());
     EXPECT_FALSE(bf.at("git_sha").empty());
-    EXPECT_EQ(bf.at("threads"), "1");
+    EXPECT_EQ(bf.at("render_threads"), "1");
 
     const auto& em = by_name.at("soup(triangles=1000,seed=3)/embree/low");
     EXPECT_EQ(em.at("status"), "ok");
-    EXPECT_EQ(em.at(param_column("threads")), "1");  // the render threads
+    EXPECT_EQ(em.at(param_column("threads")), "1");  // the build threads
     EXPECT_EQ(em.at("prim_tests"), "");              // Embree does not count: missing, not zero
     EXPECT_EQ(em.at("nodes"), "");
 
@@ -96,7 +96,7 @@ TEST_F(RunTest, WritesOneRowPerCombination) {
     EXPECT_EQ(rays.at("ray_source"), "tri.rays.csv");
     EXPECT_EQ(rays.at("rays"), "3");
     EXPECT_EQ(rays.at("hits"), "2");  // the ray beside the triangle misses
-    EXPECT_EQ(rays.at("width"), "");
+    EXPECT_EQ(rays.at("image_width"), "");
 
     const auto& skipped = by_name.at("tri-rays/embree/high");
     EXPECT_EQ(skipped.at("status"), "skipped");
@@ -179,15 +179,15 @@ accelerators: [{name: brute_force}, {name: bvh}, {name: kdtree, params: {max_pri
         EXPECT_EQ(r["verdict"], "pass") << r["model"] << " " << r["accel"] << ": " << r["verdict_counts"];
         EXPECT_EQ(r["ray_source"], "robustness-case");
         EXPECT_EQ(r["build_s_median"], "");  // judged, not timed
-        EXPECT_EQ(r["width"], "");
+        EXPECT_EQ(r["image_width"], "");
         EXPECT_FALSE(r["peak_rss_bytes"].empty());
     }
     const auto& closed = by.at("case-1:closed-meshes/bvh");
     EXPECT_EQ(closed.at("false_misses"), "0");  // watertight: no leaks, as the reference
     EXPECT_NE(closed.at("verdict_counts").find("leaks=0 "), std::string::npos);
-    EXPECT_EQ(closed.at("max_depth"),
+    EXPECT_EQ(closed.at("tree_depth"),
               closed.at("verdict_counts")
-                  .substr(closed.at("verdict_counts").find("depth=") + 6, closed.at("max_depth").size()));
+                  .substr(closed.at("verdict_counts").find("depth=") + 6, closed.at("tree_depth").size()));
     const auto& nan = by.at("case-14a:nan-vertex/kdtree");
     EXPECT_NE(nan.at("message").find("rejected at load"), std::string::npos) << nan.at("message");
     EXPECT_EQ(nan.at("false_misses"), "");  // nothing was traced
@@ -360,7 +360,7 @@ std::map<std::string, std::map<std::string, std::string>> answers_and_counts(con
     static const std::vector<std::string> deterministic = {
         "model",         "triangles",   "vertices",   "ray_source",   "ray_set",    "ray_set_hash",    "accel",
         "params",        "status",      "message",    "rays",         "hits",       "shadow_rays",     "shadow_hits",
-        "nodes",         "leaves",      "max_depth",  "memory_bytes", "sah_cost",   "avg_leaf_size",   "build_extra",
+        "nodes",         "leaves",      "tree_depth", "memory_bytes", "sah_cost",   "avg_leaf_size",   "build_extra",
         "prim_tests",    "node_visits", "box_tests",  "false_misses", "false_hits", "prim_mismatches", "t_err_ulp_p50",
         "t_err_ulp_max", "nan_results", "image_rmse", "hole_pixels"};
     const CsvData d = read_csv(csv);

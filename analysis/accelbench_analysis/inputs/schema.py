@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-# A row's identity. `ray_set` (camera, or one of RAY_SETS) and the render
-# `threads` tell apart the rows of one combination in a ray-set or thread-scaling run;
-# CSVs from before them get ray_set = camera, and their threads never vary within a file.
-KEY_COLUMNS = ["config", "model", "accel", "params", "ray_set", "threads"]
+# A row's identity. `ray_set` (camera, or one of RAY_SETS) and `render_threads`
+# tell apart the rows of one combination in a ray-set or thread-scaling run; CSVs from
+# before ray sets get ray_set = camera.
+KEY_COLUMNS = ["config", "model", "accel", "params", "ray_set", "render_threads"]
 CAMERA_SET = "camera"
 RAY_SETS = ("primary", "shadow", "ao", "diffuse", "random")
 
@@ -47,7 +47,7 @@ COUNT_COLUMNS = [
     "mrays_per_s",
     "nodes",
     "leaves",
-    "max_depth",
+    "tree_depth",
     "memory_bytes",
     "sah_cost",
     "prim_tests",
@@ -59,7 +59,7 @@ PROVENANCE_COLUMNS = [
     "compiler",
     "build_type",
     "cpu",
-    "threads",
+    "render_threads",
     "embree_version",
     "timestamp",
 ]
@@ -97,7 +97,7 @@ NUMERIC_COLUMNS = (
     ["triangles", "vertices", "repetitions"]
     + TIMING_COLUMNS
     + COUNT_COLUMNS
-    + ["threads"]
+    + ["render_threads"]
     + ERROR_COLUMNS
     + [PEAK_RSS_COLUMN, INSTRUCTIONS_COLUMN]
 )
@@ -105,11 +105,69 @@ NUMERIC_COLUMNS = (
 STATUSES = ("ok", "skipped", "timeout", "error")
 
 # Rows differing in any of these fields were not measured with the same code on the same
-# machine. `threads` and `timestamp` are per-run facts, not identity.
+# machine. `render_threads` and `timestamp` are per-run facts, not identity.
 PROVENANCE_IDENTITY = ["git_sha", "git_dirty", "compiler", "build_type", "cpu", "embree_version", "isa"]
 # The vector extensions compiled in (CMake's ACCELBENCH_ISA), the harness's last column;
 # files written before it existed load with "unknown".
 ISA_COLUMN = "isa"
+
+# The results CSV's columns other than the parameters' (which sit between `params` and
+# `status`, one per parameter name of the registry), in the harness's order, with their kind
+# in the harness's column table (`accelbench columns`; a test holds the two equal). The
+# groups above are the subsets the analysis requires or converts.
+RESULT_CSV_COLUMNS: list[tuple[str, str]] = [
+    ("config", "text"),
+    ("combo_id", "text"),
+    ("model", "text"),
+    ("triangles", "number"),
+    ("vertices", "number"),
+    ("ray_source", "text"),
+    ("ray_set", "text"),
+    ("ray_set_hash", "text"),
+    ("accel", "text"),
+    ("params", "text"),
+    ("status", "text"),
+    ("message", "text"),
+    ("repetitions", "number"),
+    *[(c, "number") for c in TIMING_COLUMNS],
+    ("ci_coverage", "number"),
+    ("render_cpu_s_median", "number"),
+    ("rays", "number"),
+    ("hits", "number"),
+    ("shadow_rays", "number"),
+    ("shadow_hits", "number"),
+    ("mrays_per_s", "number"),
+    ("nodes", "number"),
+    ("leaves", "number"),
+    ("tree_depth", "number"),
+    ("memory_bytes", "number"),
+    ("sah_cost", "number"),
+    ("avg_leaf_size", "number"),
+    ("build_extra", "text"),
+    ("prim_tests", "number"),
+    ("node_visits", "number"),
+    ("box_tests", "number"),
+    ("prim_tests_per_ray", "number"),
+    ("node_visits_per_ray", "number"),
+    (INSTRUCTIONS_COLUMN, "number"),
+    *[(c, "number") for c in ERROR_COLUMNS],
+    (PEAK_RSS_COLUMN, "number"),
+    *[(c, "text") for c in VERDICT_COLUMNS],
+    ("image_width", "number"),
+    ("image_height", "number"),
+    ("spp", "number"),
+    ("light", "text"),
+    ("shading", "text"),
+    ("git_sha", "text"),
+    ("git_dirty", "text"),
+    ("compiler", "text"),
+    ("build_type", "text"),
+    ("cpu", "text"),
+    ("render_threads", "number"),
+    ("embree_version", "text"),
+    ("timestamp", "text"),
+    (ISA_COLUMN, "text"),
+]
 
 # Build types whose timings are representative (the Makefile builds RelWithDebInfo).
 OPTIMISED_BUILD_TYPES = {"release", "relwithdebinfo"}
@@ -119,10 +177,21 @@ OPTIMISED_BUILD_TYPES = {"release", "relwithdebinfo"}
 REPS_KEY_COLUMNS = ["config", "model", "accel", "params"]
 REPS_REQUIRED_COLUMNS = REPS_KEY_COLUMNS + ["repetition", "build_s", "render_s"]
 
-# Prefix of the per-parameter columns once read: parameter names (max_depth, threads)
-# may equal statistic or provenance column names, so the harness's per-parameter columns
-# (those between `params` and `status`) are renamed to "param.<name>" on load.
+# Prefix of the per-parameter columns once read: the harness's per-parameter columns (those
+# between `params` and `status`, headed by the bare parameter name) are renamed to
+# "param.<name>" on load, so that code reading a parameter says so.
 PARAM_PREFIX = "param."
+
+# Measured and global columns the harness renamed so that no column name repeats (pandas
+# renames a repeat `max_depth.1`, csv.DictReader keeps the last): old name -> new name.
+# A file with an old name after `status` was written before; `accelbench convert-csv`
+# converts it. The harness's column table (`accelbench columns`) lists the same renames.
+RENAMED_COLUMNS = {
+    "max_depth": "tree_depth",
+    "width": "image_width",
+    "height": "image_height",
+    "threads": "render_threads",
+}
 
 # Median of the .reps.csv must reproduce the summary's median to this relative tolerance.
 REPS_MEDIAN_RTOL = 1e-6
@@ -229,6 +298,23 @@ def _read_header(path: Path) -> list[str]:
             return next(csv.reader(fh))
         except StopIteration:
             raise ContractError(f"{path}: empty file (no header)") from None
+
+
+def old_header_message(path: Path, header: list[str]) -> str | None:
+    """For a results header from before the renames (an old name after `status`): what
+    changed and how to convert it. None for any other header."""
+    names = [h.strip() for h in header]
+    if "status" not in names:
+        return None
+    after = names[names.index("status") + 1 :]
+    if not any(n in RENAMED_COLUMNS for n in after):
+        return None
+    renames = ", ".join(f"{a} -> {b}" for a, b in RENAMED_COLUMNS.items())
+    return (
+        f"{path}: written before the measured and global columns were renamed so that no "
+        f"name repeats ({renames}; the parameter columns keep their names); convert it with "
+        f"`accelbench convert-csv {path} NEW`"
+    )
 
 
 def _rename_param_columns(header: list[str]) -> list[str]:
@@ -344,6 +430,8 @@ def read_csv(path: str | Path) -> pd.DataFrame:
             f"beside it (its .reps.csv is read automatically)"
         )
     header = _read_header(path)
+    if (old := old_header_message(path, header)) is not None:
+        raise ContractError(old)
     starts = scan_records(path)
     names = _rename_param_columns(header)
     missing = [c for c in REQUIRED_COLUMNS if c not in names]
@@ -412,7 +500,7 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     if dup.any():
         keys = df.loc[dup, KEY_COLUMNS].drop_duplicates().head(3).to_dict("records")
         raise ContractError(
-            f"{path}: the key (config, model, accel, params, ray_set, threads) must be unique; "
+            f"{path}: the key (config, model, accel, params, ray_set, render_threads) must be unique; "
             f"repeated: {keys}"
         )
     df["source"] = str(path)
@@ -535,7 +623,7 @@ def load_results(paths: list[str | Path]) -> Results:
         if dup.any():
             n = int(rows[dup].drop_duplicates(KEY_COLUMNS).shape[0])
             warnings.append(
-                f"{n} (config, model, accel, params, ray_set, threads) keys occur in more than one "
+                f"{n} (config, model, accel, params, ray_set, render_threads) keys occur in more than one "
                 f"file; where such a row fills a table cell the newest timestamp "
                 f"is used and the cell's note says so."
             )

@@ -39,7 +39,7 @@ EXIT_PASS, EXIT_REGRESSION, EXIT_BAD_INPUT, EXIT_REMEASURE = 0, 1, 2, 3
 EXACT_COUNTS = [
     "nodes",
     "leaves",
-    "max_depth",
+    "tree_depth",
     "prim_tests",
     "node_visits",
     "rays",
@@ -61,7 +61,15 @@ DEFAULT_TIME_FACTOR = 1.5
 RATIO_DENOMINATOR = "embree"
 # Columns that, where the harness writes them, must agree between a row and the Embree row
 # it is divided by: the same rays must have been traced.
-RENDER_SETTING_COLUMNS = ["ray_source", "width", "height", "spp", "light", "shading", "threads"]
+RENDER_SETTING_COLUMNS = [
+    "ray_source",
+    "image_width",
+    "image_height",
+    "spp",
+    "light",
+    "shading",
+    "render_threads",
+]
 
 PASS, FAIL, REMEASURE, NOT_CHECKED = "pass", "FAIL", "needs a second measurement", "not checked"
 

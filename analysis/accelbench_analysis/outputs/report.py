@@ -25,7 +25,7 @@ REGENERATE = "make reproduce-tables"
 def provenance_lines(results: Results) -> list[str]:
     rows = results.rows
     ts = sorted(t for t in rows["timestamp"] if t)
-    threads = sorted({f"{t:g}" for t in rows["threads"].dropna()})
+    threads = sorted({f"{t:g}" for t in rows["render_threads"].dropna()})
     out = []
     for g in results.groups:
         f = g.fields

@@ -187,7 +187,7 @@ def timed_section(timed: pd.DataFrame) -> list[str]:
                 fmt_sig(r["build_s_median"]),
                 fmt_sig(r["render_s_median"]),
                 fmt_count(r["nodes"]),
-                fmt_count(r["max_depth"]),
+                fmt_count(r["tree_depth"]),
                 mib(r["memory_bytes"]),
                 mib(r["peak_rss_bytes"]),
             ]

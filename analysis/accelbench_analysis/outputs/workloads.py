@@ -35,7 +35,7 @@ BASELINE = "embree"
 
 def _thread_scaling_configs(rows: pd.DataFrame) -> pd.Series:
     """Per row: its config measures more than one render thread count."""
-    return rows.groupby("config")["threads"].transform("nunique") > 1
+    return rows.groupby("config")["render_threads"].transform("nunique") > 1
 
 
 def workload_mask(rows: pd.DataFrame) -> pd.Series:
@@ -207,13 +207,13 @@ def thread_scaling_rows(results: Results) -> pd.DataFrame:
         return rows
     rows["structure"] = structure_labels(rows)
     keys = ["config", "model", "structure"]
-    one = rows[rows["threads"] == 1].set_index(keys)["render_s_median"].rename("wall_1")
+    one = rows[rows["render_threads"] == 1].set_index(keys)["render_s_median"].rename("wall_1")
     rows = rows.join(one, on=keys)
     rows["speedup"] = rows["wall_1"] / rows["render_s_median"]
-    rows["efficiency"] = rows["speedup"] / rows["threads"]
+    rows["efficiency"] = rows["speedup"] / rows["render_threads"]
     if "render_cpu_s_median" in rows.columns:
         rows["cpu_per_wall"] = rows["render_cpu_s_median"] / rows["render_s_median"]
-    return rows.sort_values(keys + ["threads"]).reset_index(drop=True)
+    return rows.sort_values(keys + ["render_threads"]).reset_index(drop=True)
 
 
 def thread_scaling_markdown(rows: pd.DataFrame) -> str:
@@ -234,7 +234,7 @@ def thread_scaling_markdown(rows: pd.DataFrame) -> str:
             body.append(
                 [
                     md_escape(r["structure"]),
-                    f"{int(r['threads'])}",
+                    f"{int(r['render_threads'])}",
                     f"{r['render_s_median'] * 1e3:.2f}",
                     f"{r['render_cpu_s_median'] * 1e3:.2f}"
                     if has_cpu and pd.notna(r["render_cpu_s_median"])
@@ -251,7 +251,7 @@ def thread_scaling_figure(rows: pd.DataFrame, path: Path) -> Path:
     g = sns.relplot(
         data=rows,
         kind="line",
-        x="threads",
+        x="render_threads",
         y="speedup",
         hue="structure",
         col="model",
@@ -259,10 +259,10 @@ def thread_scaling_figure(rows: pd.DataFrame, path: Path) -> Path:
         height=3.4,
         aspect=1.2,
     )
-    top = rows["threads"].max()
+    top = rows["render_threads"].max()
     for ax in g.axes.flat:
         ax.plot([1, top], [1, top], ls="--", color="grey", lw=1, label="ideal")
-        ax.set_xticks(sorted(rows["threads"].unique()))
+        ax.set_xticks(sorted(rows["render_threads"].unique()))
     g.set_axis_labels("render threads", "speedup over 1 thread")
     g.set_titles("{col_name}")
     g.figure.suptitle("Thread scaling (dashed: ideal)", y=1.03)
@@ -300,7 +300,7 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
                 "config",
                 "model",
                 "structure",
-                "threads",
+                "render_threads",
                 "render_s_median",
                 "render_cpu_s_median",
                 "speedup",
