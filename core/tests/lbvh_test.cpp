@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cstring>
 #include <string>
@@ -405,4 +406,33 @@ TEST(Lbvh, StanfordBunnyAgreesWithEmbree) {
                     s.extra.at("equal_code_splits"));
         test::expect_agrees_with_embree(scene, *lbvh, rays, "lbvh bunny " + describe(p));
     }
+}
+
+// build=report (the report's Algorithm 2: boxes fitted top-down per node, the split by a
+// linear scan) builds the very tree build=karras does: the node arrays byte for byte and
+// the build counts, on the bunny and the three procedural scenes.
+TEST(Lbvh, ReportBuildGivesTheKarrasTree) {
+    const std::vector<Scene> scenes = {test::stanford_bunny(), make_procedural("forest", {}),
+                                       make_procedural("city", {}), random_soup(20000, 3)};
+    for (const Scene& scene : scenes)
+        for (const char* max_prims : {"1", "4"}) {
+            const std::string what = scene.name + " max_prims=" + max_prims;
+            auto karras = build_lbvh(scene, {{"build", "karras"}, {"max_prims", max_prims}});
+            auto report = build_lbvh(scene, {{"build", "report"}, {"max_prims", max_prims}});
+            ASSERT_GT(karras->tree().nodes.size(), 1u) << what;
+            expect_same_tree(karras->tree(), report->tree(), what);
+            const BuildStats a = karras->build_stats(), b = report->build_stats();
+            EXPECT_EQ(a.nodes, b.nodes) << what;
+            EXPECT_EQ(a.leaves, b.leaves) << what;
+            EXPECT_EQ(a.max_depth, b.max_depth) << what;
+            EXPECT_EQ(a.extra, b.extra) << what;
+        }
+    // The default is karras, and the two names are the declared choices.
+    const AcceleratorInfo info = Lbvh::info();
+    const auto spec =
+        std::find_if(info.params.begin(), info.params.end(), [](const ParamSpec& p) { return p.name == "build"; });
+    ASSERT_NE(spec, info.params.end());
+    EXPECT_EQ(spec->default_value, "karras");
+    EXPECT_EQ(spec->choices, (std::vector<std::string>{"karras", "report"}));
+    EXPECT_THROW(make_accelerator("lbvh", {{"build", "binary"}}), ParamError);
 }

@@ -4,11 +4,14 @@
 // silently ignored.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -29,6 +32,19 @@ struct ParamSpec {
     // default_value is shown as text (e.g. "auto") and the structure computes it.
     bool scene_dependent_default = false;
 };
+
+// An Enum parameter's names, listed once in an array in the enum's order: that array
+// gives both the declared choices and the parser's enum value.
+template <size_t N>
+std::vector<std::string> enum_choices(const std::array<std::string_view, N>& names) {
+    return {names.begin(), names.end()};
+}
+
+// The index of `name` in `names` (the ParamSet has checked that it is one of them).
+template <size_t N>
+size_t enum_index(const std::array<std::string_view, N>& names, const std::string& name) {
+    return size_t(std::find(names.begin(), names.end(), name) - names.begin()) % N;
+}
 
 using ParamValue = std::variant<int64_t, double, std::string, bool>;
 

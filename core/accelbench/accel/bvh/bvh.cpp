@@ -17,17 +17,6 @@ namespace {
 
 constexpr std::array<std::string_view, 2> kAxisNames = {"longest", "round_robin"};  // BvhAxisRule's order
 
-// The index of `name` in `names` (the ParamSet has checked that it is one of them).
-template <size_t N>
-size_t index_of(const std::array<std::string_view, N>& names, const std::string& name) {
-    return size_t(std::find(names.begin(), names.end(), name) - names.begin()) % N;
-}
-
-template <size_t N>
-std::vector<std::string> choices(const std::array<std::string_view, N>& names) {
-    return {names.begin(), names.end()};
-}
-
 }  // namespace
 
 AcceleratorInfo Bvh::info() {
@@ -36,10 +25,10 @@ AcceleratorInfo Bvh::info() {
             "top-down BVH (report section 2): fit & split with median/midpoint/mean/spatial-median or binned SAH "
             "splits, flattened depth-first; optional reinsertion optimizer",
             {
-                {"split", ParamType::Enum, std::string(kSplitNames[size_t(d.split)]), choices(kSplitNames), 0, 0,
+                {"split", ParamType::Enum, std::string(kSplitNames[size_t(d.split)]), enum_choices(kSplitNames), 0, 0,
                  "where a node splits: object median (report default), centre of the centroid box (report's "
                  "centroid method), centroid mean, equal triangle area (spatial median), binned SAH (Wald 2007)"},
-                {"axis", ParamType::Enum, std::string(kAxisNames[size_t(d.axis)]), choices(kAxisNames), 0, 0,
+                {"axis", ParamType::Enum, std::string(kAxisNames[size_t(d.axis)]), enum_choices(kAxisNames), 0, 0,
                  "split axis: longest axis of the node's centroid box (report, Figure 6) or x, y, z by depth"},
                 {"max_prims",
                  ParamType::Int,
@@ -111,8 +100,8 @@ AcceleratorInfo Bvh::info() {
 
 Bvh::Config Bvh::Config::from(const ParamSet& p) {
     Config c;
-    c.split = Split(index_of(kSplitNames, p.get_enum("split")));
-    c.axis = BvhAxisRule(index_of(kAxisNames, p.get_enum("axis")));
+    c.split = Split(enum_index(kSplitNames, p.get_enum("split")));
+    c.axis = BvhAxisRule(enum_index(kAxisNames, p.get_enum("axis")));
     if (p.given("max_prims")) c.max_prims = uint32_t(p.get_int("max_prims"));
     c.max_depth = uint32_t(p.get_int("max_depth"));
     c.bins = uint32_t(p.get_int("bins"));

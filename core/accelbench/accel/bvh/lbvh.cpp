@@ -18,8 +18,12 @@ AcceleratorInfo Lbvh::info() {
     const Config d;  // the defaults
     return {"lbvh",
             "linear BVH (report section 3): Morton codes of the centroids, one radix sort, split at the highest "
-            "differing code bit (Karras 2012); node boxes bottom-up; optional subtree threads",
+            "differing code bit (Karras 2012 or the report's Algorithm 2, the same tree); optional subtree threads",
             {
+                {"build", ParamType::Enum, std::string(kBuildNames[size_t(d.build)]), enum_choices(kBuildNames), 0, 0,
+                 "karras: split by binary search, boxes bottom-up, O(N) after the sort (Karras 2012); report: the "
+                 "report's Algorithm 2, each node's box fitted from its primitives and the split by a linear scan. "
+                 "Both give the same tree"},
                 {"bits",
                  ParamType::Int,
                  format_param(int64_t(d.bits)),
@@ -69,6 +73,7 @@ AcceleratorInfo Lbvh::info() {
 
 Lbvh::Config Lbvh::Config::from(const ParamSet& p) {
     Config c;
+    c.build = Build(enum_index(kBuildNames, p.get_enum("build")));
     c.bits = int(p.get_int("bits"));
     c.max_prims = uint32_t(p.get_int("max_prims"));
     c.max_depth = uint32_t(p.get_int("max_depth"));
@@ -134,17 +139,27 @@ private:
                                          std::to_string(BvhNode::kMaxLeafPrims));
             ++counts.forced_leaves;
         }
+        const Bounds3 b = global_aabb(begin, end);
+        out.push_back(BvhNode::leaf(b, begin, count));
+        return b;
+    }
+
+    // The box of the primitives sorted_[begin, end): the report's getGlobalAABB.
+    Bounds3 global_aabb(uint32_t begin, uint32_t end) const {
         Bounds3 b = sorted_bounds_[begin];
         for (uint32_t i = begin + 1; i < end; ++i) b.extend(sorted_bounds_[i]);
-        out.push_back(BvhNode::leaf(b, begin, count));
         return b;
     }
 
     Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts,
                         int threads) {
         const uint32_t self = uint32_t(out.size());
-        out.emplace_back();  // written once the children's bounds are known
-        const Split split = find_split(begin, end);
+        out.emplace_back();  // written once the node's box is known
+        // Algorithm 2 fits the node's box from its primitives before it splits; Karras's
+        // build leaves it to the children's boxes below.
+        const bool report = config_.build == Lbvh::Build::report;
+        const Bounds3 fitted = report ? global_aabb(begin, end) : Bounds3{};
+        const Split split = report ? scan_split(begin, end) : find_split(begin, end);
         if (split.axis < 0) ++counts.equal_code_splits;
 
         Bounds3 left, right;
@@ -173,7 +188,7 @@ private:
             second = uint32_t(out.size());
             right = build(split.index, end, depth + 1, out, counts, threads);
         }
-        const Bounds3 b = merge(left, right);
+        const Bounds3 b = report ? fitted : merge(left, right);
         out[self] = BvhNode::inner(b, second, split.axis >= 0 ? split.axis : b.largest_axis());
         return b;
     }
@@ -206,6 +221,21 @@ private:
             size -= half;
         }
         return {base + 1, morton_bit_axis(bit)};
+    }
+
+    // The report's findSplitPoint (section 3.1, "we start with the sorted Morton code and
+    // search for the first leading bit change"): a linear scan from the range's start for
+    // the first code whose highest bit differing between the first and last codes is set.
+    // The boundary is the one find_split's binary search finds, at O(n) instead of
+    // O(log n); equal codes split in the middle as there.
+    Split scan_split(uint32_t begin, uint32_t end) const {
+        const Code first = sorted_[begin].key, last = sorted_[end - 1].key;
+        if (first == last) return {begin + (end - begin) / 2, -1};
+        const int bit = std::bit_width(Code(first ^ last)) - 1;
+        const Code mask = Code(1) << bit;
+        uint32_t i = begin + 1;
+        while ((sorted_[i].key & mask) == 0) ++i;  // stops at the latest at end - 1
+        return {i, morton_bit_axis(bit)};
     }
 
     // Appends a subtree built in its own buffer: its inner nodes' second-child indices

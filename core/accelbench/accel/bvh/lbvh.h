@@ -7,11 +7,21 @@
 // and the tree follows from the sorted codes alone. A node over a range of the sorted
 // array splits where its highest differing code bit flips — the codes share every bit
 // above it, so the first half of the range has that bit 0 and the second half 1, and a
-// binary search finds the boundary (the report's Algorithm 2, Karras's findSplit). That
-// bit is one plane of the Morton grid, so the split is a spatial-median split on axis
-// bit % 3 of the node's grid cell. No centroid is ever compared in floating point after
-// the codes are made, and no bounds are needed to split: the node boxes are computed
-// bottom-up, each inner box the union of its children's.
+// search finds the boundary (the report's Algorithm 2, Karras's findSplit). That bit is
+// one plane of the Morton grid, so the split is a spatial-median split on axis bit % 3
+// of the node's grid cell. No centroid is ever compared in floating point after the
+// codes are made, and no bounds are needed to split.
+//
+// Two builds give that one tree (`build`):
+//   build=karras  Karras 2012: the split by binary search, each inner box the union of its
+//                 children's, so the whole build after the sort is O(N).
+//   build=report  the report's Algorithm 2 as written: each node's box fitted top-down
+//                 from all its primitives (getGlobalAABB per node) and the split found by
+//                 a linear scan for the first code whose leading differing bit has
+//                 changed, O(N) per tree level. Min and max are exact, so a box fitted
+//                 from the primitives equals the union of the children's boxes bit for
+//                 bit, and both scans find the same boundary: the node arrays are
+//                 byte-equal, and only the build time tells the builds apart.
 //
 // Subtrees are independent, which is what the report parallelises (section 3.2.1, its
 // "conditional multithreading": a new thread only for subtrees above a threshold). The
@@ -23,7 +33,9 @@
 // (bvh_traversal.h), exactly as the report reuses its BVH traversal (section 3.2).
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
@@ -35,8 +47,14 @@ namespace accelbench {
 
 class Lbvh final : public AcceleratorBase<Lbvh> {
 public:
+    enum class Build { karras, report };
+    // The build names, in the enum's order: the declared choices and the parser both read
+    // this list.
+    static constexpr std::array<std::string_view, 2> kBuildNames = {"karras", "report"};
+
     // The parameters with their defaults (info() declares them from these values).
     struct Config {
+        Build build = Build::karras;  // how the tree is built (both give the same tree)
         // 10: on every model we have (bunny to the 871k dragon) 21 bits give the same tree
         // quality within 0.02% SAH, while 30-bit codes sort as 8-byte items in 3 passes
         // instead of 16-byte items in 6-7 (3-4x faster).
