@@ -95,6 +95,25 @@ STRUCTURES = [
     Structure("embree", "Embree", Spec("embree", (), EMBREE_PREFERRED), None),
 ]
 STRUCTURE = {s.key: s for s in STRUCTURES}
+# Accelerators that are not structures of the comparison: the double-precision reference
+# every row's errors are measured against, and the O(N) brute force of the tests.
+NOT_STRUCTURES = ("reference", "brute_force")
+
+
+# The parameters that make two structures of one accelerator different structures (the
+# BVH's split, the wide BVH's width); the others are settings of the same structure.
+IDENTITY_PARAMS = ("split", "width")
+
+
+def label_of(accel: str, params: dict[str, str]) -> str:
+    """The label of the first structure (registry order) of this accelerator whose identity
+    parameters the row has; the accelerator's name where none matches."""
+    for st in STRUCTURES:
+        if st.spec.accel == accel and all(
+            params.get(k) == v for k, v in st.spec.required if k in IDENTITY_PARAMS
+        ):
+            return st.label
+    return accel
 
 
 def parse_setting(setting: str) -> tuple[str, str] | None:
@@ -151,6 +170,25 @@ class Picker:
         # Robustness-catalogue verdicts are not measurements of a structure on a model.
         self.rows = results.measured_rows()
         self.models = set(self.rows["model"])
+
+    def structures(self) -> list[Structure]:
+        """STRUCTURES, then one structure at its defaults for every other accelerator the data
+        holds (a newly registered one appears in every table and figure with no edit here),
+        labelled by the rows' `label` column where the CSV has it, else by its name."""
+        known = {s.spec.accel for s in STRUCTURES} | set(NOT_STRUCTURES)
+        out = list(STRUCTURES)
+        for accel in dict.fromkeys(self.rows["accel"]) if len(self.rows) else []:
+            if accel in known:
+                continue
+            rows = self.rows[self.rows["accel"] == accel]
+            label = (
+                str(rows["label"].dropna().iloc[0])
+                if "label" in rows and rows["label"].notna().any()
+                else accel
+            )
+            out.append(Structure(accel, label, Spec(accel), None))
+            known.add(accel)
+        return out
 
     def candidates(self, model: str, spec: Spec, variant: str | None = None) -> pd.DataFrame:
         df = self.rows[(self.rows["model"] == model) & (self.rows["accel"] == spec.accel)]

@@ -25,21 +25,14 @@ import seaborn as sns  # noqa: E402
 
 from ..inputs.report_numbers import REPORT_MODELS, TABLE2_MODEL, our_model, report_value  # noqa: E402
 from ..inputs.schema import Results  # noqa: E402
-from ..mapping.selection import STRUCTURE, STRUCTURES, Picker, setting_spec  # noqa: E402
+from ..mapping.selection import STRUCTURE, Picker, setting_spec  # noqa: E402
+from ..mapping.styles import Styles, accel_styles  # noqa: E402
 from .errors import wrong_answers  # noqa: E402
 from .tables import preferred_variant, ratio, structure_rows  # noqa: E402
 
 SEED = 0
 NO_MODES = "own (no modes)"  # traversal label of structures without traversal modes
 DPI = 130
-STRUCTURE_COLOURS = {
-    "BVH (median)": "#1f77b4",
-    "LBVH": "#ff7f0e",
-    "kd-tree": "#2ca02c",
-    "BVH (binned SAH)": "#9467bd",
-    "Embree": "#7f7f7f",
-}
-ACCEL_COLOURS = {"bvh": "#1f77b4", "lbvh": "#ff7f0e", "kdtree": "#2ca02c", "embree": "#7f7f7f"}
 SOURCE_COLOURS = {"ours": "#d62728", "report": "#7f7f7f"}
 
 
@@ -128,7 +121,7 @@ def plain_log_ticks(ax, axis: str = "y") -> None:
 
 
 def _palette(labels) -> dict[str, str]:
-    return {s: STRUCTURE_COLOURS.get(s, "#000000") for s in labels}
+    return Styles(labels).palette()
 
 
 # ---- build vs render ----------------------------------------------------------------------
@@ -140,14 +133,15 @@ def build_vs_render(results: Results, path: Path) -> Path | Skipped:
     if df.empty:
         return Skipped("no ok rows with build and render times at the report's default parameters")
     setup()
-    order = [s.label for s in STRUCTURES if s.label in set(df["structure"])]
+    styles = Styles(df["structure"])
+    order = styles.order
     g = sns.relplot(
         data=df,
         x="build_s_median",
         y="render_s_median",
         hue="structure",
         hue_order=order,
-        palette=_palette(order),
+        palette=styles.palette(),
         style="traversal",
         s=70,
         col="model",
@@ -169,7 +163,7 @@ def build_vs_render(results: Results, path: Path) -> Path | Skipped:
                     [r["render_s_ci_hi"] - r["render_s_median"]],
                 ],
                 fmt="none",
-                ecolor=STRUCTURE_COLOURS.get(r["structure"], "black"),
+                ecolor=styles.colour(r["structure"]),
                 elinewidth=1,
                 capsize=2,
                 alpha=0.8,
@@ -312,8 +306,9 @@ def per_ray(results: Results, path: Path) -> Path | Skipped:
     counted = set(tidy["structure"])
     without = sorted({s.split(" · ")[0] for s in set(df["structure"]) - counted})
     setup()
-    order = [lbl for s in STRUCTURES for lbl in sorted(counted) if lbl.split(" · ")[0] == s.label]
-    palette = {lbl: STRUCTURE_COLOURS.get(lbl.split(" · ")[0], "black") for lbl in order}
+    styles = Styles(lbl.split(" · ")[0] for lbl in counted)
+    order = sorted(counted, key=lambda lbl: (styles.order.index(lbl.split(" · ")[0]), lbl))
+    palette = {lbl: styles.colour(lbl.split(" · ")[0]) for lbl in order}
     g = sns.catplot(
         data=tidy,
         kind="bar",
@@ -391,10 +386,7 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
     names = dict(model_order(results))
     y = WRONG
     setup()
-    accels = [a for a in ACCEL_COLOURS if a in set(df["accel"])] + sorted(
-        set(df["accel"]) - set(ACCEL_COLOURS)
-    )
-    colours = {a: ACCEL_COLOURS.get(a, "black") for a in accels}
+    accels, colours = accel_styles(df["accel"])
     g = sns.relplot(
         data=df,
         x="render_s_median",
@@ -482,7 +474,7 @@ def relative_frame(results: Results, report_nums: pd.DataFrame) -> pd.DataFrame:
         ours = our_model(rm.key, picker.models)
         label = rm.label + ("\n(stand-in)" if rm.stand_in else "")
         den = picker.pick(ours, bvh.spec, preferred_variant(picker.variants([ours], bvh.spec)))
-        for s in STRUCTURES:
+        for s in picker.structures():
             if s.key == "bvh":
                 continue
             num = picker.pick(ours, s.spec, preferred_variant(picker.variants([ours], s.spec)))
@@ -518,7 +510,7 @@ def relative_to_bvh(results: Results, report_nums: pd.DataFrame, path: Path) -> 
     if df.empty or not (df["source"] == "ours").any():
         return Skipped("no BVH (median) rows to divide by")
     setup()
-    order = [s.label for s in STRUCTURES if s.label in set(df["structure"])]
+    order = Styles(df["structure"]).order
     models = list(dict.fromkeys(df["model"]))
     g = sns.catplot(
         data=df,

@@ -14,19 +14,13 @@ import matplotlib.ticker as mticker  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from ..inputs.schema import PARAM_PREFIX, ContractError, Results, record_lines, scan_records, to_numbers  # noqa: E402
-from .figures import DPI, STRUCTURE_COLOURS, plain_log_ticks  # noqa: E402
+from ..inputs.schema import ContractError, Results, record_lines, scan_records, to_numbers  # noqa: E402
+from ..mapping.selection import label_of  # noqa: E402
+from ..mapping.styles import Styles  # noqa: E402
+from .figures import DPI, plain_log_ticks  # noqa: E402
 
 TIMES = {"build_s_median": "build", "render_s_median": "render"}
 FAMILY_MARKERS = ["o", "s", "^", "D", "v"]
-
-
-def structure_label(accel: str, split: object) -> str:
-    """The figures' structure names (figures.STRUCTURE_COLOURS) from the accelerator and,
-    for the BVH, its split."""
-    if accel == "bvh":
-        return {"median": "BVH (median)", "sah": "BVH (binned SAH)"}.get(split, f"BVH ({split})")
-    return {"lbvh": "LBVH", "kdtree": "kd-tree", "embree": "Embree"}.get(accel, accel)
 
 
 def scaling_frame(results: Results) -> pd.DataFrame:
@@ -34,9 +28,7 @@ def scaling_frame(results: Results) -> pd.DataFrame:
     the model label before '@' (stanford-dragon@decimate=10000 -> stanford-dragon), so the
     sizes of one source model form one series."""
     rows = results.rows[results.rows["status"] == "ok"].copy()
-    split_col = PARAM_PREFIX + "split"
-    split = rows[split_col] if split_col in rows.columns else pd.Series([None] * len(rows), index=rows.index)
-    rows["structure"] = [structure_label(a, s) for a, s in zip(rows["accel"], split)]
+    rows["structure"] = [label_of(a, p) for a, p in zip(rows["accel"], rows["param_dict"])]
     rows["family"] = rows["model"].str.split("@").str[0]
     keep = ["family", "model", "structure", "triangles", *TIMES]
     return rows[keep].sort_values(["family", "structure", "triangles"]).reset_index(drop=True)
@@ -71,11 +63,6 @@ def fit_slopes(frame: pd.DataFrame) -> pd.DataFrame:
     )
 
 
-def _structure_order(labels) -> list[str]:
-    known = [s for s in STRUCTURE_COLOURS if s in set(labels)]
-    return known + sorted(set(labels) - set(known))
-
-
 def _triangles_tick(v: float, _pos) -> str:
     """10000 -> 10k, 1000000 -> 1M."""
     if v >= 1e6:
@@ -86,12 +73,13 @@ def _triangles_tick(v: float, _pos) -> str:
 def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Path:
     """Build (left) and render (right) time against triangles, log-log: one colour per
     structure, one marker per source model, each series with its fitted line and slope."""
-    structures = _structure_order(frame["structure"])
+    styles = Styles(frame["structure"])
+    structures = styles.order
     families = sorted(frame["family"].unique())
     fig, axes = plt.subplots(1, 2, figsize=(12, 6.6), constrained_layout=True)
     for ax, (col, what) in zip(axes, TIMES.items()):
         for s in structures:
-            colour = STRUCTURE_COLOURS.get(s, "#000000")
+            colour = styles.colour(s)
             for k, fam in enumerate(families):
                 g = frame[(frame["structure"] == s) & (frame["family"] == fam) & (frame[col] > 0)]
                 if g.empty:
@@ -160,7 +148,7 @@ def slopes_markdown(slopes: pd.DataFrame, files: list[str]) -> str:
         "| " + " | ".join(head) + " |",
         "|" + "---|" * len(head),
     ]
-    for s in _structure_order(slopes["structure"]):
+    for s in Styles(slopes["structure"]).order:
         cells = [s]
         for fam in families:
             for what in TIMES.values():

@@ -33,7 +33,6 @@ from ..inputs.schema import Results
 from ..mapping.selection import (
     AUTO,
     STRUCTURE,
-    STRUCTURES,
     Pick,
     Picker,
     Spec,
@@ -422,7 +421,7 @@ class StructureRow:
 
 def structure_rows(picker: Picker, models: list[str]) -> list[StructureRow]:
     rows = []
-    for s in STRUCTURES:
+    for s in picker.structures():
         variants = picker.variants(models, s.spec)
         if len(variants) <= 1:
             rows.append(StructureRow(s, None, s.label))
@@ -489,7 +488,8 @@ def model_table(
         srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)], len(SUBCOLUMNS)
     )
     for (o, skey, variant), pick in picks.items():
-        label = STRUCTURE[skey].label + (f" [traversal={variant}]" if variant else "")
+        labels = {sr.structure.key: sr.structure.label for sr in srows}
+        label = labels[skey] + (f" [traversal={variant}]" if variant else "")
         if not pick.ok:
             notes.append(f"{label} on {o}: {pick.reason}.")
         notes += [n + "." for n in pick.notes]
@@ -657,7 +657,7 @@ def table2(
             notes.append(f"{setting} ({spec.describe()}): {pick.reason}.")
         notes += [n + "." for n in pick.notes]
 
-    extra = [s for s in STRUCTURES if s.report_accel is None]
+    extra = [s for s in picker.structures() if s.report_accel is None]
     rows.append(Section("Beyond the report: other structures on the same model (no report numbers)"))
     for s in extra:
         variants = picker.variants([model], s.spec)
