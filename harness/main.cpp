@@ -20,7 +20,7 @@ const Command kCommands[] = {
     {"run", accelbench::run_command, "measure a config (configs/*.yaml): combinations, Google Benchmark, results CSV"},
     {"merge", accelbench::merge_command, "join result files (shards) that share a provenance"},
     {"render", accelbench::render_command, "render one model with one accelerator, print what it measured"},
-    {"list", accelbench::list_command, "accelerators with their parameters and defaults; procedural scenes"},
+    {"list", accelbench::list_command, "accelerators with their parameters and defaults; procedural scenes (--structures: name, label, counts)"},
     {"models", accelbench::models_command, "the model registry: where each file was found (--fetch: download missing)"},
     {"provenance", accelbench::provenance_command, "the provenance columns this build writes into every results row"},
     {"columns", accelbench::columns_command, "the results CSV's columns: name, kind, unit and what each holds"},

@@ -12,7 +12,15 @@
 
 namespace accelbench {
 
-int list_command(int, char**) {
+int list_command(int argc, char** argv) {
+    // `list --structures`: one line per registered structure, in registry order, for
+    // scripts: name, tab, label at the defaults, tab, whether it counts traversal (yes/no).
+    if (argc > 0 && std::string(argv[0]) == "--structures") {
+        for (const auto& info : accelerator_registry())
+            std::printf("%s\t%s\t%s\n", info.name.c_str(), info.label(resolve_params(info.name, info.params, {})).c_str(),
+                        info.counts_traversal ? "yes" : "no");
+        return 0;
+    }
     auto print_params = [](const std::vector<ParamSpec>& specs) {
         for (const auto& p : specs) {
             std::string domain;
@@ -30,7 +38,10 @@ int list_command(int, char**) {
     };
     std::printf("accelerators:\n");
     for (const auto& info : accelerator_registry()) {
-        std::printf("  %s — %s\n", info.name.c_str(), info.description.c_str());
+        // The label at the defaults (the CSV's `label`; some follow the parameters).
+        const ParamSet defaults = resolve_params(info.name, info.params, {});
+        std::printf("  %s — %s (label: %s)\n", info.name.c_str(), info.description.c_str(),
+                    info.label(defaults).c_str());
         print_params(info.params);
     }
     std::printf("\nprocedural scenes (--model procedural:KIND,k=v,...):\n");

@@ -33,6 +33,7 @@ const ColumnSpec kIdentificationColumns[] = {
     {"ray_set", ColumnKind::Text, "", "the timed ray set (camera: primary + shadow rays)"},
     {"ray_set_hash", ColumnKind::Text, "", "hash of the ray set's rays"},
     {"accel", ColumnKind::Text, "", "the structure's registry name"},
+    {"label", ColumnKind::Text, "", "the structure's display label (registry), of its parameters"},
     {"params", ColumnKind::Text, "", "the parameters given, canonical k=v;k=v"},
 };
 const ColumnSpec kMeasuredColumns[] = {
@@ -191,11 +192,42 @@ const RenamedColumn* renamed_from(const std::string& name) {
     return nullptr;
 }
 
+// A results header from before the `label` column (it follows `accel`).
+bool lacks_label(const std::vector<std::string>& header) {
+    return std::find(header.begin(), header.end(), "accel") != header.end() &&
+        std::find(header.begin(), header.end(), "label") == header.end();
+}
+
+// The registry's label of a row's structure, from its `accel` and canonical `params`; ""
+// for a structure or parameter the registry no longer has. A scene-dependent default
+// ("auto") is left to the structure, as a run does.
+std::string registry_label(const std::string& accel, const std::string& params) {
+    const AcceleratorInfo* info = find_accelerator(accel);
+    if (!info) return "";
+    std::map<std::string, std::string> given;
+    for (size_t at = 0; at < params.size();) {
+        const size_t end = std::min(params.find(';', at), params.size());
+        const std::string item = params.substr(at, end - at);
+        const size_t eq = item.find('=');
+        if (eq != std::string::npos) given[item.substr(0, eq)] = item.substr(eq + 1);
+        at = end + 1;
+    }
+    for (const ParamSpec& spec : info->params)
+        if (spec.scene_dependent_default && given.count(spec.name) && given[spec.name] == spec.default_value)
+            given.erase(spec.name);
+    try {
+        return info->label(resolve_params(accel, info->params, given));
+    } catch (const ParamError&) {
+        return "";
+    }
+}
+
 }  // namespace
 
 bool is_old_results_header(const std::vector<std::string>& header) {
     const auto status = status_position(header);
     if (!status) return false;
+    if (lacks_label(header)) return true;
     for (size_t i = *status + 1; i < header.size(); ++i)
         if (renamed_from(header[i])) return true;
     return false;
@@ -209,7 +241,8 @@ std::string old_header_message(const std::string& path, const std::vector<std::s
         renames.append(r.old_name).append(" -> ").append(r.new_name);
     }
     return path + ": written before the measured and global columns were renamed so that no name repeats (" + renames +
-        "; the parameter columns keep their names); convert it with `accelbench convert-csv " + path + " NEW`";
+        "; the parameter columns keep their names)" + (lacks_label(header) ? " or before the label column" : "") +
+        "; convert it with `accelbench convert-csv " + path + " NEW`";
 }
 
 std::vector<std::string> repetition_columns() {
@@ -502,6 +535,21 @@ size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
     if (!is_old_results_header(old.header))
         throw std::runtime_error(old_csv + ": already has the current column names; nothing to convert");
     std::vector<std::string> header = old.header;
+    std::vector<std::vector<std::string>> rows = old.rows;
+    // The label after `accel`, of each row's structure and parameters (the registry's).
+    std::optional<size_t> label_at;
+    if (lacks_label(header)) {
+        const size_t accel = size_t(std::find(header.begin(), header.end(), "accel") - header.begin());
+        const auto params = std::find(header.begin(), header.end(), "params");
+        const size_t params_at = size_t(params - header.begin());
+        label_at = accel + 1;
+        for (auto& r : rows) {
+            const std::string label =
+                accel < r.size() ? registry_label(r[accel], params_at < r.size() ? r[params_at] : "") : "";
+            r.insert(r.begin() + long(std::min(*label_at, r.size())), label);
+        }
+        header.insert(header.begin() + long(*label_at), "label");
+    }
     for (size_t i = *status_position(header) + 1; i < header.size(); ++i)
         if (const RenamedColumn* r = renamed_from(header[i])) header[i] = r->new_name;
     for (const RenamedColumn& r : renamed_columns())
@@ -519,7 +567,7 @@ size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
         } else {
             fs::remove(new_reps);
         }
-        write_parts(new_csv, {CsvData{header, old.rows, 0, false}});
+        write_parts(new_csv, {CsvData{header, rows, 0, false}});
     }
 
     // The check: the file as a reader sees it, against the old one cell by cell.
@@ -531,8 +579,11 @@ size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
     if (got.header != header) fail(header_mismatch(new_csv, got.header, header));
     if (got.rows.size() != old.rows.size())
         fail(std::to_string(got.rows.size()) + " rows, " + old_csv + " has " + std::to_string(old.rows.size()));
-    for (size_t i = 0; i < old.rows.size(); ++i)
-        if (got.rows[i] != old.rows[i]) fail("row " + std::to_string(i + 1) + " differs from " + old_csv + "'s");
+    for (size_t i = 0; i < old.rows.size(); ++i) {
+        std::vector<std::string> back = got.rows[i];
+        if (label_at && *label_at < back.size()) back.erase(back.begin() + long(*label_at));
+        if (back != old.rows[i]) fail("row " + std::to_string(i + 1) + " differs from " + old_csv + "'s");
+    }
     if (reps && read_csv(new_reps).rows.size() != read_csv(old_reps).rows.size())
         fail(new_reps + " has another row count than " + old_reps);
     return got.rows.size();

@@ -1,8 +1,10 @@
 #!/bin/sh
 # Cost images (where each structure spends its traversal work): for the bunny, Conference
 # and the procedural forest, the shaded
-# image and per-pixel node-visit / triangle-test heatmaps of the SAH BVH, the LBVH and the
-# kd-tree at 640x480, then one figure per model, OUT_DIR/figures/cost-<model>.png.
+# image and per-pixel node-visit / triangle-test heatmaps of every registered structure that
+# counts its traversal (`accelbench list --structures`), each at its defaults, at 640x480,
+# then one figure per model, OUT_DIR/figures/cost-<model>.png. A structure that refuses a
+# model (brute force above its triangle limit) is left out of that model's figure.
 #
 #   harness/scripts/cost_images.sh [BUILD_DIR [PYTHON [OUT_DIR]]]
 #
@@ -20,17 +22,19 @@ for model in stanford-bunny conference procedural:forest; do
     "$BUILD/accelbench" render --model "$model" --accel embree --width 640 --height 480 \
         --out "$RAW/$name-shaded.png" >/dev/null
     set --
-    for s in "bvh split=sah:BVH (binned SAH)" "lbvh:LBVH" "kdtree:kd-tree"; do
-        spec=${s%%:*}
-        label=${s#*:}
-        accel=${spec%% *}
-        params=""
-        [ "$accel" != "$spec" ] && params="--param ${spec#* }"
-        # shellcheck disable=SC2086  # $params is zero or two words
-        "$BUILD/accelbench" render --model "$model" --accel "$accel" $params --width 640 --height 480 \
-            --cost-out "$RAW/$name-$accel" >/dev/null
-        set -- "$@" --cost "$label=$RAW/$name-$accel-cost.csv"
-    done
+    structures=$("$BUILD/accelbench" list --structures)
+    tab=$(printf '\t')
+    while IFS="$tab" read -r accel label counts; do
+        [ "$counts" = yes ] || continue
+        if "$BUILD/accelbench" render --model "$model" --accel "$accel" --width 640 --height 480 \
+            --cost-out "$RAW/$name-$accel" >/dev/null 2>"$RAW/$name-$accel.err"; then
+            set -- "$@" --cost "$label=$RAW/$name-$accel-cost.csv"
+        else
+            echo "cost_images: $accel left out of $name: $(tail -n 1 "$RAW/$name-$accel.err")" >&2
+        fi
+    done <<EOF
+$structures
+EOF
     PYTHONPATH=analysis "$PYTHON" -m accelbench_analysis cost-images --model "$name" \
         --shaded "$RAW/$name-shaded.png" --out "$OUT" "$@"
 done

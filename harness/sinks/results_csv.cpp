@@ -1,5 +1,6 @@
 #include "sinks/results_csv.h"
 
+#include "accelbench/accel/registry.h"
 #include "csv/provenance.h"
 #include "util/stats.h"
 #include "util/text.h"
@@ -24,6 +25,7 @@ Row identification_row(const Config& config, const CombinationResult& result) {
     // timed together (`camera`, whether from the camera or a ray file: see ray_source).
     if (!judged) r["ray_set"] = c.ray_set ? std::string(ray_set_name(*c.ray_set)) : "camera";
     r["accel"] = c.accel;
+    if (const AcceleratorInfo* info = find_accelerator(c.accel)) r["label"] = info->label(c.params);
     r["params"] = c.params.canonical();
     for (const auto& [k, v] : c.params.items()) r[param_column(k)] = v;
     if (!model.rays && !judged) {

@@ -74,7 +74,7 @@ private:
 };
 
 AcceleratorInfo test_accel(const char* name, std::function<std::unique_ptr<Accelerator>()> make) {
-    return {name, "test structure", {}, [make](const ParamSet&) { return make(); }};
+    return {name, "test structure", {}, [make](const ParamSet&) { return make(); }, fixed_label(name)};
 }
 
 TEST(MeasureTest, BruteForceReportsTimesCountsAndJson) {

@@ -113,7 +113,7 @@ TEST(ColumnTableTest, ATableWithANameTwiceIsRefusedNamingIt) {
 const std::string kOldHeader =
     "config,combo_id,accel,params,max_depth,threads,width,status,rays,max_depth,width,height,threads,isa\n";
 const std::string kNewHeader =
-    "config,combo_id,accel,params,max_depth,threads,width,status,rays,tree_depth,image_width,image_height,"
+    "config,combo_id,accel,label,params,max_depth,threads,width,status,rays,tree_depth,image_width,image_height,"
     "render_threads,isa\n";
 
 TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
@@ -127,13 +127,35 @@ TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
     EXPECT_TRUE(is_old_results_header(read_csv(old_csv).header));
     const std::string new_csv = (dir.path() / "sub" / "new.csv").string();
     EXPECT_EQ(convert_results(old_csv, new_csv), 3u);
-    EXPECT_EQ(read_file(new_csv), kNewHeader + rows);
+    // The label column is added after accel, the registry's label of each row.
+    EXPECT_EQ(read_file(new_csv), kNewHeader +
+                  "t,1,kdtree,kd-tree,max_depth=5,5,,,ok,10,5,64,48,2,sse2\n"
+                  "t,2,wbvh,\"wide BVH (4, SIMD)\",width=4,,,4,ok,10,17,64,48,2,\"a,b\"\n"
+                  "t,3,lbvh,LBVH,threads=3,,3,,skipped,,,,,1,sse2\n");
     EXPECT_EQ(read_file(repetitions_path(new_csv)), "combo_id,repetition\n1,1\n2,1\n");
     EXPECT_FALSE(is_old_results_header(read_csv(new_csv).header));
     // A file already new, and the output being the input, are refused.
     EXPECT_THROW(convert_results(new_csv, (dir.path() / "again.csv").string()), std::runtime_error);
     EXPECT_THROW(convert_results(old_csv, old_csv), std::runtime_error);
     EXPECT_EQ(read_file(old_csv), kOldHeader + rows);
+}
+
+TEST(ConvertTest, AFileWithCurrentNamesButNoLabelGetsTheRegistrysLabels) {
+    TempDir dir("accelbench-convert-test-");
+    const auto old_csv = write_file(dir.path(), "old.csv",
+                                    "config,combo_id,accel,params,split,status,tree_depth\n"
+                                    "t,1,bvh,split=sah,sah,ok,7\n"
+                                    "t,2,gone,,,ok,3\n"
+                                    "t,3,kdtree,max_depth=auto,,ok,9\n");
+    EXPECT_TRUE(is_old_results_header(read_csv(old_csv).header));
+    const std::string new_csv = (dir.path() / "new.csv").string();
+    EXPECT_EQ(convert_results(old_csv, new_csv), 3u);
+    // A structure the registry no longer has gets an empty label; "auto" stays the structure's.
+    EXPECT_EQ(read_file(new_csv),
+              "config,combo_id,accel,label,params,split,status,tree_depth\n"
+              "t,1,bvh,BVH (binned SAH),split=sah,sah,ok,7\n"
+              "t,2,gone,,,,ok,3\n"
+              "t,3,kdtree,kd-tree,max_depth=auto,,ok,9\n");
 }
 
 TEST(ConvertTest, ResumeAndMergeOfAnOldFileSayWhatWasRenamedAndHowToConvert) {

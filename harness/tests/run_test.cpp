@@ -71,6 +71,7 @@ TEST_F(RunTest, WritesOneRowPerCombination) {
     EXPECT_EQ(bf.at("config"), "e2e");
     EXPECT_EQ(bf.at("triangles"), "1000");
     EXPECT_EQ(bf.at("params"), "max_triangles=20000;force=false");
+    EXPECT_EQ(bf.at("label"), "brute force");  // the registry's display label
     EXPECT_EQ(bf.at(param_column("max_triangles")), "20000");
     EXPECT_EQ(bf.at(param_column("quality")), "");  // not a brute_force parameter
     EXPECT_EQ(bf.at("repetitions"), "2");
@@ -100,6 +101,7 @@ TEST_F(RunTest, WritesOneRowPerCombination) {
 
     const auto& skipped = by_name.at("tri-rays/embree/high");
     EXPECT_EQ(skipped.at("status"), "skipped");
+    EXPECT_EQ(skipped.at("label"), "Embree");  // every row has it, whatever its status
     EXPECT_EQ(skipped.at("message"), "tiny scene");
     EXPECT_EQ(skipped.at("build_s_median"), "");
     EXPECT_EQ(skipped.at("triangles"), "1");

@@ -125,6 +125,7 @@ RESULT_CSV_COLUMNS: list[tuple[str, str]] = [
     ("ray_set", "text"),
     ("ray_set_hash", "text"),
     ("accel", "text"),
+    ("label", "text"),
     ("params", "text"),
     ("status", "text"),
     ("message", "text"),

@@ -109,6 +109,10 @@ struct AcceleratorInfo {
     std::string description;
     std::vector<ParamSpec> params;
     std::function<std::unique_ptr<Accelerator>(const ParamSet&)> create;
+    // The display label the tables and figures use (the CSV column `label`), of the
+    // resolved parameters: one structure may appear as several, as the wide BVH of width 4
+    // and of width 8 do.
+    std::function<std::string(const ParamSet&)> label;
     // Whether closest_hits/any_hits fill RayStats (node visits, box and primitive tests).
     // When not, the count columns stay missing and cost images cannot be made.
     bool counts_traversal = true;
@@ -120,6 +124,11 @@ struct AcceleratorInfo {
     // finding to report, not a bug the tests hold against it.
     bool third_party = false;
 };
+
+// A label that does not depend on the parameters.
+inline std::function<std::string(const ParamSet&)> fixed_label(std::string text) {
+    return [text = std::move(text)](const ParamSet&) { return text; };
+}
 
 }  // namespace accelbench
 

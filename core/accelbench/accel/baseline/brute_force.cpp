@@ -14,7 +14,8 @@ AcceleratorInfo BruteForce::info() {
             {"max_triangles", ParamType::Int, "20000", {}, 0, 1e12, "largest scene it builds without force"},
             {"force", ParamType::Bool, "false", {}, 0, 1, "build even above max_triangles"},
         },
-        [](const ParamSet& p) { return std::make_unique<BruteForce>(Config::from(p)); }};
+        [](const ParamSet& p) { return std::make_unique<BruteForce>(Config::from(p)); },
+        fixed_label("brute force")};
 }
 
 BruteForce::Config BruteForce::Config::from(const ParamSet& p) {

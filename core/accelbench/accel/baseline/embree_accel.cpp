@@ -22,6 +22,7 @@ AcceleratorInfo EmbreeAccel::info() {
                     {"compact", ParamType::Bool, "false", {}, 0, 1, "RTC_SCENE_FLAG_COMPACT (less memory)"},
                 },
             .create = [](const ParamSet& p) { return std::make_unique<EmbreeAccel>(Config::from(p)); },
+            .label = fixed_label("Embree"),
             // Embree's kernels keep their traversal to themselves: no per-ray counts.
             .counts_traversal = false,
             // Without RTC_SCENE_FLAG_ROBUST its triangle test may leak through shared

@@ -18,7 +18,8 @@ AcceleratorInfo ReferenceAccel::info() {
             {
                 {"leaf_size", ParamType::Int, "4", {}, 1, 64, "largest number of triangles in a leaf"},
             },
-            [](const ParamSet& p) { return std::make_unique<ReferenceAccel>(Config::from(p)); }};
+            [](const ParamSet& p) { return std::make_unique<ReferenceAccel>(Config::from(p)); },
+            fixed_label("reference")};
 }
 
 ReferenceAccel::Config ReferenceAccel::Config::from(const ParamSet& p) {

@@ -17,6 +17,18 @@ namespace {
 
 constexpr std::array<std::string_view, 2> kAxisNames = {"longest", "round_robin"};  // BvhAxisRule's order
 
+// How tables and figures name a split (the report's words where it has them).
+std::string split_label(Bvh::Split split) {
+    switch (split) {
+        case Bvh::Split::median: return "median";
+        case Bvh::Split::midpoint: return "midpoint";
+        case Bvh::Split::mean: return "mean";
+        case Bvh::Split::spatial_median: return "spatial median";
+        case Bvh::Split::sah: return "binned SAH";
+    }
+    return "?";
+}
+
 }  // namespace
 
 AcceleratorInfo Bvh::info() {
@@ -95,7 +107,8 @@ AcceleratorInfo Bvh::info() {
                  "passes of the reinsertion optimizer after the build (Meister & Bittner 2018; 0 = off, bvh v2 "
                  "uses 3): lower SAH cost for a longer build, the same answers"},
             },
-            [](const ParamSet& p) { return std::make_unique<Bvh>(p); }};
+            [](const ParamSet& p) { return std::make_unique<Bvh>(p); },
+            [](const ParamSet& p) { return "BVH (" + split_label(Split(enum_index(kSplitNames, p.get_enum("split")))) + ")"; }};
 }
 
 Bvh::Config Bvh::Config::from(const ParamSet& p) {

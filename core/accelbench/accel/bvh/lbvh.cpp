@@ -68,7 +68,8 @@ AcceleratorInfo Lbvh::info() {
                  "radix sort digit width: bits per counting pass"},
                 bvh_traversal_param(),
             },
-            [](const ParamSet& p) { return std::make_unique<Lbvh>(p); }};
+            [](const ParamSet& p) { return std::make_unique<Lbvh>(p); },
+            fixed_label("LBVH")};
 }
 
 Lbvh::Config Lbvh::Config::from(const ParamSet& p) {

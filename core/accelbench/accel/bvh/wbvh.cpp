@@ -141,7 +141,11 @@ AcceleratorInfo Wbvh::info() {
                  "simd: the vector slab and triangle tests compiled in (scalar on a target without SSE2); "
                  "scalar: the scalar forms, identical answers (for testing and measuring the vector gain)"},
             },
-            [](const ParamSet& p) { return std::make_unique<Wbvh>(p); }};
+            [](const ParamSet& p) { return std::make_unique<Wbvh>(p); },
+            [](const ParamSet& p) {
+                return "wide BVH (" + p.get_enum("width") + ", " + (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") +
+                    ")";
+            }};
 }
 
 Wbvh::Config Wbvh::Config::from(const ParamSet& params) {

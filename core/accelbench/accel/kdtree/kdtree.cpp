@@ -71,7 +71,8 @@ AcceleratorInfo KdTree::info() {
                  "test a triangle once per ray even when several leaves the ray visits hold it (the same "
                  "answers; prim_tests then counts the tests made)"},
             },
-            [](const ParamSet& p) { return std::make_unique<KdTree>(p); }};
+            [](const ParamSet& p) { return std::make_unique<KdTree>(p); },
+            fixed_label("kd-tree")};
 }
 
 KdTree::Config KdTree::Config::from(const ParamSet& p) {
