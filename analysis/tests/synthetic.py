@@ -64,8 +64,8 @@ MODELS = {  # name: (triangles, vertices)
 
 
 def header(with_errors: bool = False) -> list[str]:
-    """The harness's header: note that max_depth and threads occur twice (parameter and
-    statistic/provenance), which the loader resolves by position. with_errors adds the
+    """The harness's header, every name once: the parameter columns (max_depth, threads)
+    and the measured and global ones (tree_depth, render_threads). with_errors adds the
     optional columns (errors vs the reference, peak_rss_bytes, verdict, verdict_counts)."""
     cols = IDENTITY_COLUMNS + PARAM_NAMES + STATUS_COLUMNS + TIMING_COLUMNS + COUNT_COLUMNS
     if with_errors:
