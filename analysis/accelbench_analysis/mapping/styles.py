@@ -1,4 +1,4 @@
-"""One colour and one marker per structure, the same in every figure.
+"""One colour per structure, the same in every figure.
 
 Styles are assigned by order, benchopt-style, never looked up in a hand-kept table that a new
 structure can miss: the analysis's structures (selection.STRUCTURES, the registry's order)
@@ -41,7 +41,6 @@ _BASE = [
     "#dbdb8d",
 ]
 BASELINE, BASELINE_COLOUR = "Embree", "#7f7f7f"
-MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "<", ">", "h", "p"]
 KNOWN = [s.label for s in STRUCTURES]
 
 
@@ -64,34 +63,25 @@ def structure_order(labels: Iterable[str]) -> list[str]:
 
 
 class Styles:
-    """Colours and markers for one figure's labels. Known structures keep their place across
+    """Colours for one figure's labels. Known structures keep their place across
     figures; unknown labels take places after every known one. Embree, the baseline row,
     is grey."""
 
     def __init__(self, labels: Iterable[str]):
         self.order = structure_order(labels)
         coloured = [k for k in KNOWN if k != BASELINE]
-        self.places: dict[str, int] = {}
-        nxt = len(coloured)
-        for label in self.order:
-            if label in coloured:
-                self.places[label] = coloured.index(label)
-            elif label == BASELINE:
-                self.places[label] = len(_BASE) + 10_000  # its own marker; its colour is grey
-            else:
-                self.places[label], nxt = nxt, nxt + 1
+        unknown = iter(range(len(coloured), len(coloured) + len(self.order)))
+        self.places = {
+            label: coloured.index(label) if label in coloured else next(unknown)
+            for label in self.order
+            if label != BASELINE
+        }
 
     def colour(self, label: str) -> str:
         return BASELINE_COLOUR if label == BASELINE else colour_at(self.places[label])
 
-    def marker(self, label: str) -> str:
-        return MARKERS[self.places[label] % len(MARKERS)]
-
     def palette(self) -> dict[str, str]:
         return {label: self.colour(label) for label in self.order}
-
-    def markers(self) -> dict[str, str]:
-        return {label: self.marker(label) for label in self.order}
 
 
 def accel_label(accel: str) -> str:

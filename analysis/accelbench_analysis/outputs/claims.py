@@ -22,7 +22,7 @@ import pandas as pd
 from ..inputs.report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
 from ..inputs.schema import Results
 from ..mapping.selection import Picker, setting_spec
-from .cost_model import FlooredSource, cost_model_lines, fit_all, write_cost_model
+from .cost_model import AdjustedSource, FlooredSource, cost_model_lines, fit_all, write_cost_model
 from .formatting import fmt_sig, md_escape
 from .tables import METRIC, preferred_variant
 
@@ -635,36 +635,23 @@ def timing_spread(results: Results) -> tuple[float, str]:
     return spread, (parts[0] if parts else "no repeated measurement")
 
 
-class PerturbedSource:
+class PerturbedSource(AdjustedSource):
     """Our numbers with every timed value scaled by its own factor in [1 - s, 1 + s]: a
     failing claim that holds under some draw is a verdict inside the run's spread."""
 
     def __init__(self, base: OurSource, spread: float, seed: int):
-        self.base, self.spread = base, spread
+        super().__init__(base)
+        self.spread = spread
         self.rng = random.Random(seed)
         self.factors: dict[tuple, float] = {}
 
-    def begin(self) -> None:
-        self.base.begin()
-
-    def groups(self) -> set[str]:
-        return self.base.groups()
-
-    def primitives(self, model: str) -> float:
-        return self.base.primitives(model)
-
-    def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
-        if metric == "total":
-            return self.get(model, structure, "build", setting) + self.get(
-                model, structure, "render", setting
-            )
-        v = self.base.get(model, structure, metric, setting)
+    def adjust(self, model: str, structure: str, metric: str, setting: str, value: float) -> float:
         if metric not in TIMED_METRICS:
-            return v
+            return value
         key = (model, structure, metric, setting)
         if key not in self.factors:
             self.factors[key] = self.rng.uniform(1 - self.spread, 1 + self.spread)
-        return v * self.factors[key]
+        return value * self.factors[key]
 
 
 def holds_within(c: Claim, base: OurSource, spread: float, verdict: str = HOLDS) -> bool:
@@ -825,13 +812,19 @@ def classify(row: ClaimRow, src: RecordingSource, spread: float, spread_how: str
     row.reason = f"no ablation of this run reproduces the report here; measured: {ours.evidence}"
 
 
+def sweep_fits(results: Results, report_nums: pd.DataFrame) -> tuple[dict, dict]:
+    """The cost model's fits of every Table 2 sweep: (the report's, ours)."""
+    return fit_all(ReportSource(report_nums), Missing), fit_all(OurSource(results, report_nums), Missing)
+
+
 def evaluate_all(
-    results: Results, report_nums: pd.DataFrame, reference: Results | None = None
+    results: Results, report_nums: pd.DataFrame, reference: Results | None = None, fits: tuple | None = None
 ) -> tuple[list[ClaimRow], OurSource]:
+    """fits: sweep_fits(results, report_nums) where the caller has them already."""
     rsrc, osrc = ReportSource(report_nums), RecordingSource(results, report_nums)
     refsrc = OurSource(reference, report_nums) if reference is not None else None
     spread, how = timing_spread(results)
-    fits = fit_all(rsrc, Missing), fit_all(osrc, Missing)
+    fits = fits or sweep_fits(results, report_nums)
     ordered = OurSource(results, report_nums, traversal="ordered")
     abl_srcs = [(a, s) for a in ABLATIONS if (s := a.source(results, report_nums, fits)) is not None]
     rows = []
@@ -963,8 +956,9 @@ def write_claims(
     results: Results, report_nums: pd.DataFrame, out_dir: Path, reference: Results | None = None
 ) -> tuple[Path, list[ClaimRow]]:
     out_dir.mkdir(parents=True, exist_ok=True)
-    rows, osrc = evaluate_all(results, report_nums, reference)
-    write_cost_model_files(results, report_nums, rows, out_dir)
+    fits = sweep_fits(results, report_nums)
+    rows, osrc = evaluate_all(results, report_nums, reference, fits)
+    write_cost_model_files(fits, rows, out_dir)
     path = out_dir / "claims.md"
     path.write_text(claims_markdown(rows, results, osrc, reference))
     pd.DataFrame([r.csv_row() for r in rows], columns=list(CSV_COLUMNS)).to_csv(
@@ -973,21 +967,17 @@ def write_claims(
     return path, rows
 
 
-def write_cost_model_files(
-    results: Results, report_nums: pd.DataFrame, rows: list[ClaimRow], out_dir: Path
-) -> None:
+def write_cost_model_files(fits: tuple[dict, dict], rows: list[ClaimRow], out_dir: Path) -> None:
     """tables/cost_model.csv (both sides' fits, point by point) and cost_model.md (its text,
     which REPORT.md's cost model section shows)."""
-    report_fits = fit_all(ReportSource(report_nums), Missing)
-    our_fits = fit_all(OurSource(results, report_nums), Missing)
+    report_fits, our_fits = fits
     if not report_fits or not our_fits:
         return
+    floor = next(a for a in ABLATIONS if a.cost_model).describe()
     decided = [
         r.claim.id
         for r in rows
-        if r.ablation.startswith("tables/cost_model")
-        and r.ablation_finding
-        and r.ablation_finding.verdict == HOLDS
+        if r.ablation == floor and r.ablation_finding and r.ablation_finding.verdict == HOLDS
     ]
     write_cost_model(report_fits, our_fits, out_dir)
     text = ["# A cost model of render time", ""] + cost_model_lines(report_fits, our_fits, decided)

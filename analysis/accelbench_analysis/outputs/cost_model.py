@@ -116,19 +116,14 @@ def sweep_of(setting: str) -> str | None:
     return next((name for name, settings in SWEEPS.items() if setting in settings), None)
 
 
-class FlooredSource:
-    """Our numbers with our render floor replaced by the report's, in tests' worth at our cost
-    of a test: render' = render - a_ours + b_ours * (a_report / b_report), each sweep with its
-    own fits. Every other number is ours, unchanged. This is the one difference "the
-    report's renderer has a fixed floor" makes; a claim that holds here is decided by it."""
+class AdjustedSource:
+    """A claims source that is another source with some of its values changed: everything
+    but `adjust` is the base's, and "total" is build + render of the adjusted values."""
 
     name = "ours"
 
-    def __init__(self, base, ours: dict[str, SweepFit], report: dict[str, SweepFit]):
-        absent = [s for s in SWEEPS if s not in ours or s not in report]
-        if absent:
-            raise ValueError(f"no fit of the {', '.join(absent)} sweep on both sides")
-        self.base, self.ours, self.report = base, ours, report
+    def __init__(self, base):
+        self.base = base
 
     def begin(self) -> None:
         self.base.begin()
@@ -144,12 +139,33 @@ class FlooredSource:
             return self.get(model, structure, "build", setting) + self.get(
                 model, structure, "render", setting
             )
-        v = self.base.get(model, structure, metric, setting)
+        return self.adjust(
+            model, structure, metric, setting, self.base.get(model, structure, metric, setting)
+        )
+
+    def adjust(self, model: str, structure: str, metric: str, setting: str, value: float) -> float:
+        raise NotImplementedError
+
+
+class FlooredSource(AdjustedSource):
+    """Our numbers with our render floor replaced by the report's, in tests' worth at our cost
+    of a test: render' = render - a_ours + b_ours * (a_report / b_report), each sweep with its
+    own fits. Every other number is ours, unchanged. This is the one difference "the
+    report's renderer has a fixed floor" makes; a claim that holds here is decided by it."""
+
+    def __init__(self, base, ours: dict[str, SweepFit], report: dict[str, SweepFit]):
+        absent = [s for s in SWEEPS if s not in ours or s not in report]
+        if absent:
+            raise ValueError(f"no fit of the {', '.join(absent)} sweep on both sides")
+        super().__init__(base)
+        self.ours, self.report = ours, report
+
+    def adjust(self, model: str, structure: str, metric: str, setting: str, value: float) -> float:
         sweep = sweep_of(setting)
         if metric != "render" or model != SWEEP_MODEL or structure != SWEEP_STRUCTURE or sweep is None:
-            return v
+            return value
         o, r = self.ours[sweep].fit, self.report[sweep].fit
-        return v - o.a + o.b * r.floor_tests
+        return value - o.a + o.b * r.floor_tests
 
 
 def describe(f: SweepFit) -> str:

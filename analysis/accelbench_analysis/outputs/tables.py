@@ -487,8 +487,8 @@ def model_table(
     rows += error_sections(
         srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)], len(SUBCOLUMNS)
     )
+    labels = {sr.structure.key: sr.structure.label for sr in srows}
     for (o, skey, variant), pick in picks.items():
-        labels = {sr.structure.key: sr.structure.label for sr in srows}
         label = labels[skey] + (f" [traversal={variant}]" if variant else "")
         if not pick.ok:
             notes.append(f"{label} on {o}: {pick.reason}.")
