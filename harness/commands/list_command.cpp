@@ -17,7 +17,8 @@ int list_command(int argc, char** argv) {
     // scripts: name, tab, label at the defaults, tab, whether it counts traversal (yes/no).
     if (argc > 0 && std::string(argv[0]) == "--structures") {
         for (const auto& info : accelerator_registry())
-            std::printf("%s\t%s\t%s\n", info.name.c_str(), info.label(resolve_params(info.name, info.params, {})).c_str(),
+            std::printf("%s\t%s\t%s\n", info.name.c_str(),
+                        info.label(resolve_params(info.name, info.params, {})).c_str(),
                         info.counts_traversal ? "yes" : "no");
         return 0;
     }

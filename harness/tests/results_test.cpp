@@ -128,7 +128,8 @@ TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
     const std::string new_csv = (dir.path() / "sub" / "new.csv").string();
     EXPECT_EQ(convert_results(old_csv, new_csv), 3u);
     // The label column is added after accel, the registry's label of each row.
-    EXPECT_EQ(read_file(new_csv), kNewHeader +
+    EXPECT_EQ(read_file(new_csv),
+              kNewHeader +
                   "t,1,kdtree,kd-tree,max_depth=5,5,,,ok,10,5,64,48,2,sse2\n"
                   "t,2,wbvh,\"wide BVH (4, SIMD)\",width=4,,,4,ok,10,17,64,48,2,\"a,b\"\n"
                   "t,3,lbvh,LBVH,threads=3,,3,,skipped,,,,,1,sse2\n");

@@ -108,7 +108,9 @@ AcceleratorInfo Bvh::info() {
                  "uses 3): lower SAH cost for a longer build, the same answers"},
             },
             [](const ParamSet& p) { return std::make_unique<Bvh>(p); },
-            [](const ParamSet& p) { return "BVH (" + split_label(Split(enum_index(kSplitNames, p.get_enum("split")))) + ")"; }};
+            [](const ParamSet& p) {
+                return "BVH (" + split_label(Split(enum_index(kSplitNames, p.get_enum("split")))) + ")";
+            }};
 }
 
 Bvh::Config Bvh::Config::from(const ParamSet& p) {

@@ -143,8 +143,8 @@ AcceleratorInfo Wbvh::info() {
             },
             [](const ParamSet& p) { return std::make_unique<Wbvh>(p); },
             [](const ParamSet& p) {
-                return "wide BVH (" + p.get_enum("width") + ", " + (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") +
-                    ")";
+                return "wide BVH (" + p.get_enum("width") + ", " +
+                    (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") + ")";
             }};
 }
 
