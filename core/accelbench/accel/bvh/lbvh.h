@@ -23,11 +23,14 @@
 //                 bit, and both scans find the same boundary: the node arrays are
 //                 byte-equal, and only the build time tells the builds apart.
 //
-// Subtrees are independent, which is what the report parallelises (section 3.2.1, its
-// "conditional multithreading": a new thread only for subtrees above a threshold). The
-// tree does not depend on the thread count: each task builds its subtree into its own
-// node buffer, and the parent appends it right after its first child's nodes, which is
-// where a one-thread depth-first build puts it.
+// Every stage runs on `threads` threads (Karras 2012 builds each in parallel): the codes,
+// the radix sort and the gathering of the sorted boxes in blocks, the hierarchy as tasks —
+// subtrees are independent, which is what the report parallelises too (section 3.2.1, its
+// "conditional multithreading": a new thread only for subtrees above a threshold); here a
+// second child above task_threshold primitives is handed out as a task, and the box fitting
+// (Karras's bottom-up unions, or the report's top-down fits) happens inside each task. The
+// tree does not depend on the thread count: each task builds its subtree into a piece of its
+// own, and the pieces are assembled where a one-thread depth-first build puts them.
 //
 // The tree is the shared FlatBvh and is traversed by the shared traversals
 // (bvh_traversal.h), exactly as the report reuses its BVH traversal (section 3.2).
@@ -41,6 +44,7 @@
 #include "accelbench/accel/accelerator.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
 #include "accelbench/accel/bvh/flat_bvh.h"
+#include "accelbench/base/parallel.h"
 #include "accelbench/base/radix_sort.h"
 
 namespace accelbench {
@@ -61,7 +65,7 @@ public:
         int bits = 10;                  // Morton grid bits per axis
         uint32_t max_prims = 1;         // a range of at most this many primitives is a leaf (report: 1)
         uint32_t max_depth = 50;        // a node at this depth is a leaf (report: 50)
-        int threads = 1;                // build threads; 0 in the parameter = all cores
+        int threads = 1;                // build threads (the parameter's 0 = all cores resolved)
         uint32_t task_threshold = 100;  // a subtree goes to another thread only above this size (report: 100)
         // 10: a 30-bit code is exactly three digits, and three 1024-entry histograms
         // (12 KB) stay in L1 while counting. 8 needs a 4th pass.
@@ -118,6 +122,8 @@ private:
     SortBuffers<uint32_t> sort32_;
     SortBuffers<uint64_t> sort64_;
     std::vector<Bounds3> sorted_bounds_;
+    BvhNodeArray spare_nodes_;  // several threads: the root piece's nodes (flat_bvh.h)
+    BuildThreads threads_;
 };
 
 }  // namespace accelbench
