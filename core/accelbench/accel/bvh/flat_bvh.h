@@ -45,6 +45,13 @@ struct FlatBvh {
     bool empty() const { return nodes.empty(); }
 };
 
+// The nodes of node i's subtree are [i, subtree_end(i)): a depth-first subtree ends after
+// its last second child's.
+inline size_t subtree_end(const FlatBvh& bvh, size_t i) {
+    while (!bvh.nodes[i].is_leaf()) i = bvh.nodes[i].second_child();
+    return i + 1;
+}
+
 // A subtree of a binary BVH built by one task (base/tree_pieces.h): nodes only, as leaves
 // index the slot arrays every task shares (each writes its own range of them).
 struct NoLeafItems {};
