@@ -206,9 +206,9 @@ grid-search: build venv
 
 # ---- robustness: extreme cases and stiff parameters -----------------------------------
 # configs/robustness.yaml: every case of the extreme-case catalogue judged by every
-# accelerator setting (the verdict table ends the log), the stiff parameters timed on a
+# structure setting (the verdict table ends the log), the stiff parameters timed on a
 # dense cluster and the 871k dragon; then the analysis's robustness report. Always a fresh
-# run (about 70 seconds). Writes results/robustness/{robustness.csv,robustness.log,robustness.md}.
+# run (about 100 seconds). Writes results/robustness/{robustness.csv,robustness.log,robustness.md}.
 ROBUSTNESS_DIR ?= results/robustness
 
 robustness: build models venv
