@@ -25,6 +25,8 @@ namespace {
 const char* kRunUsage =
     "usage: accelbench run [options] CONFIG.yaml\n"
     "  --dry-run             print the expanded combinations and their count; measure nothing\n"
+    "  --dry-run=json        the same as one JSON document, with each accelerator entry's axes (ranges\n"
+    "                        expanded, canonical values): for programs, such as the grid search\n"
     "  --out FILE            results CSV (default results/runs/<name>-<timestamp>.csv); repetitions go\n"
     "                        beside it in FILE minus .csv plus .reps.csv\n"
     "  --resume              append to the output file, skipping combinations already in it (without\n"
@@ -63,7 +65,7 @@ int run(const RunOptions& opt) {
     try {
         RunPlan plan = plan_run(opt);
         if (opt.dry_run) {
-            print_dry_run(plan);
+            print_dry_run(plan, opt.dry_run_json);
             return 0;
         }
         initialize_google_benchmark(opt.benchmark_args);
@@ -109,6 +111,7 @@ int run_command(int argc, char** argv) {
                 std::printf("%s", kRunUsage);
                 return 0;
             } else if (a == "--dry-run") opt.dry_run = true;
+            else if (a == "--dry-run=json") opt.dry_run = opt.dry_run_json = true;
             else if (a == "--resume") opt.resume = true;
             else if (a == "--in-process") opt.in_process = true;
             else if (a == "--show-repetitions") opt.show_repetitions = true;
