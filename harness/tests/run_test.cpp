@@ -7,7 +7,7 @@
 #include <map>
 #include <set>
 
-#include "commands/run_command.h"
+#include "commands/cli.h"
 #include "csv/csv.h"
 #include "csv/results.h"
 #include "harness_test_util.h"
