@@ -194,21 +194,21 @@ GRID_OUT     = results/grid/$(GRID_NAME)
 grid-search: build venv
 	mkdir -p $(GRID_RUNS)
 	$(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-1.csv $(GRID_CONFIG) > $(GRID_RUNS)/pass-1.log
-	@mode=$$(PYTHONPATH=analysis $(PYTHON) -c 'import sys; from accelbench_analysis.grid.grid_config import load_grid_config; print(load_grid_config(sys.argv[1]).mode)' $(GRID_CONFIG)) || exit 2; \
+	@mode=$$(PYTHONPATH=analysis $(PYTHON) -c 'import sys; from accelbench_analysis.grid.grid_config import load_grid_config; print(load_grid_config(sys.argv[1], sys.argv[2]).mode)' $(GRID_CONFIG) $(ACCELBENCH)) || exit 2; \
 	set -ex; \
 	if [ "$$mode" = successive_halving ]; then \
-	  $(ANALYSIS) grid-halve $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_RUNS)/pass-2.yaml; \
+	  $(ANALYSIS) grid-halve $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --accelbench $(ACCELBENCH) --out $(GRID_RUNS)/pass-2.yaml; \
 	  $(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-2.csv $(GRID_RUNS)/pass-2.yaml > $(GRID_RUNS)/pass-2.log; \
-	  $(ANALYSIS) grid $(GRID_RUNS)/pass-2.csv --cheap $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
+	  $(ANALYSIS) grid $(GRID_RUNS)/pass-2.csv --cheap $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --accelbench $(ACCELBENCH) --out $(GRID_OUT); \
 	else \
-	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
+	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --accelbench $(ACCELBENCH) --out $(GRID_OUT); \
 	fi
 
 # ---- robustness: extreme cases and stiff parameters -----------------------------------
 # configs/robustness.yaml: every case of the extreme-case catalogue judged by every
-# accelerator setting (the verdict table ends the log), the stiff parameters timed on a
+# structure setting (the verdict table ends the log), the stiff parameters timed on a
 # dense cluster and the 871k dragon; then the analysis's robustness report. Always a fresh
-# run (about 70 seconds). Writes results/robustness/{robustness.csv,robustness.log,robustness.md}.
+# run (about 100 seconds). Writes results/robustness/{robustness.csv,robustness.log,robustness.md}.
 ROBUSTNESS_DIR ?= results/robustness
 
 robustness: build models venv

@@ -153,6 +153,11 @@ def add_grid(sub) -> None:
     )
     s.add_argument("--out", type=Path, help="output directory (default: results/grid/NAME/)")
     s.add_argument("--no-heatmaps", action="store_true", help="skip the PNGs")
+    s.add_argument(
+        "--accelbench",
+        type=Path,
+        help="the accelbench binary that expands the config's axes (default: $ACCELBENCH, else build/accelbench)",
+    )
     h = sub.add_parser(
         "grid-halve",
         help="successive halving: write the second pass's config (top K per model)",
@@ -166,6 +171,11 @@ def add_grid(sub) -> None:
         "--keep", type=int, help="candidates per model to keep (default: grid.successive_halving.keep)"
     )
     h.add_argument("--out", type=Path, required=True, help="the second pass's config (YAML)")
+    h.add_argument(
+        "--accelbench",
+        type=Path,
+        help="the accelbench binary that expands the config's axes (default: $ACCELBENCH, else build/accelbench)",
+    )
 
 
 def add_scaling(sub) -> None:
@@ -329,7 +339,7 @@ def run_grid(args: argparse.Namespace) -> int:
     from .grid.grid import analyse, write_outputs
     from .grid.grid_config import load_grid_config
 
-    cfg = load_grid_config(args.config)
+    cfg = load_grid_config(args.config, args.accelbench)
     results = load_results(args.csv)
     cheap = load_results(args.cheap) if args.cheap else None
     for w in results.warnings + (cheap.warnings if cheap else []):
@@ -348,7 +358,7 @@ def run_grid_halve(args: argparse.Namespace) -> int:
     from .grid.grid import analyse, dump_yaml, halve
     from .grid.grid_config import GridConfigError, load_grid_config
 
-    cfg = load_grid_config(args.config)
+    cfg = load_grid_config(args.config, args.accelbench)
     keep = args.keep if args.keep is not None else cfg.keep
     if keep is None:
         raise GridConfigError("give --keep or grid.successive_halving.keep in the config")
