@@ -381,6 +381,9 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
     write_run_json(run_dir, meta)
     if job.latest is not None and job.into is None:
         point_latest(job.latest, run_dir)
+    from .outputs.runs_page import write_runs_page
+
+    write_runs_page(job.runs.parent)
     took = clock(time.monotonic() - progress.start)
     print(
         f"reproduce: done in {took}; see {run_dir / 'REPORT.md'}"

@@ -29,6 +29,7 @@ import seaborn as sns  # noqa: E402
 
 from ..inputs.schema import CAMERA_SET, RAY_SETS, Results  # noqa: E402
 from .formatting import md_escape  # noqa: E402
+from .interactive import ray_sets_spec, thread_scaling_spec, write_spec  # noqa: E402
 
 BASELINE = "embree"
 
@@ -289,6 +290,7 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
             tables / "ray_sets.csv",
             tables / "ray_set_ranking.md",
             ray_set_figure(rows, figures / "ray_sets.png"),
+            write_spec(figures / "ray_sets.png", ray_sets_spec(table, list(rows["ray_set"].cat.categories))),
         ]
     ts = thread_scaling_rows(results)
     if not ts.empty:
@@ -315,5 +317,6 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
             tables / "thread_scaling.md",
             tables / "thread_scaling.csv",
             thread_scaling_figure(ts, figures / "thread_scaling.png"),
+            write_spec(figures / "thread_scaling.png", thread_scaling_spec(ts)),
         ]
     return written
