@@ -467,7 +467,7 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
     )
     g.figure.suptitle(title, y=1.04)
     save_figure(g, path)
-    write_spec(path, error_pareto_spec(df, fronts, y, title.replace("\n", " ")))
+    write_spec(path, error_pareto_spec(df, fronts, y, title.replace("\n", " "), colours))
     return path
 
 

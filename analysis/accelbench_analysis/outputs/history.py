@@ -35,6 +35,7 @@ from .regress import ERROR_COUNTS, EXACT_COUNTS, RENDER_SETTING_COLUMNS, embree_
 
 HISTORY_DIR = Path("results/history")
 COLLECTED = "collected.csv"
+SOURCES = "sources.csv"
 HISTORY = "history.csv"
 VERDICTS = "regress.csv"
 
@@ -126,29 +127,39 @@ def measured_rows(src: Source, results: Path) -> pd.DataFrame:
 IDENTITY = ["file", "timestamp", "config", *COMBINATION]
 
 
-def collect(results: Path, store: Path) -> tuple[pd.DataFrame, list[str]]:
-    """The stored rows plus those on disk that the store does not hold; notes on files
-    that are not harness CSVs."""
-    frames, notes = [], []
+def file_state(path: Path) -> str:
+    st = path.stat()
+    return f"{st.st_size}:{st.st_mtime_ns}"
+
+
+def collect(results: Path, out: Path) -> tuple[pd.DataFrame, pd.DataFrame, list[str]]:
+    """The rows out/collected.csv holds plus those of the files on disk it does not hold
+    yet (a file whose size and modification time out/sources.csv recorded is not read
+    again); the files' states; notes on files that are not harness CSVs."""
+    store, manifest = out / COLLECTED, out / SOURCES
+    known = {}
+    if store.is_file() and manifest.is_file():
+        m = pd.read_csv(manifest, dtype=str, keep_default_na=False)
+        known = dict(zip(m["file"], m["state"]))
+    frames, notes, states = [], [], []
     for src in sources(results):
+        state = file_state(src.file)
+        states.append((str(src.file), state))
+        if known.get(str(src.file)) == state:
+            continue
         try:
             frames.append(measured_rows(src, results))
         except ContractError as e:
             notes.append(f"left out {src.file}: {e}")
-    new = (
-        pd.concat(frames, ignore_index=True)
-        if frames
-        else pd.DataFrame(columns=SOURCE + PROVENANCE + COMBINATION)
-    )
+    text = [*IDENTITY, *PROVENANCE, "kind", "run", "structure"]
+    new = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=[*text, *MEASURES])
     if store.is_file():
-        old = pd.read_csv(store, dtype=str, keep_default_na=False)
-        for c in MEASURES:
-            old[c] = pd.to_numeric(old[c], errors="coerce") if c in old.columns else math.nan
         new = pd.concat(
-            [old, new.astype({c: str for c in IDENTITY + PROVENANCE + ["kind", "run", "structure"]})]
+            [pd.read_csv(store, dtype=str, keep_default_na=False), new.astype({c: str for c in text})]
         )
-    new = new.astype({c: str for c in IDENTITY}).drop_duplicates(IDENTITY, keep="last")
-    return new.reset_index(drop=True), notes
+    new[MEASURES] = new[MEASURES].apply(pd.to_numeric, errors="coerce")
+    new = new.astype({c: str for c in text}).drop_duplicates(IDENTITY, keep="last")
+    return new.reset_index(drop=True), pd.DataFrame(states, columns=["file", "state"]), notes
 
 
 # ---- commit order ------------------------------------------------------------------------------
@@ -224,36 +235,28 @@ def series_labels(df: pd.DataFrame) -> pd.Series:
 
 
 def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:
-    """One row per commit x combination x measure, in commit order; count steps marked."""
+    """One row per commit x combination x measure, in commit order; count steps marked.
+    configs, runs, cpus: what measured the combination at that commit."""
     if collected.empty:
         return pd.DataFrame(columns=["commit", "measure", "value"])
-    long = collected.melt(
-        id_vars=[
-            "git_sha",
-            "git_dirty",
-            "cpu",
-            "kind",
-            "run",
-            "config",
-            "timestamp",
-            "structure",
-            *COMBINATION,
-        ],
-        value_vars=MEASURES,
-        var_name="measure",
-        value_name="value",
-    ).dropna(subset=["value"])
-    keys = ["git_sha", "git_dirty", *COMBINATION, "structure", "measure"]
-    g = long.groupby(keys, sort=False)
-    out = g["value"].agg(value="median", n="count", min="min", max="max").reset_index()
+    # Aggregated per commit and combination first (a few thousand groups, not one per
+    # measure too), then one row per measure.
+    keys = ["git_sha", "git_dirty", *COMBINATION, "structure"]
+    g = collected.groupby(keys, sort=False)
+    stats = [
+        getattr(g[MEASURES], how)().reset_index().melt(id_vars=keys, var_name="measure", value_name=name)
+        for how, name in (("median", "value"), ("count", "n"), ("min", "min"), ("max", "max"))
+    ]
+    out = pd.concat([stats[0], *(s[[s.columns[-1]]] for s in stats[1:])], axis=1)
+    out = out[out["n"] > 0]
     joined = g.agg(
         configs=("config", lambda v: ";".join(sorted(set(v)))),
         runs=("run", lambda v: ";".join(sorted(set(v)))),
         cpus=("cpu", lambda v: ";".join(sorted(set(v)))),
         first_measured=("timestamp", "min"),
         last_measured=("timestamp", "max"),
-    ).reset_index(drop=True)
-    out = pd.concat([out, joined], axis=1)
+    ).reset_index()
+    out = out.merge(joined, on=keys, how="left")
     out = out.merge(commit_table(collected, repo), on=["git_sha", "git_dirty"], how="left")
     out["series"] = series_labels(out)
     out = out.sort_values([*COMBINATION, "measure", "commit_order"]).reset_index(drop=True)
@@ -360,13 +363,13 @@ class Collected:
 
 
 def update(results: Path, out: Path, repo: Path) -> Collected:
-    """Collects, writes out/collected.csv, out/history.csv and out/regress.csv."""
+    """Collects; writes out/collected.csv, sources.csv, history.csv and regress.csv."""
     out.mkdir(parents=True, exist_ok=True)
-    rows, notes = collect(results, out / COLLECTED)
+    rows, states, notes = collect(results, out)
     hist = history(rows, repo)
     latest = latest_verdict(results)
     verdicts = verdict_history(latest, out / VERDICTS)
-    for frame, name in ((rows, COLLECTED), (hist, HISTORY), (verdicts, VERDICTS)):
+    for frame, name in ((rows, COLLECTED), (states, SOURCES), (hist, HISTORY), (verdicts, VERDICTS)):
         tmp = out / (name + ".tmp")
         frame.to_csv(tmp, index=False)
         tmp.replace(out / name)

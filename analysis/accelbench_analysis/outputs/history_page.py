@@ -94,7 +94,7 @@ def counts_chart() -> dict:
         "type": "quantitative",
         "title": None,
         "scale": {"zero": False},
-        "axis": {"format": "~s"},
+        "axis": {"labelExpr": "format(datum.value, '~s')"},
     }
     count_tip = tooltip("count") + [
         {"field": "step", "type": "nominal", "title": "changed from the previous commit"}
@@ -144,10 +144,23 @@ def counts_chart() -> dict:
 
 
 def history_spec(hist: pd.DataFrame, panels: list[str]) -> dict:
-    """One view, its panel picked by the `panel` parameter (the menu, or page.js from the table)."""
+    """One view, its panel picked by the `panel` parameter (the menu, or page.js from the
+    table). What repeats over a combination's measures (its panel, series, configs, runs)
+    and a commit's rows (its order, date, subject) is inlined once and looked up, which
+    keeps the page a fraction of history.csv's size; min and max only where n > 1."""
     commits = hist.drop_duplicates("commit")[["commit", "commit_order", "commit_date", "subject"]]
     rows = hist.assign(panel=panel_of(hist))
-    cols = ["panel", "series", "commit", "measure", "value", "n", "min", "max", "step", "configs", "runs"]
+    combo = ["panel", "series", "commit", "configs", "runs"]
+    combos = rows[combo].drop_duplicates().reset_index(drop=True)
+    combos["c"] = combos.index
+    rows = rows.merge(combos, on=combo)
+    several = rows["n"] > 1
+    rows["min"], rows["max"] = rows["min"].where(several), rows["max"].where(several)
+    rows["step"] = rows["step"].where(rows["step"])
+    values = [
+        {k: v for k, v in r.items() if v is not None}
+        for r in records(rows, ["c", "measure", "value", "n", "min", "max", "step"])
+    ]
     return {
         "$schema": SCHEMA,
         "params": [
@@ -157,8 +170,12 @@ def history_spec(hist: pd.DataFrame, panels: list[str]) -> dict:
                 "bind": {"input": "select", "options": panels, "name": "model · structure: "},
             }
         ],
-        "data": {"values": records(rows, cols)},
+        "data": {"values": values},
         "transform": [
+            {
+                "lookup": "c",
+                "from": {"data": {"values": records(combos, list(combos))}, "key": "c", "fields": combo},
+            },
             {"filter": "datum.panel === panel"},
             {
                 "lookup": "commit",

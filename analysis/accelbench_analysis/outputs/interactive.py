@@ -41,8 +41,8 @@ def records(df: pd.DataFrame, columns: list[str]) -> list[dict]:
     return json.loads(out.to_json(orient="records"))
 
 
-def colour(field: str, labels, title: str | None = None) -> dict:
-    palette = Styles(labels).palette()
+def colour(field: str, palette: dict[str, str], title: str | None = None) -> dict:
+    """The PNG's colours: `palette` maps each value of `field`, in legend order, to its colour."""
     return {
         "field": field,
         "type": "nominal",
@@ -87,7 +87,7 @@ def build_vs_render_spec(df: pd.DataFrame, title: str) -> dict:
         "node_visits",
     ]
     x, y = log("build_s_median", "build time (s, median, 95% CI)"), log("render_s_median", "render time (s)")
-    col = colour("structure", df["structure"])
+    col = colour("structure", Styles(df["structure"]).palette())
     params, opacity = legend_pick("structure")
     tooltip = [
         {"field": "model", "type": "nominal"},
@@ -154,7 +154,7 @@ def scaling_spec(points: pd.DataFrame, lines: pd.DataFrame) -> dict:
     long over `time` (build, render)."""
     data = pd.concat([points.assign(kind="measured"), lines.assign(kind="fit")], ignore_index=True)
     cols = ["kind", "time", "family", "model", "structure", "triangles", "seconds", "slope"]
-    col = colour("structure", data["structure"])
+    col = colour("structure", Styles(data["structure"]).palette())
     params, opacity = legend_pick("structure")
     x = {**log("triangles", "triangles"), "axis": {"format": "~s"}}
     y = log("seconds", "time, median (s)")
@@ -207,9 +207,11 @@ def scaling_spec(points: pd.DataFrame, lines: pd.DataFrame) -> dict:
     }
 
 
-def error_pareto_spec(points: pd.DataFrame, fronts: pd.DataFrame, wrong: str, title: str) -> dict:
+def error_pareto_spec(
+    points: pd.DataFrame, fronts: pd.DataFrame, wrong: str, title: str, colours: dict[str, str]
+) -> dict:
     """error_frame's rows (figures.error_pareto) with `optimal` marking the points nothing
-    beats, and each structure's Pareto front as dashed steps."""
+    beats, and each structure's Pareto front as dashed steps; colours per accelerator."""
     data = pd.concat([points.assign(kind="row"), fronts.assign(kind="front")], ignore_index=True)
     data = data.rename(columns={wrong: "wrong"})
     cols = [
@@ -225,7 +227,7 @@ def error_pareto_spec(points: pd.DataFrame, fronts: pd.DataFrame, wrong: str, ti
         "nan_results",
         "optimal",
     ]
-    col = colour("accel", data["accel"], "accelerator")
+    col = colour("accel", colours, "accelerator")
     params, opacity = legend_pick("accel")
     x = log("render_s_median", "render time (s, median)")
     y = {
@@ -282,7 +284,7 @@ def error_pareto_spec(points: pd.DataFrame, fronts: pd.DataFrame, wrong: str, ti
     }
 
 
-def ray_sets_spec(table: pd.DataFrame, sets: list[str]) -> dict:
+def ray_sets_spec(table: pd.DataFrame, sets: list[str], palette: dict[str, str]) -> dict:
     """ray_set_table's rows (tables/ray_sets.md): Mrays/s per set, structure and model."""
     cols = [
         "model",
@@ -296,7 +298,7 @@ def ray_sets_spec(table: pd.DataFrame, sets: list[str]) -> dict:
         "false_hits",
     ]
     table = table.assign(ray_set=table["ray_set"].astype(str))
-    col = colour("structure", table["structure"])
+    col = colour("structure", palette)
     params, opacity = legend_pick("structure")
     return {
         "$schema": SCHEMA,
@@ -332,7 +334,7 @@ def ray_sets_spec(table: pd.DataFrame, sets: list[str]) -> dict:
     }
 
 
-def thread_scaling_spec(rows: pd.DataFrame) -> dict:
+def thread_scaling_spec(rows: pd.DataFrame, palette: dict[str, str]) -> dict:
     """thread_scaling_rows (tables/thread_scaling.md): speedup over one thread."""
     cols = [
         "model",
@@ -345,10 +347,21 @@ def thread_scaling_spec(rows: pd.DataFrame) -> dict:
         "cpu_per_wall",
     ]
     top = float(rows["render_threads"].max())
-    col = colour("structure", rows["structure"])
+    col = colour("structure", palette)
     params, opacity = legend_pick("structure")
-    x = {"field": "render_threads", "type": "quantitative", "title": "render threads"}
-    y = {"field": "speedup", "type": "quantitative", "title": "speedup over 1 thread"}
+    x = {
+        "field": "render_threads",
+        "type": "quantitative",
+        "title": "render threads",
+        "scale": {"zero": False},
+        "axis": {"tickMinStep": 1},
+    }
+    y = {
+        "field": "speedup",
+        "type": "quantitative",
+        "title": "speedup over 1 thread",
+        "scale": {"zero": False},
+    }
     return {
         "$schema": SCHEMA,
         "title": "Thread scaling (dashed: ideal)",

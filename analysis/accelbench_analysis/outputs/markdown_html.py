@@ -69,27 +69,38 @@ def mark_table(table: ET.Element) -> ET.Element:
 
 class PageTree(Treeprocessor):
     """Marks tables, shifts headings by `shift` levels with ids under `prefix`, and
-    rewrites each link's href with `link(href, text)` (None: keep it)."""
+    rewrites each link's href with `link(href, text)` (None: keep it), `text` being the
+    first link's text in the link's list item or paragraph (what it is a link to: "[Thread
+    scaling](...) ... ([figure](...))" names the figure "Thread scaling")."""
 
     def __init__(self, md, shift: int, prefix: str, link: Callable[[str, str], str | None]):
         super().__init__(md)
         self.shift, self.prefix, self.link = shift, prefix, link
 
     def run(self, root: ET.Element) -> None:
-        for parent in list(root.iter()):
-            for i, child in enumerate(list(parent)):
+        for holder in list(root.iter()):
+            for i, child in enumerate(list(holder)):
                 if child.tag == "table":
-                    parent.remove(child)
-                    parent.insert(i, mark_table(child))
+                    holder.remove(child)
+                    holder.insert(i, mark_table(child))
+        parent = {c: p for p in root.iter() for c in p}
         for el in root.iter():
             if re.fullmatch(r"h[1-6]", el.tag):
                 level = min(6, int(el.tag[1]) + self.shift)
                 el.tag = f"h{level}"
                 el.set("id", f"{self.prefix}{slug(''.join(el.itertext()))}")
             elif el.tag == "a" and el.get("href"):
-                new = self.link(el.get("href"), "".join(el.itertext()).strip())
+                new = self.link(el.get("href"), self.subject(el, parent))
                 if new is not None:
                     el.set("href", new)
+
+    @staticmethod
+    def subject(a: ET.Element, parent: dict) -> str:
+        block = a
+        while block in parent and block.tag not in ("li", "p"):
+            block = parent[block]
+        first = next(block.iter("a"), a)
+        return "".join(first.itertext()).strip()
 
 
 class Extension(markdown.Extension):
