@@ -268,7 +268,7 @@ def start(job: Job, provenance: dict[str, str], now: datetime) -> tuple[Path, di
         run_dir = job.into
         for sub in ("csv", "tables", "figures", "report", "runs"):
             shutil.rmtree(run_dir / sub, ignore_errors=True)
-        for f in ("REPORT.md", RUN_JSON):
+        for f in ("REPORT.md", "index.html", RUN_JSON):
             (run_dir / f).unlink(missing_ok=True)
         print(f"reproduce: measuring from scratch into {run_dir}", file=sys.stderr)
         meta = None

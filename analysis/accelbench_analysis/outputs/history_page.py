@@ -18,7 +18,7 @@ import pandas as pd
 from .history import COUNTS, Collected
 from .interactive import SCHEMA, records
 from .markdown_html import to_html
-from .page import page, vega_figure
+from .page import data_table, page, vega_figure, write_page
 
 INDEX = "index.html"
 PANEL_SEP = " · "
@@ -214,13 +214,8 @@ def overview_table(hist: pd.DataFrame) -> str:
             f"<td>{html.escape(', '.join(sorted(set(steps['measure'] + ' at ' + steps['commit']))))}</td>"
             "</tr>"
         )
-    head = "".join(
-        f"<th>{h}</th>"
-        for h in ("model", "structure", "combinations", "commits", "last commit", "count steps", "where")
-    )
-    return (
-        f'<div class="table-wrap"><table class="data"><thead><tr>{head}</tr></thead>'
-        f"<tbody>{''.join(rows)}</tbody></table></div>"
+    return data_table(
+        ["model", "structure", "combinations", "commits", "last commit", "count steps", "where"], rows
     )
 
 
@@ -244,17 +239,14 @@ def regress_section(c: Collected, out: Path) -> list[str]:
         parts.append(
             "<p>Its combinations across commits: " + ", ".join(panel_link(p) for p in panels) + ".</p>"
         )
-    rows = "".join(
+    rows = [
         f"<tr><td>{html.escape(r.commit)}</td><td>{html.escape(r.measured)}</td>"
         f'<td><span class="verdict {verdict_class(r.verdict)}">{html.escape(r.verdict)}</span></td>'
         f"<td>{html.escape(r.report)}</td></tr>"
         for r in c.verdicts.iloc[::-1].itertuples()
-    )
-    parts.append(
-        "<h3>Verdicts collected so far, newest first</h3>"
-        '<div class="table-wrap"><table class="data"><thead><tr><th>commit</th><th>measured</th>'
-        f"<th>verdict</th><th>report</th></tr></thead><tbody>{rows}</tbody></table></div>"
-    )
+    ]
+    parts.append("<h3>Verdicts collected so far, newest first</h3>")
+    parts.append(data_table(["commit", "measured", "verdict", "report"], rows))
     parts.append(
         '<details class="included"><summary>The latest report</summary>'
         + to_html(c.latest.text, shift=2, prefix="regress-")
@@ -282,13 +274,7 @@ def sources_table(c: Collected, out: Path, results: Path) -> str:
             f"<tr><td>{html.escape(r.kind)}</td><td>{name}</td><td>{html.escape(r.commits)}</td>"
             f'<td class="num">{r.rows}</td><td>{html.escape(r.first)}</td><td>{html.escape(r.last)}</td></tr>'
         )
-    head = "".join(
-        f"<th>{h}</th>" for h in ("kind", "run", "commits", "rows", "first measured", "last measured")
-    )
-    return (
-        f'<div class="table-wrap"><table class="data"><thead><tr>{head}</tr></thead>'
-        f"<tbody>{''.join(rows)}</tbody></table></div>"
-    )
+    return data_table(["kind", "run", "commits", "rows", "first measured", "last measured"], rows)
 
 
 def history_page_html(c: Collected, out: Path, results: Path) -> str:
@@ -345,8 +331,4 @@ def history_page_html(c: Collected, out: Path, results: Path) -> str:
 
 
 def write_history_page(c: Collected, out: Path, results: Path) -> Path:
-    path = out / INDEX
-    tmp = path.with_name(INDEX + ".tmp")
-    tmp.write_text(history_page_html(c, out, results))
-    tmp.replace(path)
-    return path
+    return write_page(out / INDEX, history_page_html(c, out, results))

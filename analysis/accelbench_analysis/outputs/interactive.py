@@ -61,6 +61,22 @@ def legend_pick(field: str) -> tuple[list[dict], dict]:
     return params, {"condition": {"param": "pick", "value": 0.9}, "value": 0.12}
 
 
+def picked_layer(
+    mark: dict, x: dict, y: dict, colours: dict, tooltip: list, keep: str | None = None, **more
+) -> dict:
+    """The layer a legend click picks from: coloured (`colours`: the colour encoding), the
+    other values faded, a tooltip on each mark; `keep` filters the data's rows first."""
+    params, opacity = legend_pick(colours["field"])
+    layer = {
+        "params": params,
+        "mark": mark,
+        "encoding": {"x": x, "y": y, "color": colours, "opacity": opacity, "tooltip": tooltip, **more},
+    }
+    if keep:
+        layer["transform"] = [{"filter": keep}]
+    return layer
+
+
 def log(field: str, title: str) -> dict:
     return {"field": field, "type": "quantitative", "title": title, "scale": {"type": "log"}}
 
@@ -72,23 +88,9 @@ def unique(values) -> list:
 def build_vs_render_spec(df: pd.DataFrame, title: str) -> dict:
     """structure_frame's rows (figures.build_vs_render): one point per structure and model,
     its 95% CIs as rules."""
-    cols = [
-        "model",
-        "structure",
-        "traversal",
-        "params",
-        "build_s_median",
-        "build_s_ci_lo",
-        "build_s_ci_hi",
-        "render_s_median",
-        "render_s_ci_lo",
-        "render_s_ci_hi",
-        "prim_tests",
-        "node_visits",
-    ]
     x, y = log("build_s_median", "build time (s, median, 95% CI)"), log("render_s_median", "render time (s)")
     col = colour("structure", Styles(df["structure"]).palette())
-    params, opacity = legend_pick("structure")
+    _, opacity = legend_pick("structure")
     tooltip = [
         {"field": "model", "type": "nominal"},
         {"field": "structure", "type": "nominal"},
@@ -106,7 +108,7 @@ def build_vs_render_spec(df: pd.DataFrame, title: str) -> dict:
     return {
         "$schema": SCHEMA,
         "title": title,
-        "data": {"values": records(df, cols)},
+        "data": {"values": records(df, [c for c in df.columns if c != "structure_key"])},
         "facet": {"field": "model", "type": "nominal", "sort": unique(df["model"]), "title": None},
         "columns": 3,
         "spec": {
@@ -132,18 +134,14 @@ def build_vs_render_spec(df: pd.DataFrame, title: str) -> dict:
                         "opacity": opacity,
                     },
                 },
-                {
-                    "params": params,
-                    "mark": {"type": "point", "filled": True, "size": 70},
-                    "encoding": {
-                        "x": x,
-                        "y": y,
-                        "color": col,
-                        "shape": {"field": "traversal", "type": "nominal"},
-                        "opacity": opacity,
-                        "tooltip": tooltip,
-                    },
-                },
+                picked_layer(
+                    {"type": "point", "filled": True, "size": 70},
+                    x,
+                    y,
+                    col,
+                    tooltip,
+                    shape={"field": "traversal", "type": "nominal"},
+                ),
             ],
         },
     }
@@ -155,9 +153,20 @@ def scaling_spec(points: pd.DataFrame, lines: pd.DataFrame) -> dict:
     data = pd.concat([points.assign(kind="measured"), lines.assign(kind="fit")], ignore_index=True)
     cols = ["kind", "time", "family", "model", "structure", "triangles", "seconds", "slope"]
     col = colour("structure", Styles(data["structure"]).palette())
-    params, opacity = legend_pick("structure")
+    _, opacity = legend_pick("structure")
     x = {**log("triangles", "triangles"), "axis": {"format": "~s"}}
     y = log("seconds", "time, median (s)")
+    fit_tip = [
+        {"field": "structure", "type": "nominal"},
+        {"field": "family", "type": "nominal", "title": "model"},
+        number("slope", "fitted slope", ".2f"),
+    ]
+    point_tip = [
+        {"field": "structure", "type": "nominal"},
+        {"field": "model", "type": "nominal"},
+        number("triangles", "triangles", ",d"),
+        number("seconds", "time (s)"),
+    ]
     return {
         "$schema": SCHEMA,
         "title": "Build and render time against triangles (log-log; lines: least-squares fits)",
@@ -177,31 +186,18 @@ def scaling_spec(points: pd.DataFrame, lines: pd.DataFrame) -> dict:
                         "color": col,
                         "detail": {"field": "family", "type": "nominal"},
                         "opacity": opacity,
-                        "tooltip": [
-                            {"field": "structure", "type": "nominal"},
-                            {"field": "family", "type": "nominal", "title": "model"},
-                            number("slope", "fitted slope", ".2f"),
-                        ],
+                        "tooltip": fit_tip,
                     },
                 },
-                {
-                    "params": params,
-                    "transform": [{"filter": "datum.kind == 'measured'"}],
-                    "mark": {"type": "point", "filled": True, "size": 60},
-                    "encoding": {
-                        "x": x,
-                        "y": y,
-                        "color": col,
-                        "shape": {"field": "family", "type": "nominal", "title": "source model"},
-                        "opacity": opacity,
-                        "tooltip": [
-                            {"field": "structure", "type": "nominal"},
-                            {"field": "model", "type": "nominal"},
-                            number("triangles", "triangles", ",d"),
-                            number("seconds", "time (s)"),
-                        ],
-                    },
-                },
+                picked_layer(
+                    {"type": "point", "filled": True, "size": 60},
+                    x,
+                    y,
+                    col,
+                    point_tip,
+                    keep="datum.kind == 'measured'",
+                    shape={"field": "family", "type": "nominal", "title": "source model"},
+                ),
             ],
         },
     }
@@ -228,7 +224,7 @@ def error_pareto_spec(
         "optimal",
     ]
     col = colour("accel", colours, "accelerator")
-    params, opacity = legend_pick("accel")
+    _, opacity = legend_pick("accel")
     x = log("render_s_median", "render time (s, median)")
     y = {
         "field": "wrong",
@@ -236,6 +232,18 @@ def error_pareto_spec(
         "title": "false misses + false hits + wrong primitives",
         "scale": {"type": "symlog", "constant": 1},
     }
+    tooltip = [
+        {"field": "model", "type": "nominal"},
+        {"field": "accel", "type": "nominal", "title": "accelerator"},
+        {"field": "params", "type": "nominal"},
+        number("render_s_median", "render (s)"),
+        number("wrong", "wrong answers", ",d"),
+        number("false_misses", "false misses", ",d"),
+        number("false_hits", "false hits", ",d"),
+        number("prim_mismatches", "wrong primitives", ",d"),
+        number("nan_results", "NaN results", ",d"),
+        {"field": "optimal", "type": "nominal", "title": "optimal overall"},
+    ]
     return {
         "$schema": SCHEMA,
         "title": title,
@@ -256,29 +264,14 @@ def error_pareto_spec(
                     "mark": {"type": "point", "size": 160, "color": "black", "strokeWidth": 1.2},
                     "encoding": {"x": x, "y": y},
                 },
-                {
-                    "params": params,
-                    "transform": [{"filter": "datum.kind == 'row'"}],
-                    "mark": {"type": "point", "filled": True, "size": 45},
-                    "encoding": {
-                        "x": x,
-                        "y": y,
-                        "color": col,
-                        "opacity": opacity,
-                        "tooltip": [
-                            {"field": "model", "type": "nominal"},
-                            {"field": "accel", "type": "nominal", "title": "accelerator"},
-                            {"field": "params", "type": "nominal"},
-                            number("render_s_median", "render (s)"),
-                            number("wrong", "wrong answers", ",d"),
-                            number("false_misses", "false misses", ",d"),
-                            number("false_hits", "false hits", ",d"),
-                            number("prim_mismatches", "wrong primitives", ",d"),
-                            number("nan_results", "NaN results", ",d"),
-                            {"field": "optimal", "type": "nominal", "title": "optimal overall"},
-                        ],
-                    },
-                },
+                picked_layer(
+                    {"type": "point", "filled": True, "size": 45},
+                    x,
+                    y,
+                    col,
+                    tooltip,
+                    keep="datum.kind == 'row'",
+                ),
             ],
         },
     }
@@ -286,69 +279,43 @@ def error_pareto_spec(
 
 def ray_sets_spec(table: pd.DataFrame, sets: list[str], palette: dict[str, str]) -> dict:
     """ray_set_table's rows (tables/ray_sets.md): Mrays/s per set, structure and model."""
-    cols = [
-        "model",
-        "structure",
-        "ray_set",
-        "mrays_per_s",
-        "embree_mrays_per_s",
-        "ratio_to_embree",
-        "rays",
-        "false_misses",
-        "false_hits",
-    ]
     table = table.assign(ray_set=table["ray_set"].astype(str))
-    col = colour("structure", palette)
-    params, opacity = legend_pick("structure")
+    tooltip = [
+        {"field": "model", "type": "nominal"},
+        {"field": "structure", "type": "nominal"},
+        {"field": "ray_set", "type": "nominal", "title": "ray set"},
+        number("mrays_per_s", "Mrays/s"),
+        number("ratio_to_embree", "ratio to Embree"),
+        number("embree_mrays_per_s", "Embree Mrays/s"),
+        number("rays", "rays", ",d"),
+        number("false_misses", "false misses", ",d"),
+        number("false_hits", "false hits", ",d"),
+    ]
     return {
         "$schema": SCHEMA,
         "title": "Mrays/s per ray set, structure and model",
-        "data": {"values": records(table, cols)},
+        "data": {"values": records(table, list(table.columns))},
         "facet": {"field": "model", "type": "nominal", "title": None},
         "columns": 2,
         "resolve": {"scale": {"y": "independent"}},
         "spec": {
             "width": 380,
             "height": 220,
-            "params": params,
-            "mark": "bar",
-            "encoding": {
-                "x": {"field": "ray_set", "type": "nominal", "sort": sets, "title": "ray set"},
-                "xOffset": {"field": "structure", "type": "nominal", "sort": list(col["scale"]["domain"])},
-                "y": {"field": "mrays_per_s", "type": "quantitative", "title": "Mrays/s"},
-                "color": col,
-                "opacity": opacity,
-                "tooltip": [
-                    {"field": "model", "type": "nominal"},
-                    {"field": "structure", "type": "nominal"},
-                    {"field": "ray_set", "type": "nominal", "title": "ray set"},
-                    number("mrays_per_s", "Mrays/s"),
-                    number("ratio_to_embree", "ratio to Embree"),
-                    number("embree_mrays_per_s", "Embree Mrays/s"),
-                    number("rays", "rays", ",d"),
-                    number("false_misses", "false misses", ",d"),
-                    number("false_hits", "false hits", ",d"),
-                ],
-            },
+            **picked_layer(
+                {"type": "bar"},
+                {"field": "ray_set", "type": "nominal", "sort": sets, "title": "ray set"},
+                {"field": "mrays_per_s", "type": "quantitative", "title": "Mrays/s"},
+                colour("structure", palette),
+                tooltip,
+                xOffset={"field": "structure", "type": "nominal", "sort": list(palette)},
+            ),
         },
     }
 
 
 def thread_scaling_spec(rows: pd.DataFrame, palette: dict[str, str]) -> dict:
-    """thread_scaling_rows (tables/thread_scaling.md): speedup over one thread."""
-    cols = [
-        "model",
-        "structure",
-        "render_threads",
-        "render_s_median",
-        "render_cpu_s_median",
-        "speedup",
-        "efficiency",
-        "cpu_per_wall",
-    ]
+    """thread_scaling_rows as tables/thread_scaling.csv has them: speedup over one thread."""
     top = float(rows["render_threads"].max())
-    col = colour("structure", palette)
-    params, opacity = legend_pick("structure")
     x = {
         "field": "render_threads",
         "type": "quantitative",
@@ -362,10 +329,19 @@ def thread_scaling_spec(rows: pd.DataFrame, palette: dict[str, str]) -> dict:
         "title": "speedup over 1 thread",
         "scale": {"zero": False},
     }
+    tooltip = [
+        {"field": "structure", "type": "nominal"},
+        {"field": "render_threads", "type": "quantitative", "title": "threads"},
+        number("render_s_median", "wall (s)"),
+        number("render_cpu_s_median", "CPU (s)"),
+        number("speedup", "speedup", ".2f"),
+        number("efficiency", "efficiency", ".2f"),
+        number("cpu_per_wall", "CPU / wall", ".2f"),
+    ]
     return {
         "$schema": SCHEMA,
         "title": "Thread scaling (dashed: ideal)",
-        "data": {"values": records(rows, cols)},
+        "data": {"values": records(rows, list(rows.columns))},
         "facet": {"field": "model", "type": "nominal", "title": None},
         "columns": 3,
         "spec": {
@@ -380,25 +356,7 @@ def thread_scaling_spec(rows: pd.DataFrame, palette: dict[str, str]) -> dict:
                         "y2": {"datum": top},
                     },
                 },
-                {
-                    "params": params,
-                    "mark": {"type": "line", "point": True},
-                    "encoding": {
-                        "x": x,
-                        "y": y,
-                        "color": col,
-                        "opacity": opacity,
-                        "tooltip": [
-                            {"field": "structure", "type": "nominal"},
-                            {"field": "render_threads", "type": "quantitative", "title": "threads"},
-                            number("render_s_median", "wall (s)"),
-                            number("render_cpu_s_median", "CPU (s)"),
-                            number("speedup", "speedup", ".2f"),
-                            number("efficiency", "efficiency", ".2f"),
-                            number("cpu_per_wall", "CPU / wall", ".2f"),
-                        ],
-                    },
-                },
+                picked_layer({"type": "line", "point": True}, x, y, colour("structure", palette), tooltip),
             ],
         },
     }

@@ -52,6 +52,23 @@ def vega_figure(spec: dict, source: str) -> str:
     return f'<div class="vega" data-source="{html.escape(source)}"></div>' + json_script(spec, "vega-spec")
 
 
+def data_table(head: list[str], rows: list[str]) -> str:
+    """A sortable, filterable table: header texts, and rows already written as <tr>...</tr>."""
+    cells = "".join(f"<th>{html.escape(h)}</th>" for h in head)
+    return (
+        f'<div class="table-wrap"><table class="data"><thead><tr>{cells}</tr></thead>'
+        f"<tbody>{''.join(rows)}</tbody></table></div>"
+    )
+
+
+def write_page(path: Path, text: str) -> Path:
+    """Replaces the file at once: a browser never opens half a page."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+    return path
+
+
 def page(
     title: str, body: str, *, nav: list[tuple[str, str]] = (), charts: bool = False, note: str = ""
 ) -> str:

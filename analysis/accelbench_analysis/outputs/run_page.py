@@ -20,7 +20,7 @@ from pathlib import Path
 
 from .interactive import spec_path
 from .markdown_html import first_heading, slug, to_html
-from .page import page, png_data_uri, vega_figure
+from .page import page, png_data_uri, vega_figure, write_page
 
 INDEX = "index.html"
 EXTERNAL = re.compile(r"^[a-z][a-z0-9+.-]*:|^#", re.I)
@@ -146,8 +146,4 @@ def run_page_html(run_dir: Path) -> str:
 
 
 def write_run_page(run_dir: Path) -> Path:
-    path = run_dir / INDEX
-    tmp = path.with_name(INDEX + ".tmp")
-    tmp.write_text(run_page_html(run_dir))
-    tmp.replace(path)
-    return path
+    return write_page(run_dir / INDEX, run_page_html(run_dir))

@@ -13,7 +13,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from .page import page
+from .page import data_table, page, write_page
 
 INDEX = "index.html"
 
@@ -94,9 +94,6 @@ def runs_page_html(results: Path) -> str:
             f"<td>{html.escape(e.kind)}</td><td>{html.escape(e.commit)}</td><td>{html.escape(e.what)}</td>"
             f"<td>{html.escape(e.state)}</td><td>{' '.join(links)}</td></tr>"
         )
-    head = "".join(
-        f"<th>{h}</th>" for h in ("started / measured", "run", "kind", "commit", "what", "state", "pages")
-    )
     history = results / "history" / INDEX
     body = [
         "<h1>accelbench runs on this machine</h1>",
@@ -107,14 +104,10 @@ def runs_page_html(results: Path) -> str:
             else "Run <code>make history</code> for every measurement across commits."
         )
         + "</p>",
-        f'<div class="table-wrap"><table class="data"><thead><tr>{head}</tr></thead><tbody>{"".join(rows)}</tbody></table></div>',
+        data_table(["started / measured", "run", "kind", "commit", "what", "state", "pages"], rows),
     ]
     return page("accelbench runs", "\n".join(body))
 
 
 def write_runs_page(results: Path) -> Path:
-    path = results / INDEX
-    tmp = path.with_name(INDEX + ".tmp")
-    tmp.write_text(runs_page_html(results))
-    tmp.replace(path)
-    return path
+    return write_page(results / INDEX, runs_page_html(results))

@@ -332,6 +332,8 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
             tables / "thread_scaling.md",
             tables / "thread_scaling.csv",
             thread_scaling_figure(ts, figures / "thread_scaling.png", hue_palette(ts["structure"])),
-            write_spec(figures / "thread_scaling.png", thread_scaling_spec(ts, hue_palette(ts["structure"]))),
+            write_spec(
+                figures / "thread_scaling.png", thread_scaling_spec(ts[cols], hue_palette(ts["structure"]))
+            ),
         ]
     return written
