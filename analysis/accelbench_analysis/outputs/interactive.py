@@ -78,7 +78,14 @@ def picked_layer(
 
 
 def log(field: str, title: str) -> dict:
-    return {"field": field, "type": "quantitative", "title": title, "scale": {"type": "log"}}
+    # The data's own extent, a few pixels inside the frame (a "nice" log domain rounds to
+    # whole decades and can leave most of the panel empty).
+    return {
+        "field": field,
+        "type": "quantitative",
+        "title": title,
+        "scale": {"type": "log", "nice": False, "padding": 10},
+    }
 
 
 def unique(values) -> list:
