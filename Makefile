@@ -14,16 +14,17 @@ ACCELBENCH  := $(BUILD_DIR)/accelbench
 QUICK       ?=
 FRESH       ?=
 
-# Debian packages the build, tests and analysis need (checked with dpkg first).
+# Debian packages the build, tests and analysis need (checked with dpkg first); chromium
+# renders the analysis's HTML pages in the browser test (headless, no network).
 DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
   libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
   libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev valgrind clang-format \
-  python3 python3-venv python3-pip
+  python3 python3-venv python3-pip chromium
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: deps venv build models test test-cpp test-python reproduce-tables reference-run \
-        test-sanitize regress update-baseline grid-search robustness clean \
+        test-sanitize regress update-baseline grid-search robustness history clean \
         slurm-deps slurm-submit test-slurm
 
 # ---- set-up -----------------------------------------------------------------------
@@ -76,8 +77,10 @@ test-cpp: models
 
 # In $(JOBS) worker processes (pytest-xdist): run serially the suite (157 s of CPU for its
 # 227 tests, the accelbench runs they start included) keeps one process busy at a time.
+# ACCELBENCH_BROWSER=required: deps installed chromium, so the browser test of the HTML
+# pages must run here (run by hand without it, pytest skips it where chromium is missing).
 test-python: venv
-	cd analysis && ../$(PYTHON) -m pytest -q -n $(JOBS) tests
+	cd analysis && ACCELBENCH_BROWSER=required ../$(PYTHON) -m pytest -q -n $(JOBS) tests
 
 test: test-cpp test-python
 
@@ -177,6 +180,14 @@ update-baseline: build
 	$(call ci_callgrind,$(REGRESS_DIR)/baseline/callgrind.csv)
 	$(call ci_join,$(BASELINE),$(REGRESS_DIR)/baseline/timed.csv,$(REGRESS_DIR)/baseline/callgrind.csv)
 	@echo "update-baseline: wrote $(BASELINE); commit it saying why the baseline changed"
+
+# ---- every run across commits --------------------------------------------------------
+# `make history`: every run on this machine (results/runs/*, the regression check's,
+# results/reference/, the grid searches) into results/history/history.csv, one row per
+# commit x combination x measure, kept across runs (results/history/collected.csv), drawn
+# in results/history/index.html; results/index.html lists the runs.
+history: venv
+	$(ANALYSIS) history
 
 # ---- parameter grid search ----------------------------------------------------------
 # `make grid-search [GRID_CONFIG=configs/grid-NAME.yaml]`: runs the grid through the
