@@ -199,3 +199,26 @@ def test_an_ablation_on_another_model_fits_its_own_floor(tmp_path, report_nums):
     assert (
         plain.source(results, report_nums, fits).get("stanford-bunny", "kdtree", "build", "maxDepth=5") == 0.2
     )
+
+
+def test_what_n_note_reads_the_kd_tree_at_table_3s_settings_only(tmp_path, report_nums):
+    # bunny-35947 carries the kd-tree at Table 3's settings and the ablations' sweeps
+    # (b_e 0, mailboxes, other depths): the note gives the first only.
+    from synthetic import KD, row, write_csv
+
+    from accelbench_analysis.inputs.schema import load_results
+    from accelbench_analysis.outputs.tables import note_what_n
+
+    results = load_results(
+        [write_csv(tmp_path / "t2.csv", [row("stanford-bunny", "kdtree", KD, build=1, render=1)])]
+    )
+
+    def kd(nodes, **params):
+        p = {"max_prims": "1", "max_depth": "auto", "empty_bonus": "0.5", **params}
+        return {"model": "bunny-35947", "accel": "kdtree", "status": "ok", "triangles": 35947, "nodes": nodes,
+                "param_dict": p}  # fmt: skip
+
+    abl = pd.DataFrame([kd(379275), kd(863569, empty_bonus="0", mailbox="true"), kd(61, max_depth="5")])
+    text = note_what_n(report_nums, results, abl)
+    assert "has 379,275 nodes" in text
+    assert "863,569" not in text and " 61 nodes" not in text
