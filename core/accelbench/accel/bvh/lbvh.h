@@ -28,9 +28,11 @@
 //                 complexity"; section 3: it "acts as a splitting criterion of a BVH"):
 //                 the Morton codes and the radix sort of the other builds, then the
 //                 median BVH's top-down build (bvh_top_down.h, BvhMedianSplit), whose
-//                 tree it is, node for node. The report's published code builds its LBVH's
-//                 subtrees with its BVH's median builder; this build measures what that
-//                 costs: the BVH's build plus the two stages.
+//                 tree it is, node for node. The report's published code
+//                 (github.com/Alhajras/Raytracer-Data-structures, accelerators.h,
+//                 constructLBVHNew) builds its LBVH's subtrees with its BVH's median
+//                 builder; this build measures what that costs: the BVH's build plus the
+//                 two stages.
 //
 // Subtrees are independent, which is what the report parallelises (section 3.2.1, its
 // "conditional multithreading": a new thread only for subtrees above a threshold). The
