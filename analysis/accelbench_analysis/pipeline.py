@@ -350,6 +350,10 @@ def run(args: argparse.Namespace) -> list[Path]:
         written += write_workloads(results, out)
     if beyond.any() and not beyond.all():
         results = replace(results, rows=results.rows[~beyond])
+    if reference is not None:  # like with like: the reference run's report rows only
+        ref_beyond = workload_mask(reference.rows)
+        if ref_beyond.any() and not ref_beyond.all():
+            reference = replace(reference, rows=reference.rows[~ref_beyond])
     # Ablation rows (configs/ablations.yaml) are judged by the claims only: the tables and
     # figures show the run at the report's settings.
     from .outputs.claims import is_ablation, without_ablations
