@@ -8,84 +8,44 @@
 #include <string>
 #include <type_traits>
 
+#include "accelbench/base/param_table.h"
 #include "accelbench/base/radix_sort.h"
 #include "accelbench/base/triangle.h"
 
 namespace accelbench {
 
-AcceleratorInfo KdTree::info() {
-    const Config d;  // the defaults
-    return {"kdtree",
-            "SAH kd-tree after pbrt-v3 (report section 4): 8-byte nodes, edge-event SAH, front-to-back traversal",
-            {
-                {"build",
-                 ParamType::Enum,
-                 d.build == BuildAlgorithm::NLogN ? "nlogn" : "pbrt",
-                 {"nlogn", "pbrt"},
-                 0,
-                 0,
-                 "nlogn: events sorted once, split in linear time (Wald & Havran 2006); pbrt: edges sorted at "
-                 "every node. Both give the same tree"},
-                {"isect_cost",
-                 ParamType::Float,
-                 format_param(double(d.isect_cost)),
-                 {},
-                 1e-4,
-                 1e4,
-                 "SAH cost of one ray/triangle test C_I"},
-                {"traversal_cost",
-                 ParamType::Float,
-                 format_param(double(d.traversal_cost)),
-                 {},
-                 1e-4,
-                 1e4,
-                 "SAH cost of one traversal step C_T"},
-                {"empty_bonus",
-                 ParamType::Float,
-                 format_param(double(d.empty_bonus)),
-                 {},
-                 0,
-                 1,
-                 "b_e: fraction of the cost forgiven when one child is empty"},
-                {"max_prims",
-                 ParamType::Int,
-                 format_param(int64_t(d.max_prims)),
-                 {},
-                 0,
-                 KdNode::kMaxIndex,
-                 "nodes with at most this many primitives become leaves"},
-                {"max_depth",
-                 ParamType::Int,
-                 "auto",
-                 {},
-                 0,
-                 kMaxDepthLimit,
-                 "deepest level; auto = round(8 + 1.3 log2 N)",
-                 true},
-                {"mailbox",
-                 ParamType::Bool,
-                 d.mailbox ? "true" : "false",
-                 {},
-                 0,
-                 0,
-                 "test a triangle once per ray even when several leaves the ray visits hold it (the same "
-                 "answers; prim_tests then counts the tests made)"},
-            },
-            [](const ParamSet& p) { return std::make_unique<KdTree>(p); },
-            fixed_label("kd-tree")};
+namespace {
+
+// The parameters, each once: its row and its Config member, whose initializer is the default.
+const ParamTable<KdTree::Config>& kdtree_params() {
+    using C = KdTree::Config;
+    static const ParamTable<C> rows = {
+        enum_param("build", &C::build, KdTree::kBuildNames,
+                   "nlogn: events sorted once, split in linear time (Wald & Havran 2006); pbrt: edges sorted at "
+                   "every node. Both give the same tree"),
+        float_param("isect_cost", &C::isect_cost, 1e-4, 1e4, "SAH cost of one ray/triangle test C_I"),
+        float_param("traversal_cost", &C::traversal_cost, 1e-4, 1e4, "SAH cost of one traversal step C_T"),
+        float_param("empty_bonus", &C::empty_bonus, 0, 1, "b_e: fraction of the cost forgiven when one child is empty"),
+        int_param("max_prims", &C::max_prims, 0, KdNode::kMaxIndex,
+                  "nodes with at most this many primitives become leaves"),
+        auto_int_param("max_depth", &C::max_depth, 0, KdTree::kMaxDepthLimit,
+                       "deepest level; auto = round(8 + 1.3 log2 N)"),
+        bool_param("mailbox", &C::mailbox,
+                   "test a triangle once per ray even when several leaves the ray visits hold it (the same "
+                   "answers; prim_tests then counts the tests made)"),
+    };
+    return rows;
 }
 
-KdTree::Config KdTree::Config::from(const ParamSet& p) {
-    Config c;
-    c.build = p.get_enum("build") == "pbrt" ? BuildAlgorithm::Pbrt : BuildAlgorithm::NLogN;
-    c.isect_cost = float(p.get_float("isect_cost"));
-    c.traversal_cost = float(p.get_float("traversal_cost"));
-    c.empty_bonus = float(p.get_float("empty_bonus"));
-    c.max_prims = int(p.get_int("max_prims"));
-    if (p.given("max_depth")) c.max_depth = int(p.get_int("max_depth"));
-    c.mailbox = p.get_bool("mailbox");
-    return c;
+}  // namespace
+
+AcceleratorInfo KdTree::info() {
+    return {
+        "kdtree", "SAH kd-tree after pbrt-v3 (report section 4): 8-byte nodes, edge-event SAH, front-to-back traversal",
+        kdtree_params().specs(), [](const ParamSet& p) { return std::make_unique<KdTree>(p); }, fixed_label("kd-tree")};
 }
+
+KdTree::Config KdTree::Config::from(const ParamSet& p) { return kdtree_params().from(p); }
 
 KdTree::KdTree(const ParamSet& params) : KdTree(Config::from(params)) {}
 

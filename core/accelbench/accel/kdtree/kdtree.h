@@ -18,6 +18,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
@@ -65,7 +66,10 @@ static_assert(sizeof(KdNode) == 8, "the kd-tree node must stay 8 bytes (report 4
 
 class KdTree final : public AcceleratorBase<KdTree> {
 public:
-    enum class BuildAlgorithm { Pbrt, NLogN };
+    enum class BuildAlgorithm { NLogN, Pbrt };
+    // The build names, in the enum's order: the declared choices and the parser both read
+    // this list.
+    static constexpr std::array<std::string_view, 2> kBuildNames = {"nlogn", "pbrt"};
 
     // The largest max_depth accepted. It sizes the traversal's fixed stack (one entry
     // per level at most), so no ray can overflow it.
@@ -81,7 +85,7 @@ public:
     static constexpr uint64_t kMaxRefsPerPrim = 256;
     static constexpr uint64_t kMinRefBudget = 1u << 22;
 
-    // The parameters with their defaults (info() declares them from these values).
+    // The parameters: each member's initializer is its default; kdtree.cpp's table declares them.
     struct Config {
         float isect_cost = 80.0f;     // C_I, pbrt-v3's default
         float traversal_cost = 1.0f;  // C_T
