@@ -8,23 +8,33 @@
 #include <string>
 
 #include "accelbench/base/exact_predicates.h"
+#include "accelbench/base/param_table.h"
 
 namespace accelbench {
+
+namespace {
+
+// The parameters, each once: its row and its Config member, whose initializer is the default.
+const ParamTable<ReferenceAccel::Config>& reference_params() {
+    using C = ReferenceAccel::Config;
+    static const ParamTable<C> rows = {
+        int_param("leaf_size", &C::leaf_size, 1, 64, "largest number of triangles in a leaf"),
+    };
+    return rows;
+}
+
+}  // namespace
 
 AcceleratorInfo ReferenceAccel::info() {
     return {"reference",
             "ground truth for the error columns: object-median BVH, double precision, exact hit/miss decision, "
             "conservative box tests; never timed",
-            {
-                {"leaf_size", ParamType::Int, "4", {}, 1, 64, "largest number of triangles in a leaf"},
-            },
+            reference_params().specs(),
             [](const ParamSet& p) { return std::make_unique<ReferenceAccel>(Config::from(p)); },
             fixed_label("reference")};
 }
 
-ReferenceAccel::Config ReferenceAccel::Config::from(const ParamSet& p) {
-    return {.leaf_size = uint32_t(p.get_int("leaf_size"))};
-}
+ReferenceAccel::Config ReferenceAccel::Config::from(const ParamSet& p) { return reference_params().from(p); }
 
 namespace {
 
