@@ -41,9 +41,11 @@
 // (is_valid_ray) are answered "miss" before any count.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
@@ -83,19 +85,32 @@ class Wbvh final : public AcceleratorBase<Wbvh> {
 public:
     enum class Kernel { simd, scalar };
     enum class Collapse { greedy, sah };
+    // The names, in the enums' order: the declared choices and the parser both read them.
+    static constexpr std::array<std::string_view, 2> kKernelNames = {"simd", "scalar"};
+    static constexpr std::array<std::string_view, 2> kCollapseNames = {"greedy", "sah"};
 
-    // The parameters, as declared in info() (defaults there only).
+    // The parameters: each member's initializer is its default; wbvh.cpp's table declares
+    // them. What the defaults were measured against: docs/decisions.md, "Wide BVH".
     struct Config {
-        uint32_t width = 0;         // children per node: 4 or 8
-        uint32_t max_prims = 0;     // leaf cap of the binary build (SAH may stop earlier)
-        uint32_t max_depth = 0;     // binary build's depth limit
-        uint32_t bins = 0;          // binned SAH bins
-        uint32_t all_axes_min = 0;  // ranges that bin all three axes (bvh.h)
-        double traversal_cost = 0;  // SAH constants of the binary build
-        double isect_cost = 0;
-        uint32_t reinsertion = 0;           // reinsertion passes on the binary tree before the collapse
+        uint32_t width = 8;  // children per node: 4 or 8
+        // Leaf cap of the binary build. With collapse=sah the binary leaves are small and
+        // the collapse merges a subtree into one leaf only where its packets are cheaper
+        // than a node, so the cap only bounds what it may merge: 8, two packets.
+        uint32_t max_prims = 8;
+        uint32_t max_depth = 64;  // binary build's depth limit
+        uint32_t bins = 32;       // binned SAH bins: Embree's, and `bvh split=sah`'s
+        // Ranges that bin all three axes (bvh.h): none, unlike bvh's 1024, for the build goal.
+        uint32_t all_axes_min = 0;
+        // SAH constants of the binary build. 2 with collapse=sah: a finer binary tree whose
+        // leaves the collapse merges as the wide cost model says (set 3 with greedy, which
+        // keeps each binary leaf, so fuller leaves pay there).
+        double traversal_cost = 2;
+        double isect_cost = 1;
+        // Reinsertion passes on the binary tree before the collapse; off for the build goal
+        // (<= 1.2x Embree).
+        uint32_t reinsertion = 0;
         Collapse collapse = Collapse::sah;  // how binary nodes are grouped into wide nodes and leaves
-        double packet_cost = 0;             // collapse=sah: cost of one packet test, a wide node's = 1
+        double packet_cost = 2;             // collapse=sah: cost of one packet test, a wide node's = 1
         Kernel kernel = Kernel::simd;       // vector tests, or the scalar ones they must equal
 
         static Config from(const ParamSet& params);
