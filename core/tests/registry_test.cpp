@@ -11,6 +11,7 @@
 
 #include "accelbench/accel/registry.h"
 #include "accelbench/base/param_table.h"
+#include "test_scenes.h"
 
 namespace accelbench {
 namespace {
@@ -62,6 +63,41 @@ TEST(Registry, DefaultParameterTextIsUnchanged) {
         ASSERT_TRUE(expected.count(info.name)) << info.name << ": add its default parameter text here";
         EXPECT_EQ(resolve_params(info.name, info.params, {}).canonical(), expected.at(info.name)) << info.name;
     }
+}
+
+// Every tree's statistics come from one tally (tree_tally.h): the same columns for every
+// structure that has a tree, and the same rule for what cannot be known: no SAH cost for a
+// root box without area, no average leaf without leaves.
+TEST(BuildStats, EveryTreeReportsItsShapeTheSameWay) {
+    const Scene grid = test::closed_grid();
+    Scene line;  // degenerate triangles, all on the x axis: a root box without area
+    for (int i = 0; i < 20; ++i)
+        test::add_triangle(line, {float(i), 0, 0}, {float(i) + 1, 0, 0}, {float(i) + 0.5f, 0, 0});
+    line.finalize();
+    Scene empty;
+    empty.finalize();
+    int trees = 0;
+    for (const auto& info : accelerator_registry()) {
+        auto accel = info.create(resolve_params(info.name, info.params, {}));
+        accel->build(grid);
+        const BuildStats s = accel->build_stats();
+        if (!s.nodes || *s.nodes == 0) continue;  // no tree (brute force) or none it shows (Embree)
+        ++trees;
+        ASSERT_TRUE(s.leaves && s.max_depth && s.memory_bytes) << info.name;
+        EXPECT_GT(*s.leaves, 0u) << info.name;
+        ASSERT_TRUE(s.avg_leaf_size.has_value()) << info.name;
+        EXPECT_GT(*s.avg_leaf_size, 0.0) << info.name;
+        ASSERT_TRUE(s.sah_cost.has_value()) << info.name;
+        EXPECT_GE(*s.sah_cost, 1.0) << info.name << ": the root's own visit costs 1";
+
+        accel->build(line);
+        EXPECT_FALSE(accel->build_stats().sah_cost.has_value()) << info.name << ": a root box without area";
+        accel->build(empty);
+        const BuildStats e = accel->build_stats();
+        EXPECT_FALSE(e.sah_cost.has_value()) << info.name << ": an empty scene";
+        EXPECT_TRUE(e.leaves != 0u || !e.avg_leaf_size) << info.name << ": no leaves, no average";
+    }
+    EXPECT_EQ(trees, 5);  // bvh, lbvh, kdtree, reference, wbvh
 }
 
 // A Config of every kind of row, to check that the declarations and Config::from come from

@@ -96,7 +96,6 @@ private:
     std::vector<Node> nodes_;
     std::vector<uint32_t> prim_ids_;
     uint32_t depth_ = 0;
-    uint64_t leaves_ = 0;
 };
 
 }  // namespace accelbench

@@ -422,7 +422,7 @@ void Bvh::build(const Scene& scene) {
 }
 
 BuildStats Bvh::build_stats() const {
-    BuildStats s = bvh_build_stats(bvh_);
+    BuildStats s = measure_bvh(bvh_);
     if (s.memory_bytes) *s.memory_bytes += packets_.memory_bytes();
     s.extra["degenerate_splits"] = double(counts_.degenerate_splits);
     s.extra["forced_leaves"] = double(counts_.forced_leaves);

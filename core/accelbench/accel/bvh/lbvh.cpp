@@ -282,7 +282,7 @@ uint64_t Lbvh::reserved_bytes() const {
 }
 
 BuildStats Lbvh::build_stats() const {
-    BuildStats s = bvh_build_stats(bvh_);
+    BuildStats s = measure_bvh(bvh_);
     s.extra["morton_bits"] = config_.bits;
     s.extra["equal_code_splits"] = double(counts_.equal_code_splits);
     s.extra["forced_leaves"] = double(counts_.forced_leaves);

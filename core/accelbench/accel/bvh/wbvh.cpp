@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "accelbench/accel/bvh/bvh_metrics.h"
 #include "accelbench/accel/bvh/bvh_packet_leaves.h"
+#include "accelbench/accel/tree_tally.h"
 #include "accelbench/base/param_table.h"
 
 namespace accelbench {
@@ -354,15 +354,12 @@ void Wbvh::build(const Scene& scene) {
 }
 
 template <int W>
-WbvhMetrics measure_wbvh(const WbvhTree<W>& tree) {
-    WbvhMetrics m;
-    m.nodes = tree.nodes.size();
-    m.leaves = tree.leaves;
-    m.packets = tree.packets.size();
-    m.max_depth = tree.empty() ? 0 : tree.depth + 1;  // edges down to the deepest leaf child
-    m.memory_bytes = tree.nodes.size() * sizeof(WbvhNode<W>) + tree.packets.size() * sizeof(WbvhTriPacket);
-    double inner_area = 0, leaf_area = 0, root_area = 0;
-    uint64_t prims = 0, children = 0;
+BuildStats measure_wbvh(const WbvhTree<W>& tree) {
+    TreeTally t;
+    t.nodes = tree.nodes.size();
+    t.max_depth = tree.empty() ? 0 : tree.depth + 1;  // edges down to the deepest leaf child
+    t.memory_bytes = tree.nodes.size() * sizeof(WbvhNode<W>) + tree.packets.size() * sizeof(WbvhTriPacket);
+    uint64_t children = 0;
     for (size_t i = 0; i < tree.nodes.size(); ++i) {
         const WbvhNode<W>& node = tree.nodes[i];
         Bounds3 box;
@@ -371,36 +368,24 @@ WbvhMetrics measure_wbvh(const WbvhTree<W>& tree) {
         for (uint32_t k = 0; k < n; ++k) {
             const Bounds3 b = node.child_bounds(int(k));
             box.extend(b);
-            if (node.count[k]) {
-                prims += node.count[k];
-                leaf_area += double(b.area()) * node.count[k];
-            }
+            if (node.count[k]) t.leaf(b.area(), node.count[k]);
         }
-        inner_area += box.area();
-        if (i == 0) root_area = box.area();
+        t.inner(box.area());
+        if (i == 0) t.root_area = box.area();
     }
-    if (m.leaves) m.avg_leaf_size = double(prims) / double(m.leaves);
-    if (m.nodes) m.avg_children = double(children) / double(m.nodes);
-    if (m.packets) m.packet_fill = double(prims) / double(m.packets * WbvhTriPacket::kLanes);
-    if (root_area > 0) m.sah_cost = (kSahCostTraversal * inner_area + kSahCostIntersection * leaf_area) / root_area;
-    return m;
+    BuildStats s = t.stats();
+    const uint64_t packets = tree.packets.size();
+    s.extra["packets"] = double(packets);
+    s.extra["packet_fill"] = packets ? double(t.prim_refs) / double(packets * WbvhTriPacket::kLanes) : 0.0;
+    s.extra["avg_children"] = t.nodes ? double(children) / double(t.nodes) : 0.0;
+    return s;
 }
 
-template WbvhMetrics measure_wbvh(const WbvhTree<4>&);
-template WbvhMetrics measure_wbvh(const WbvhTree<8>&);
+template BuildStats measure_wbvh(const WbvhTree<4>&);
+template BuildStats measure_wbvh(const WbvhTree<8>&);
 
 BuildStats Wbvh::build_stats() const {
-    const WbvhMetrics m = config_.width == 8 ? measure_wbvh(tree8_) : measure_wbvh(tree4_);
-    BuildStats s;
-    s.nodes = m.nodes;
-    s.leaves = m.leaves;
-    s.max_depth = m.max_depth;
-    s.memory_bytes = m.memory_bytes;
-    if (m.leaves) s.avg_leaf_size = m.avg_leaf_size;
-    s.sah_cost = m.sah_cost;
-    s.extra["packets"] = double(m.packets);
-    s.extra["packet_fill"] = m.packet_fill;
-    s.extra["avg_children"] = m.avg_children;
+    BuildStats s = config_.width == 8 ? measure_wbvh(tree8_) : measure_wbvh(tree4_);
     const BuildStats binary = binary_.build_stats();
     s.extra["binary_nodes"] = double(binary.nodes.value_or(0));
     if (binary.sah_cost) s.extra["binary_sah_cost"] = *binary.sah_cost;

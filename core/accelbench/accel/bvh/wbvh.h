@@ -69,17 +69,12 @@ struct WbvhTree {
     bool empty() const { return nodes.empty(); }
 };
 
-// Statistics of a finished wide tree (measure_wbvh), reported as BuildStats.
-struct WbvhMetrics {
-    uint64_t nodes = 0, leaves = 0, max_depth = 0, memory_bytes = 0, packets = 0;
-    double avg_leaf_size = 0;        // triangles per leaf child
-    double avg_children = 0;         // used child slots per node
-    double packet_fill = 0;          // used lanes / lanes of all packets
-    std::optional<double> sah_cost;  // C_trav = C_isect = 1 (bvh_metrics.h), wide nodes' areas
-};
-
+// Statistics of a finished wide tree (tree_tally.h): nodes = wide nodes, leaves = leaf
+// children, max_depth = edges down to the deepest leaf child, sah_cost over the wide nodes'
+// boxes; extras packets, packet_fill (used lanes / lanes of all packets) and avg_children
+// (used child slots per node).
 template <int W>
-WbvhMetrics measure_wbvh(const WbvhTree<W>& tree);
+BuildStats measure_wbvh(const WbvhTree<W>& tree);
 
 class Wbvh final : public AcceleratorBase<Wbvh> {
 public:

@@ -8,6 +8,7 @@
 #include <string>
 #include <type_traits>
 
+#include "accelbench/accel/tree_tally.h"
 #include "accelbench/base/param_table.h"
 #include "accelbench/base/radix_sort.h"
 #include "accelbench/base/triangle.h"
@@ -524,15 +525,16 @@ uint64_t KdTree::memory_bytes() const {
         corners_.size() * sizeof(corners_[0]);
 }
 
-// Walks the tree with each node's box. Both SAH costs are expected costs of a ray
-// through the root box: every interior node costs C_T and every leaf C_I per primitive
-// reference, each weighted by its surface area relative to the root's.
+// Walks the tree with each node's box (tree_tally.h). sah_cost_build is the same sum with
+// this build's C_T and C_I (pbrt's model without the empty bonus), what its SAH minimised.
 BuildStats measure_kdtree(const KdTree& tree) {
     const std::span<const KdNode> nodes = tree.nodes();
-    const KdTree::Config& config = tree.config();
-    uint64_t leaves = 0, empty_leaves = 0, refs = 0;
-    double inner_area = 0.0, leaf_area = 0.0;  // relative to the root's, leaves' weighted by their references
-    const double root_area = tree.bounds().area();
+    TreeTally t;
+    t.nodes = nodes.size();
+    t.max_depth = uint64_t(tree.deepest_leaf());
+    t.memory_bytes = tree.memory_bytes();
+    t.root_area = nodes.empty() ? 0.0 : double(tree.bounds().area());
+    uint64_t empty_leaves = 0;
     struct Item {
         uint32_t node;
         Bounds3 box;
@@ -543,31 +545,22 @@ BuildStats measure_kdtree(const KdTree& tree) {
         const Item it = todo.back();
         todo.pop_back();
         const KdNode& node = nodes[it.node];
-        const double rel = root_area > 0 ? it.box.area() / root_area : 1.0;
         if (node.is_leaf()) {
-            ++leaves;
-            refs += node.prim_count();
+            t.leaf(it.box.area(), node.prim_count());
             empty_leaves += node.prim_count() == 0;
-            leaf_area += rel * node.prim_count();
         } else {
-            inner_area += rel;
+            t.inner(it.box.area());
             Bounds3 below = it.box, above = it.box;
             below.upper[node.axis()] = above.lower[node.axis()] = node.split();
             todo.push_back({node.above_child(), above});
             todo.push_back({it.node + 1, below});
         }
     }
-    BuildStats s;
-    s.nodes = nodes.size();
-    s.leaves = leaves;
-    s.max_depth = uint64_t(tree.deepest_leaf());
-    s.memory_bytes = tree.memory_bytes();
-    s.avg_leaf_size = leaves ? double(refs) / double(leaves) : 0.0;
-    if (!nodes.empty()) {
-        s.sah_cost = kSahCostTraversal * inner_area + kSahCostIntersection * leaf_area;
-        s.extra["sah_cost_build"] = double(config.traversal_cost) * inner_area + double(config.isect_cost) * leaf_area;
-    }
-    s.extra["prim_refs"] = double(refs);
+    BuildStats s = t.stats();
+    const KdTree::Config& config = tree.config();
+    if (const auto build_cost = t.sah_cost(config.traversal_cost, config.isect_cost))
+        s.extra["sah_cost_build"] = *build_cost;
+    s.extra["prim_refs"] = double(t.prim_refs);
     s.extra["empty_leaves"] = double(empty_leaves);
     s.extra["bad_refines"] = double(tree.bad_refines());
     s.extra["max_depth_limit"] = double(tree.max_depth_used());
