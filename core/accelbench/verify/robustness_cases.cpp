@@ -2,7 +2,6 @@
 #include "accelbench/base/unknown_name.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -765,13 +764,7 @@ std::vector<RobustnessCase> robustness_catalogue() {
 JudgeOptions judge_options(const AcceleratorInfo& accelerator, const ParamSet& params) {
     JudgeOptions o;
     o.watertight = accelerator.watertight(params);
-    for (const auto& [name, value] : params.items()) {
-        if (name == "max_depth") {
-            uint64_t depth = 0;
-            auto [p, ec] = std::from_chars(value.data(), value.data() + value.size(), depth);
-            if (ec == std::errc() && p == value.data() + value.size()) o.depth_limit = depth;
-        }
-    }
+    o.depth_limit = accelerator.depth_limit(params);
     return o;
 }
 

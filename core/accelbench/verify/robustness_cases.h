@@ -104,8 +104,8 @@ struct JudgeOptions {
 };
 
 // Watertight as the structure's info says for these parameters (every structure of ours
-// uses triangle.h's watertight test; Embree only with robust=true). The depth limit is
-// the structure's own `max_depth` parameter when it has a numeric one.
+// uses triangle.h's watertight test; Embree only with robust=true), and its depth limit
+// (AcceleratorInfo::depth_limit) where it declares one.
 JudgeOptions judge_options(const AcceleratorInfo& accelerator, const ParamSet& params);
 
 // BuildStats.memory_bytes must stay below this for a case's scene: 4 KiB per triangle

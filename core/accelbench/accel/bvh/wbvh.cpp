@@ -74,13 +74,23 @@ Bvh::Config binary_config(const Wbvh::Config& c) {
 }  // namespace
 
 AcceleratorInfo Wbvh::info() {
-    return {"wbvh",
-            "wide BVH (Embree BVH4/BVH8): the binned-SAH binary BVH collapsed to 4 or 8 children per node, child "
-            "boxes structure-of-arrays in one SIMD slab test, leaves of 4-triangle packets in one SIMD watertight test",
-            wbvh_params().specs(), [](const ParamSet& p) { return std::make_unique<Wbvh>(p); },
-            [](const ParamSet& p) {
-                return "wide BVH (" + p.get_enum("width") + ", " +
-                    (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") + ")";
+    return {.name = "wbvh",
+            .description =
+                "wide BVH (Embree BVH4/BVH8): the binned-SAH binary BVH collapsed to 4 or 8 children per "
+                "node, child boxes structure-of-arrays in one SIMD slab test, leaves of 4-triangle packets "
+                "in one SIMD watertight test",
+            .params = wbvh_params().specs(),
+            .create = [](const ParamSet& p) { return std::make_unique<Wbvh>(p); },
+            .label =
+                [](const ParamSet& p) {
+                    return "wide BVH (" + p.get_enum("width") + ", " +
+                        (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") + ")";
+                },
+            // Every wide child lies at least one binary level below its node, so the wide
+            // tree is no deeper than the binary one, except that the wide root is an inner
+            // node even over a single binary leaf (max_depth=0): a leaf child at depth 1.
+            .depth_limit = [](const ParamSet& p) -> std::optional<uint64_t> {
+                return std::max<uint64_t>(1, Config::from(p).max_depth);
             }};
 }
 
