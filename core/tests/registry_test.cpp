@@ -100,6 +100,28 @@ TEST(BuildStats, EveryTreeReportsItsShapeTheSameWay) {
     EXPECT_EQ(trees, 5);  // bvh, lbvh, kdtree, reference, wbvh
 }
 
+// A structure's depth limit is what the robustness judge holds its tree to: built with it,
+// the tree stays within it, and the structures with a depth parameter declare one.
+TEST(Registry, DepthLimitBoundsTheBuiltTree) {
+    const Scene grid = test::closed_grid();
+    auto limit = [](const std::string& name, const std::map<std::string, std::string>& given) {
+        const AcceleratorInfo* info = find_accelerator(name);
+        return info->depth_limit(resolve_params(name, info->params, given));
+    };
+    for (const char* name : {"bvh", "lbvh", "kdtree", "wbvh"})
+        for (const char* depth : {"0", "1", "3", "9"}) {
+            const std::optional<uint64_t> bound = limit(name, {{"max_depth", depth}});
+            ASSERT_TRUE(bound.has_value()) << name;
+            EXPECT_EQ(*bound, std::string(name) == "wbvh" && std::string(depth) == "0" ? 1u : std::stoull(depth))
+                << name << " max_depth=" << depth;
+            auto accel = make_accelerator(name, {{"max_depth", depth}});
+            accel->build(grid);
+            EXPECT_LE(*accel->build_stats().max_depth, *bound) << name << " max_depth=" << depth;
+        }
+    EXPECT_FALSE(limit("kdtree", {}).has_value()) << "its default depth depends on the scene";
+    EXPECT_FALSE(limit("reference", {}).has_value());
+}
+
 // A Config of every kind of row, to check that the declarations and Config::from come from
 // the rows and the defaults from the member initializers.
 enum class Shape { round, square };

@@ -67,11 +67,14 @@ const ParamTable<Bvh::Config>& bvh_params() {
 }  // namespace
 
 AcceleratorInfo Bvh::info() {
-    return {"bvh",
-            "top-down BVH (report section 2): fit & split with median/midpoint/mean/spatial-median or binned SAH "
-            "splits, flattened depth-first; optional reinsertion optimizer",
-            bvh_params().specs(), [](const ParamSet& p) { return std::make_unique<Bvh>(p); },
-            [](const ParamSet& p) { return "BVH (" + split_label(Config::from(p).split) + ")"; }};
+    return {.name = "bvh",
+            .description =
+                "top-down BVH (report section 2): fit & split with median/midpoint/mean/spatial-median or "
+                "binned SAH splits, flattened depth-first; optional reinsertion optimizer",
+            .params = bvh_params().specs(),
+            .create = [](const ParamSet& p) { return std::make_unique<Bvh>(p); },
+            .label = [](const ParamSet& p) { return "BVH (" + split_label(Config::from(p).split) + ")"; },
+            .depth_limit = [](const ParamSet& p) -> std::optional<uint64_t> { return Config::from(p).max_depth; }};
 }
 
 Bvh::Config Bvh::Config::from(const ParamSet& p) { return bvh_params().from(p); }

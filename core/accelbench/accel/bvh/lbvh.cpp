@@ -45,10 +45,15 @@ const ParamTable<Lbvh::Config>& lbvh_params() {
 }  // namespace
 
 AcceleratorInfo Lbvh::info() {
-    return {"lbvh",
-            "linear BVH (report section 3): Morton codes of the centroids, one radix sort, split at the highest "
-            "differing code bit (Karras 2012 or the report's Algorithm 2, the same tree); optional subtree threads",
-            lbvh_params().specs(), [](const ParamSet& p) { return std::make_unique<Lbvh>(p); }, fixed_label("LBVH")};
+    return {.name = "lbvh",
+            .description =
+                "linear BVH (report section 3): Morton codes of the centroids, one radix sort, split at the "
+                "highest differing code bit (Karras 2012 or the report's Algorithm 2, the same tree); "
+                "optional subtree threads",
+            .params = lbvh_params().specs(),
+            .create = [](const ParamSet& p) { return std::make_unique<Lbvh>(p); },
+            .label = fixed_label("LBVH"),
+            .depth_limit = [](const ParamSet& p) -> std::optional<uint64_t> { return Config::from(p).max_depth; }};
 }
 
 Lbvh::Config Lbvh::Config::from(const ParamSet& p) { return lbvh_params().from(p); }

@@ -41,9 +41,17 @@ const ParamTable<KdTree::Config>& kdtree_params() {
 }  // namespace
 
 AcceleratorInfo KdTree::info() {
-    return {
-        "kdtree", "SAH kd-tree after pbrt-v3 (report section 4): 8-byte nodes, edge-event SAH, front-to-back traversal",
-        kdtree_params().specs(), [](const ParamSet& p) { return std::make_unique<KdTree>(p); }, fixed_label("kd-tree")};
+    return {.name = "kdtree",
+            .description =
+                "SAH kd-tree after pbrt-v3 (report section 4): 8-byte nodes, edge-event SAH, front-to-back traversal",
+            .params = kdtree_params().specs(),
+            .create = [](const ParamSet& p) { return std::make_unique<KdTree>(p); },
+            .label = fixed_label("kd-tree"),
+            // A given max_depth; the default's depends on the scene.
+            .depth_limit = [](const ParamSet& p) -> std::optional<uint64_t> {
+                const std::optional<int> depth = Config::from(p).max_depth;
+                return depth ? std::optional<uint64_t>(uint64_t(*depth)) : std::nullopt;
+            }};
 }
 
 KdTree::Config KdTree::Config::from(const ParamSet& p) { return kdtree_params().from(p); }
