@@ -10,7 +10,8 @@
 //                the recursion by splitting them in linear time (Wald & Havran 2006, "On
 //                building fast kd-trees for ray tracing, and on doing that in O(N log N)").
 // They differ only in where a node's sorted events come from; the SAH sweep, the
-// classification and the leaf contents are one code path (kdtree.cpp).
+// classification and the leaf contents are one code path (kdtree_build.cpp). The
+// traversal is kdtree_traversal.cpp, the statistics kdtree_metrics.h.
 #pragma once
 
 #include <array>
@@ -151,13 +152,5 @@ private:
     uint64_t bad_refines_ = 0;  // splits made although dearer than a leaf
     int deepest_leaf_ = 0;
 };
-
-// Statistics of a built kd-tree (tree_tally.h): nodes, leaves (empty ones included),
-// max_depth (deepest leaf; root = 0), avg_leaf_size (primitive references per leaf),
-// memory_bytes (nodes, the shared primitive-index array and the triangle copy; inline single
-// primitives cost nothing extra) and sah_cost; extra: sah_cost_build (pbrt's model with THIS
-// build's C_T and C_I and no empty bonus, what its SAH minimised), prim_refs (references over
-// all leaves), empty_leaves, bad_refines, max_depth_limit (the max_depth applied).
-BuildStats measure_kdtree(const KdTree& tree);
 
 }  // namespace accelbench
