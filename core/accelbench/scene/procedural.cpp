@@ -164,42 +164,59 @@ struct LeafCluster {
 constexpr Vec3 kGround{0.30f, 0.36f, 0.15f}, kBark{0.28f, 0.19f, 0.11f};
 constexpr Vec3 kBroadLeaf{0.20f, 0.42f, 0.10f}, kNeedle{0.07f, 0.24f, 0.09f};
 
-ProceduralScene make_forest(const ParamSet& p) {
-    const int64_t target = p.get_int("triangles");
-    SplitMix64 rng(mix_seed(uint64_t(p.get_int("seed")), 0xF0235Full));
-    ProceduralScene out;
-    out.scene.name = scene_name("forest", p);
-    ColouredSoupBuilder mesh(out);
+// How big the forest is: about one tree per 10k triangles, so leaves stay small and dense
+// at any size.
+struct ForestLayout {
+    int trees;
+    float radius;       // metres
+    float ground_half;  // half the ground's side: reaches far toward the horizon
+};
 
-    // About one tree per 10k triangles, so leaves stay small and dense at any size.
+ForestLayout forest_layout(int64_t target) {
     const int trees = std::clamp(int(std::lround(double(target) / 10000.0)), 2, 60);
-    const float forest_radius = 6.0f * std::sqrt(float(trees)) + 10.0f;  // metres
-    const float ground_half = 6.0f * forest_radius;                      // reaches far toward the horizon
+    const float forest_radius = 6.0f * std::sqrt(float(trees)) + 10.0f;
+    return {trees, forest_radius, 6.0f * forest_radius};
+}
 
-    // Gently rolling ground, a grid of about 0.8% of the triangles.
-    const float ph0 = rng.uniform(0, 2 * kPi), ph1 = rng.uniform(0, 2 * kPi), ph2 = rng.uniform(0, 2 * kPi);
-    auto ground_height = [&](float x, float z) {
+// Gently rolling ground: the sum of two waves with random phases.
+struct Ground {
+    float ph0 = 0, ph1 = 0, ph2 = 0;
+    float height(float x, float z) const {
         return 0.8f * std::sin(0.07f * x + ph0) * std::cos(0.05f * z + ph1) + 0.4f * std::sin(0.13f * (x + z) + ph2);
-    };
+    }
+};
+
+// The ground as a grid of about 0.8% of the triangles.
+Ground build_ground(ColouredSoupBuilder& mesh, SplitMix64& rng, const ForestLayout& forest, int64_t target) {
+    Ground ground;
+    ground.ph0 = rng.uniform(0, 2 * kPi);
+    ground.ph1 = rng.uniform(0, 2 * kPi);
+    ground.ph2 = rng.uniform(0, 2 * kPi);
+    const float ground_half = forest.ground_half;
     const int grid = std::clamp(int(std::sqrt(double(target) * 0.004)), 2, 48);
     const float cell = 2 * ground_half / float(grid);
     for (int i = 0; i < grid; ++i)
         for (int j = 0; j < grid; ++j) {
             const float x0 = -ground_half + cell * float(i), z0 = -ground_half + cell * float(j);
             const float x1 = x0 + cell, z1 = z0 + cell;
-            mesh.quad({x0, ground_height(x0, z0), z0}, {x0, ground_height(x0, z1), z1}, {x1, ground_height(x1, z1), z1},
-                      {x1, ground_height(x1, z0), z0}, vary(rng, kGround, 0.08f));
+            mesh.quad({x0, ground.height(x0, z0), z0}, {x0, ground.height(x0, z1), z1}, {x1, ground.height(x1, z1), z1},
+                      {x1, ground.height(x1, z0), z0}, vary(rng, kGround, 0.08f));
         }
+    return ground;
+}
 
-    // Groves: trees gather around a few centres, keeping a minimum gap between trunks.
-    const int groves = std::max(1, trees / 5);
+// Groves: trees gather around a few centres, keeping a minimum gap between trunks. The
+// trunks' positions on the ground plane (y = 0).
+std::vector<Vec3> place_trunks(SplitMix64& rng, const ForestLayout& forest) {
+    const float forest_radius = forest.radius;
+    const int groves = std::max(1, forest.trees / 5);
     std::vector<Vec3> grove_centres;
     for (int g = 0; g < groves; ++g) {
         const float r = 0.6f * forest_radius * std::sqrt(rng.uniform()), a = rng.uniform(0, 2 * kPi);
         grove_centres.push_back({r * std::cos(a), 0, r * std::sin(a)});
     }
     std::vector<Vec3> trunks;
-    for (int t = 0; t < trees; ++t) {
+    for (int t = 0; t < forest.trees; ++t) {
         Vec3 best;
         for (int attempt = 0; attempt < 40; ++attempt) {
             const Vec3 c = grove_centres[rng.below(uint32_t(groves))];
@@ -217,57 +234,58 @@ ProceduralScene make_forest(const ParamSet& p) {
         }
         trunks.push_back(best);
     }
+    return trunks;
+}
 
-    // Trunks and branches first (their count is fixed); leaves take what is left.
-    std::vector<LeafCluster> clusters;
-    float tallest = 0;
-    for (const Vec3& base_xz : trunks) {
-        const Vec3 base{base_xz.x, ground_height(base_xz.x, base_xz.z) - 0.3f, base_xz.z};
-        const bool conifer = rng.uniform() < 0.35f;
-        const float h = conifer ? rng.uniform(12, 20) : rng.uniform(9, 16);
-        tallest = std::max(tallest, h);
-        const Vec3 leaf_colour = vary(rng, conifer ? kNeedle : kBroadLeaf, 0.2f);
-        // The trunk: three tapering segments with a slight random lean.
-        const float trunk_top = conifer ? 0.97f * h : 0.62f * h;
-        const Vec3 lean{rng.uniform(-0.04f, 0.04f) * h, 0, rng.uniform(-0.04f, 0.04f) * h};
-        const float r_base = (conifer ? 0.028f : 0.035f) * h, r_top = conifer ? 0.006f * h : 0.022f * h;
-        Vec3 prev = base;
-        for (int s = 1; s <= 3; ++s) {
-            const float f = float(s) / 3.0f;
-            const Vec3 next = base + Vec3{0, trunk_top * f, 0} + lean * (f * f);
-            mesh.tube(prev, next, r_base + (r_top - r_base) * (f - 1.0f / 3.0f), r_base + (r_top - r_base) * f, 7,
-                      kBark);
-            prev = next;
-        }
-        const Vec3 top = prev;
-        if (conifer) {
-            // Whorls of needles, widest at the bottom: a layered cone.
-            const int whorls = 6 + int(rng.below(3));
-            for (int w = 0; w < whorls; ++w) {
-                const float f = float(w) / float(whorls);
-                const float r = (0.30f * (1.0f - f) + 0.05f) * h * rng.uniform(0.9f, 1.1f);
-                const Vec3 c = base + Vec3{0, (0.22f + 0.72f * f) * h, 0} + lean * (f * f);
-                clusters.push_back({c, {r, 0.07f * h, r}, true, leaf_colour});
-            }
-        } else {
-            // Branches from the upper trunk, each ending in a leaf cluster, plus one on top.
-            const int branches = 4 + int(rng.below(3));
-            for (int b = 0; b < branches; ++b) {
-                const float az = 2 * kPi * (float(b) + rng.uniform(-0.3f, 0.3f)) / float(branches);
-                const float el = rng.uniform(0.6f, 1.05f);  // radians above the horizontal
-                const float from = rng.uniform(0.45f, 0.62f) / 0.62f;
-                const Vec3 start = base + (top - base) * from;
-                const Vec3 dir{std::cos(az) * std::cos(el), std::sin(el), std::sin(az) * std::cos(el)};
-                const Vec3 end = start + dir * (rng.uniform(0.25f, 0.35f) * h);
-                mesh.tube(start, end, 0.012f * h, 0.007f * h, 5, kBark);
-                const float r = rng.uniform(0.17f, 0.24f) * h;
-                clusters.push_back({end + Vec3{0, 0.3f * r, 0}, {r, 0.75f * r, r}, false, leaf_colour});
-            }
-            const float r = rng.uniform(0.2f, 0.25f) * h;
-            clusters.push_back({top + Vec3{0, 0.6f * r, 0}, {r, 0.8f * r, r}, false, leaf_colour});
-        }
+// One tree standing at `base`: its trunk and branches, its leaf clusters appended to
+// `clusters` (filled with leaves later, when the leaves' budget is known). Returns its height.
+float build_tree(ColouredSoupBuilder& mesh, SplitMix64& rng, Vec3 base, std::vector<LeafCluster>& clusters) {
+    const bool conifer = rng.uniform() < 0.35f;
+    const float h = conifer ? rng.uniform(12, 20) : rng.uniform(9, 16);
+    const Vec3 leaf_colour = vary(rng, conifer ? kNeedle : kBroadLeaf, 0.2f);
+    // The trunk: three tapering segments with a slight random lean.
+    const float trunk_top = conifer ? 0.97f * h : 0.62f * h;
+    const Vec3 lean{rng.uniform(-0.04f, 0.04f) * h, 0, rng.uniform(-0.04f, 0.04f) * h};
+    const float r_base = (conifer ? 0.028f : 0.035f) * h, r_top = conifer ? 0.006f * h : 0.022f * h;
+    Vec3 prev = base;
+    for (int s = 1; s <= 3; ++s) {
+        const float f = float(s) / 3.0f;
+        const Vec3 next = base + Vec3{0, trunk_top * f, 0} + lean * (f * f);
+        mesh.tube(prev, next, r_base + (r_top - r_base) * (f - 1.0f / 3.0f), r_base + (r_top - r_base) * f, 7, kBark);
+        prev = next;
     }
+    const Vec3 top = prev;
+    if (conifer) {
+        // Whorls of needles, widest at the bottom: a layered cone.
+        const int whorls = 6 + int(rng.below(3));
+        for (int w = 0; w < whorls; ++w) {
+            const float f = float(w) / float(whorls);
+            const float r = (0.30f * (1.0f - f) + 0.05f) * h * rng.uniform(0.9f, 1.1f);
+            const Vec3 c = base + Vec3{0, (0.22f + 0.72f * f) * h, 0} + lean * (f * f);
+            clusters.push_back({c, {r, 0.07f * h, r}, true, leaf_colour});
+        }
+        return h;
+    }
+    // Branches from the upper trunk, each ending in a leaf cluster, plus one on top.
+    const int branches = 4 + int(rng.below(3));
+    for (int b = 0; b < branches; ++b) {
+        const float az = 2 * kPi * (float(b) + rng.uniform(-0.3f, 0.3f)) / float(branches);
+        const float el = rng.uniform(0.6f, 1.05f);  // radians above the horizontal
+        const float from = rng.uniform(0.45f, 0.62f) / 0.62f;
+        const Vec3 start = base + (top - base) * from;
+        const Vec3 dir{std::cos(az) * std::cos(el), std::sin(el), std::sin(az) * std::cos(el)};
+        const Vec3 end = start + dir * (rng.uniform(0.25f, 0.35f) * h);
+        mesh.tube(start, end, 0.012f * h, 0.007f * h, 5, kBark);
+        const float r = rng.uniform(0.17f, 0.24f) * h;
+        clusters.push_back({end + Vec3{0, 0.3f * r, 0}, {r, 0.75f * r, r}, false, leaf_colour});
+    }
+    const float r = rng.uniform(0.2f, 0.25f) * h;
+    clusters.push_back({top + Vec3{0, 0.6f * r, 0}, {r, 0.8f * r, r}, false, leaf_colour});
+    return h;
+}
 
+// The leaves: everything the trees left of the triangle target, shared among the clusters.
+void fill_leaves(ColouredSoupBuilder& mesh, SplitMix64& rng, const std::vector<LeafCluster>& clusters, int64_t target) {
     const size_t fixed = mesh.triangles();
     if (size_t(target) < fixed + 10 * clusters.size())
         too_few_triangles("forest", target, fixed + 10 * clusters.size());
@@ -295,13 +313,34 @@ ProceduralScene make_forest(const ParamSet& p) {
             else mesh.random_triangle(rng, at, r, 0.866f * r, colour);
         }
     }
+}
+
+// The stages in the order they draw from the one random stream: ground, trunk positions,
+// trees (trunks and branches first, their count is fixed), then the leaves take what is left.
+ProceduralScene make_forest(const ParamSet& p) {
+    const int64_t target = p.get_int("triangles");
+    SplitMix64 rng(mix_seed(uint64_t(p.get_int("seed")), 0xF0235Full));
+    ProceduralScene out;
+    out.scene.name = scene_name("forest", p);
+    ColouredSoupBuilder mesh(out);
+
+    const ForestLayout forest = forest_layout(target);
+    const Ground ground = build_ground(mesh, rng, forest, target);
+    const std::vector<Vec3> trunks = place_trunks(rng, forest);
+    std::vector<LeafCluster> clusters;
+    float tallest = 0;
+    for (const Vec3& base_xz : trunks) {
+        const Vec3 base{base_xz.x, ground.height(base_xz.x, base_xz.z) - 0.3f, base_xz.z};
+        tallest = std::max(tallest, build_tree(mesh, rng, base, clusters));
+    }
+    fill_leaves(mesh, rng, clusters, target);
 
     // The view: from the south-east, low enough that the sky shows above the far edge of
     // the ground; the light: a high sun to the right, so trees cast shadows toward the
     // viewer's left.
     const Vec3 target_point{0, 0.3f * tallest, 0};
-    out.camera = orbit_camera(target_point, 35.0f, 16.0f, 1.9f * forest_radius);
-    out.light = Light{Vec3{0, 0, 0} + normalize(Vec3{0.9f, 1.3f, -0.2f}) * (4.0f * forest_radius)};
+    out.camera = orbit_camera(target_point, 35.0f, 16.0f, 1.9f * forest.radius);
+    out.light = Light{Vec3{0, 0, 0} + normalize(Vec3{0.9f, 1.3f, -0.2f}) * (4.0f * forest.radius)};
     out.scene.finalize();
     return out;
 }
