@@ -25,8 +25,6 @@ constexpr int kMaxClassLines = 300, kMaxFunctionLines = 120;
 // one no longer does, so the list only shrinks).
 const std::set<std::string> kNotYetSplit = {
     "core/accelbench/scene/mesh_ply.cpp: PlyReader",
-    "core/accelbench/scene/procedural.cpp: make_city",
-    "core/accelbench/scene/procedural.cpp: make_forest",
     "harness/config/config.cpp: Loader",
 };
 
