@@ -268,7 +268,7 @@ def start(job: Job, provenance: dict[str, str], now: datetime) -> tuple[Path, di
         run_dir = job.into
         for sub in ("csv", "tables", "figures", "report", "runs"):
             shutil.rmtree(run_dir / sub, ignore_errors=True)
-        for f in ("REPORT.md", RUN_JSON):
+        for f in ("REPORT.md", "index.html", RUN_JSON):
             (run_dir / f).unlink(missing_ok=True)
         print(f"reproduce: measuring from scratch into {run_dir}", file=sys.stderr)
         meta = None
@@ -381,6 +381,9 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
     write_run_json(run_dir, meta)
     if job.latest is not None and job.into is None:
         point_latest(job.latest, run_dir)
+    from .outputs.runs_page import write_runs_page
+
+    write_runs_page(job.runs.parent)
     took = clock(time.monotonic() - progress.start)
     print(
         f"reproduce: done in {took}; see {run_dir / 'REPORT.md'}"

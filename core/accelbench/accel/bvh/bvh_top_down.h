@@ -505,6 +505,18 @@ private:
 
 }  // namespace detail
 
+// Object median (report 2.2.1): half the primitives on each side, by centroid order.
+// Balanced by construction, blind to the primitives' sizes and to empty space. The
+// median BVH's split, and the tree of the LBVH's build=median (lbvh.h).
+struct BvhMedianSplit {
+    using Ref = BvhCentroidRef;  // the median looks at centroids only
+    std::optional<BvhSplit> operator()(std::span<Ref> refs, const BvhRangeRequest<Ref>& r) {
+        return equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis], r.centroid_bounds.upper[r.axis],
+                            r.parallel);
+    }
+    detail::EqualCountSplitter<Ref> equal_counts;
+};
+
 // The references the builder starts from: one per scene triangle, in scene order.
 inline void put_refs(const Scene& scene, BvhPrimRef* out, bool parallel) {
     for_blocks(parallel, scene.triangle_count(), 1 << 14, [&](size_t, size_t begin, size_t end) {
@@ -579,8 +591,8 @@ public:
         Bounds3 bounds, centroid_bounds;
     };
 
-    TopDownBuild(const BvhTopDownSettings& settings, const Strategy& prototype, Ref* const* buffers,
-                 uint32_t* prim_ids, bool parallel, bool in_place)
+    TopDownBuild(const BvhTopDownSettings& settings, const Strategy& prototype, Ref* const* buffers, uint32_t* prim_ids,
+                 bool parallel, bool in_place)
         : settings_(settings),
           prototype_(prototype),
           buffers_{buffers[0], buffers[1]},
@@ -604,13 +616,12 @@ public:
             const bool small = count <= settings_.max_prims;
             if (count > 1 && range.depth < settings_.max_depth && (!small || kMayStopEarly)) {
                 const Vec3 extent = range.centroid_bounds.diagonal();
-                const int axis =
-                    settings_.axis == BvhAxisRule::longest ? max_axis(extent) : int(range.depth % 3);
+                const int axis = settings_.axis == BvhAxisRule::longest ? max_axis(extent) : int(range.depth % 3);
                 const std::span<Ref> span_scratch(buffers_[range.buffer ^ 1] + range.begin, count);
                 const bool wide = parallel_ && count >= kParallelMin;
                 if (extent[axis] > 0.0f)
-                    split = strategy(span, {range.bounds, range.centroid_bounds, axis, range.depth, small, span_scratch,
-                                            wide});
+                    split = strategy(
+                        span, {range.bounds, range.centroid_bounds, axis, range.depth, small, span_scratch, wide});
                 if (split && (split->mid == 0 || split->mid >= count))
                     throw std::logic_error("bvh: split strategy returned an empty side");
                 if (!split && !small) {
