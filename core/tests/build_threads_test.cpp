@@ -1,6 +1,7 @@
 // Every parallel build gives the tree of its one-thread build: the node arrays (and the leaf
 // arrays beside them) byte for byte at 1, 2 and 7 threads, on the bunny and the procedural
-// scenes, for bvh (every split), wbvh (both widths and collapses) and lbvh. The scenes are
+// scenes, for bvh (every split), wbvh (both widths and collapses), lbvh and kdtree (both
+// builds). The scenes are
 // large enough (more than 64k triangles) that the parallel paths run: the root's split
 // binned and partitioned in blocks, subtrees handed out as tasks, the pieces assembled.
 #include <gtest/gtest.h>
@@ -14,6 +15,7 @@
 #include "accelbench/accel/bvh/bvh.h"
 #include "accelbench/accel/bvh/lbvh.h"
 #include "accelbench/accel/bvh/wbvh.h"
+#include "accelbench/accel/kdtree/kdtree.h"
 #include "accelbench/accel/registry.h"
 #include "accelbench/scene/procedural.h"
 #include "agreement.h"
@@ -135,12 +137,43 @@ TEST(BuildThreads, LbvhIsTheSameForEveryThreadCount) {
         }
 }
 
+TEST(BuildThreads, KdTreeIsTheSameForEveryThreadCount) {
+    const std::vector<Params> variants = {{}, {{"build", "pbrt"}}, {{"max_prims", "4"}}, {{"max_depth", "12"}}};
+    for (const Scene& scene : shared_scenes())
+        for (const Params& p : variants) {
+            if (p.count("build") && scene.name != shared_scenes()[0].name) continue;  // pbrt's build is slow: the bunny
+            const auto one = built<KdTree>("kdtree", scene, p, "1");
+            for (const char* threads : kThreads) {
+                const auto many = built<KdTree>("kdtree", scene, p, threads);
+                const std::string what = scene.name + " " + describe("kdtree", p, threads);
+                expect_same_bytes(one->nodes(), many->nodes(), what + " nodes");
+                expect_same_bytes(one->prim_indices(), many->prim_indices(), what + " prim_indices");
+                EXPECT_EQ(one->build_stats().extra, many->build_stats().extra) << what;
+                EXPECT_EQ(one->deepest_leaf(), many->deepest_leaf()) << what;
+            }
+        }
+}
+
+// The kd-tree's reference budget stops a build on several threads as on one (the count of
+// references only grows, so the batches' order does not matter).
+TEST(BuildThreads, KdTreeBudgetStopsEveryThreadCount) {
+    const Scene& scene = shared_scenes()[0];
+    for (const char* threads : {"1", "2", "7"}) {
+        KdTree::Config tight;
+        tight.max_refs = scene.triangle_count() + 10000;
+        tight.threads = std::stoi(threads);
+        KdTree kd(tight);
+        EXPECT_THROW(kd.build(scene), std::runtime_error) << threads;
+        EXPECT_TRUE(kd.nodes().empty()) << threads;
+    }
+}
+
 // A rebuild on several threads reuses the structure's arrays: it must give the same tree
 // again, and answer as Embree does.
 TEST(BuildThreads, RebuildsOnSeveralThreadsAgreeWithEmbree) {
     const Scene& scene = shared_scenes()[1];
     const auto rays = test::probe_rays(scene, 2000);
-    for (const char* name : {"bvh", "wbvh"}) {
+    for (const char* name : {"bvh", "wbvh", "kdtree"}) {
         auto accel = make_accelerator(name, {{"threads", "2"}});
         accel->build(scene);
         accel->build(scene);

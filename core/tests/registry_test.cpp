@@ -54,7 +54,8 @@ TEST(Registry, DefaultParameterTextIsUnchanged) {
          "build=karras;bits=10;max_prims=1;max_depth=50;threads=1;task_threshold=100;sort_digit_bits=10;"
          "traversal=ordered"},
         {"kdtree",
-         "build=nlogn;isect_cost=80;traversal_cost=1;empty_bonus=0.5;max_prims=1;max_depth=auto;mailbox=false"},
+         "build=nlogn;isect_cost=80;traversal_cost=1;empty_bonus=0.5;max_prims=1;max_depth=auto;mailbox=false;"
+         "threads=1"},
         {"reference", "leaf_size=4"},
         {"wbvh",
          "width=8;max_prims=8;max_depth=64;bins=32;all_axes_min=0;traversal_cost=2;isect_cost=1;reinsertion=0;"
