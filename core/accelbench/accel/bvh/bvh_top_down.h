@@ -401,28 +401,18 @@ private:
         BvhBoxAccumulator* const boxes = boxes_;
         BvhBoxAccumulator* const centroids = centroids_;
         // The bins are empty on entry (left empty below).
-        auto count_into = [&](size_t begin, size_t end, uint32_t* counts, BvhBoxAccumulator* boxes,
-                              BvhBoxAccumulator* centroids) {
-            for (size_t i = begin; i < end; ++i) {
-                const Ref& r = refs[i];
-                const uint32_t b = uint32_t(std::min(last_bin, std::max(0.0f, (r.centroid(a) - lo) * scale)));
-                bin[i] = uint8_t(b);
-                ++counts[b];
-                if constexpr (kBoxes) boxes[b].extend(r, centroids[b]);
-                else centroids[b].extend(r);
-            }
-        };
         struct Part {
             uint32_t counts[kMaxBins] = {};
             BvhBoxAccumulator boxes[kBoxes ? kMaxBins : 1], centroids[kMaxBins];
         };
         std::vector<Part> parts;  // parallel: each block's bins
         if (!parallel) {
-            count_into(0, n, counts, boxes, centroids);
+            count_range(a, refs, bin, 0, n, lo, scale, last_bin, counts, boxes, centroids);
         } else {
             parts.resize(block_count(n, kParallelBlock));
             for_blocks(true, n, kParallelBlock, [&](size_t k, size_t begin, size_t end) {
-                count_into(begin, end, parts[k].counts, parts[k].boxes, parts[k].centroids);
+                count_range(a, refs, bin, begin, end, lo, scale, last_bin, parts[k].counts, parts[k].boxes,
+                            parts[k].centroids);
             });
             for (const Part& p : parts)
                 for (uint32_t b = 0; b < bins; ++b) {
@@ -448,19 +438,8 @@ private:
         // three write positions are selected in registers: kept in an array indexed by the
         // group, each store's address waited for the previous increment through memory
         // (store-to-load forwarding) whenever two references in a row went the same way.
-        auto scatter = [&](size_t begin, size_t end, size_t next0, size_t next1, size_t next2) {
-            for (size_t i = begin; i < end; ++i) {
-                const uint32_t b = bin[i];
-                const bool above = b > median_bin, in = b == median_bin;
-                const size_t dst = above ? next2 : (in ? next1 : next0);
-                scratch[dst] = refs[i];
-                next2 += above;
-                next1 += in;
-                next0 += !above & !in;
-            }
-        };
         if (!parallel) {
-            scatter(0, n, 0, below, below + in_median);
+            scatter_range(refs, bin, scratch, 0, n, median_bin, 0, below, below + in_median);
         } else {
             // Each block's groups start after the earlier blocks' groups.
             std::vector<size_t> starts(3 * parts.size());
@@ -475,7 +454,8 @@ private:
                 }
             }
             for_blocks(true, n, kParallelBlock, [&](size_t k, size_t begin, size_t end) {
-                scatter(begin, end, starts[3 * k], starts[3 * k + 1], starts[3 * k + 2]);
+                scatter_range(refs, bin, scratch, begin, end, median_bin, starts[3 * k], starts[3 * k + 1],
+                              starts[3 * k + 2]);
             });
         }
         auto by_centroid = [a](const Ref& x, const Ref& y) { return x.centroid(a) < y.centroid(a); };
@@ -493,6 +473,36 @@ private:
             split.centroid_bounds[c] = child_centroids[c].bounds();
         }
         return split;
+    }
+
+    // The counting loop over refs [begin, end) into the given bins. Every value it reads is
+    // a parameter (a local): see split_binned.
+    template <class Axis>
+    static void count_range(Axis a, const Ref* refs, uint8_t* bin, size_t begin, size_t end, float lo, float scale,
+                            float last_bin, uint32_t* counts, BvhBoxAccumulator* boxes, BvhBoxAccumulator* centroids) {
+        for (size_t i = begin; i < end; ++i) {
+            const Ref& r = refs[i];
+            const uint32_t b = uint32_t(std::min(last_bin, std::max(0.0f, (r.centroid(a) - lo) * scale)));
+            bin[i] = uint8_t(b);
+            ++counts[b];
+            if constexpr (kBoxes) boxes[b].extend(r, centroids[b]);
+            else centroids[b].extend(r);
+        }
+    }
+
+    // The three-way scatter of refs [begin, end), the groups' next positions starting at
+    // next0, next1, next2.
+    static void scatter_range(const Ref* refs, const uint8_t* bin, Ref* scratch, size_t begin, size_t end,
+                              uint32_t median_bin, size_t next0, size_t next1, size_t next2) {
+        for (size_t i = begin; i < end; ++i) {
+            const uint32_t b = bin[i];
+            const bool above = b > median_bin, in = b == median_bin;
+            const size_t dst = above ? next2 : (in ? next1 : next0);
+            scratch[dst] = refs[i];
+            next2 += above;
+            next1 += in;
+            next0 += !above & !in;
+        }
     }
 
     static constexpr uint32_t kMaxBins = 256;                        // a bin index fits a byte

@@ -178,7 +178,8 @@ public:
         // The root is a wide node whatever its cost: one leaf child under it when that is
         // cheaper than distributing the tree over its W slots.
         root_is_leaf_ = binary.nodes[0].is_leaf() ||
-            (prims_[0] <= max_prims && leaf_cost(binary.nodes[0].bounds.area(), prims_[0]) <= root_distribute_);
+            (prims_[0] <= max_prims &&
+             leaf_cost(binary.nodes[0].bounds.area(), prims_[0], packet_cost_) <= root_distribute_);
     }
 
     // The children of the wide node over binary node `node` (the root or an inner child).
@@ -195,8 +196,8 @@ public:
     }
 
 private:
-    float leaf_cost(float area, uint32_t n) const {
-        return area * packet_cost_ * float((n + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes);
+    static float leaf_cost(float area, uint32_t n, float packet_cost) {
+        return area * packet_cost * float((n + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes);
     }
 
     void plan_subtree(uint32_t m, bool parallel) {
@@ -211,19 +212,27 @@ private:
         plan_node(m);
     }
 
+    // Every member it reads is copied to a local first: the byte stores into the plans may
+    // alias anything, as far as the compiler knows, and would make it reload the members.
     void plan_node(uint32_t m) {
         const BvhNode& b = binary_.nodes[m];
-        Plan& p = plan_[m];
+        Plan* const plans = plan_.data();
+        uint32_t* const prims = prims_.data();
+        const uint32_t max_prims = max_prims_;
+        const float packet_cost = packet_cost_;
+        Plan& p = plans[m];
         const float area = b.bounds.area();
         if (b.is_leaf()) {
-            prims_[m] = b.prim_count();
-            for (int i = 0; i < W; ++i) p.cost[i] = leaf_cost(area, prims_[m]);
+            const float cost = leaf_cost(area, b.prim_count(), packet_cost);
+            prims[m] = b.prim_count();
+            for (int i = 0; i < W; ++i) p.cost[i] = cost;
             p.leaf = true;
             return;
         }
         const uint32_t l = m + 1, r = b.second_child();
-        prims_[m] = prims_[l] + prims_[r];
-        const Plan &pl = plan_[l], &pr = plan_[r];
+        const uint32_t n = prims[l] + prims[r];
+        prims[m] = n;
+        const Plan &pl = plans[l], &pr = plans[r];
         float dist[W + 1];
         uint8_t split[W + 1];
         for (int j = 2; j <= W; ++j) {
@@ -239,8 +248,8 @@ private:
         p.node_split = split[W];
         if (m == 0) root_distribute_ = dist[W];
         const float node = area + dist[W];
-        const float leaf = prims_[m] <= max_prims_ ? leaf_cost(area, prims_[m]) : kInfinity;
-        p.leaf = prims_[m] <= max_prims_ && leaf <= node;  // a tie: the leaf, one node fewer
+        const float leaf = n <= max_prims ? leaf_cost(area, n, packet_cost) : kInfinity;
+        p.leaf = n <= max_prims && leaf <= node;  // a tie: the leaf, one node fewer
         p.cost[0] = p.leaf ? leaf : node;
         p.split[0] = 0;
         for (int i = 2; i <= W; ++i) {
