@@ -1,9 +1,10 @@
 // Every case of the extreme-case catalogue against every registered accelerator: at its
 // defaults, and also with each flag that changes whether it is watertight (embree's
 // robust) and each of ours building on two threads, brute_force forced past its
-// scene-size limit. The verdict (robustness_cases.h) requires, per case: no leak, no false hit, no wrong
-// primitive, no NaN, any-hit agreeing with closest-hit, the same answers on two traces
-// and two builds, depth within the structure's limit and memory within the case's bound.
+// scene-size limit. The verdict (robustness_cases.h) requires, per case: no leak, no
+// false hit, no wrong primitive, no NaN, any-hit agreeing with closest-hit, the same
+// answers on two traces and two builds, depth within the structure's limit and memory
+// within the case's bound.
 // Leaks through edges and vertices are required of watertight structures only; for
 // Embree (without robust, and with robust on the denormal-scale cases 3b/3c) they are
 // printed as findings, not failed: Embree is third-party code (AcceleratorInfo::third_party).
