@@ -162,6 +162,108 @@ private:
     std::shared_ptr<const std::vector<double>> area_;  // per scene triangle
 };
 
+// The binned SAH's parts (SahSplit below): lanes x, y, z and a fourth never read back.
+using F4 = BvhBoxAccumulator::F4;
+using I4 = int32_t __attribute__((vector_size(16)));
+constexpr F4 kInf4 = {kInfinity, kInfinity, kInfinity, kInfinity};
+
+// Centroid -> bin, along each axis (lanes 0-2): (c - lo) * scale clamped to [0, K - 1].
+// Clamped in float before the conversion: a tiny extent can make scale infinite, and
+// (c - lo) * scale then infinite (clamped to K - 1) or, at c = lo, NaN (sent to bin 0,
+// NaN failing the first comparison). An axis without extent (no
+// plane; the builder never asks for one when its own axis has none) gets scale 0, not a
+// division by zero: every centroid in bin 0. Lane 3 maps everything to bin 0.
+struct SahBinMap {
+    F4 lo, scale, last;
+    SahBinMap(const BvhSplitRequest& r, uint32_t bins) {
+        const Bounds3& cb = r.centroid_bounds;
+        // (1 - 1e-6): the largest centroid lands in the last bin, not one past it.
+        const float k = float(bins) * (1.0f - 1e-6f);
+        auto scale_of = [k](float lower, float upper) { return upper > lower ? k / (upper - lower) : 0.0f; };
+        lo = F4{cb.lower.x, cb.lower.y, cb.lower.z, 0.0f};
+        scale = F4{scale_of(cb.lower.x, cb.upper.x), scale_of(cb.lower.y, cb.upper.y), scale_of(cb.lower.z, cb.upper.z),
+                   0.0f};
+        const float l = float(bins - 1);
+        last = F4{l, l, l, 0.0f};
+    }
+    I4 bins(F4 centroid) const {
+        F4 f = (centroid - lo) * scale;
+        const F4 zero = {};
+        f = zero < f ? f : zero;  // NaN -> 0
+        f = f < last ? f : last;
+        return __builtin_convertvector(f, I4);
+    }
+};
+
+// A candidate plane of the binned SAH and what its sweep knows of the two sides.
+struct SahPlane {
+    float sum = kInfinity;  // A_left N_left + A_right N_right
+    uint32_t plane = 0;     // 0: none
+    uint32_t left_count = 0;
+    BvhBoxAccumulator left, right;  // the two sides' boxes
+};
+
+// The children's centroid boxes of a binned SAH split, taken while moving references to
+// their sides (SahSplit::partition).
+struct SahSides {
+    F4 lo[2] = {kInf4, kInf4}, hi[2] = {-kInf4, -kInf4};
+
+    // Moves refs to scratch, the left ones from `left` on, the right ones from `right`
+    // on; returns where each side ended.
+    std::pair<size_t, size_t> move(std::span<const BvhPrimRef> refs, std::span<BvhPrimRef> scratch,
+                                   const SahBinMap& map, int axis, uint32_t plane, size_t left, size_t right) {
+        switch (axis) {
+            case 0: return move_along<0>(refs.data(), refs.size(), scratch.data(), map, plane, left, right);
+            case 1: return move_along<1>(refs.data(), refs.size(), scratch.data(), map, plane, left, right);
+            default: return move_along<2>(refs.data(), refs.size(), scratch.data(), map, plane, left, right);
+        }
+    }
+    // The loop, every value it updates a local (not a capture or a member, which each store
+    // of a reference would make the compiler reload and store: it cannot tell they do not
+    // alias). Written as the one-thread partition was, where GCC 12 selects the
+    // destination with cmov; in other forms it made `is_right ? right : left` a branch,
+    // taken as the data says (0.26M more mispredictions per bunny build, 20% more time).
+    template <int A>
+    std::pair<size_t, size_t> move_along(const BvhPrimRef* refs, size_t n, BvhPrimRef* out, const SahBinMap& map,
+                                         uint32_t plane, size_t left, size_t right) {
+        F4 l[2] = {lo[0], lo[1]}, h[2] = {hi[0], hi[1]};
+        const std::span<BvhPrimRef> scratch(out, right + n);
+        for (const BvhPrimRef& ref : std::span<const BvhPrimRef>(refs, n)) {
+            const F4 c = BvhBoxAccumulator::centroid(ref);
+            const bool is_right = uint32_t(map.bins(c)[A]) >= plane;
+            scratch[is_right ? right : left] = ref;
+            left += !is_right;
+            right += is_right;
+            const I4 m = I4{} - int32_t(is_right);  // all ones on the right
+            l[0] = m ? l[0] : (c < l[0] ? c : l[0]);
+            h[0] = m ? h[0] : (c > h[0] ? c : h[0]);
+            l[1] = m ? (c < l[1] ? c : l[1]) : l[1];
+            h[1] = m ? (c > h[1] ? c : h[1]) : h[1];
+        }
+        for (int k = 0; k < 2; ++k) {
+            lo[k] = l[k];
+            hi[k] = h[k];
+        }
+        return {left, right};
+    }
+    // Merges the boxes of references that came after this one's (the earlier's lanes win
+    // ties, as in one pass).
+    void add(const SahSides& o) {
+        for (int k = 0; k < 2; ++k) {
+            lo[k] = o.lo[k] < lo[k] ? o.lo[k] : lo[k];
+            hi[k] = o.hi[k] > hi[k] ? o.hi[k] : hi[k];
+        }
+    }
+    BvhSplit split(int axis, const SahPlane& best) const {
+        BvhSplit s{best.left_count, axis, /*in_scratch=*/true, /*fitted=*/true};
+        s.bounds[0] = best.left.bounds();
+        s.bounds[1] = best.right.bounds();
+        for (int k = 0; k < 2; ++k)
+            s.centroid_bounds[k] = {{lo[k][0], lo[k][1], lo[k][2]}, {hi[k][0], hi[k][1], hi[k][2]}};
+        return s;
+    }
+};
+
 // Binned SAH (Wald 2007): instead of sorting, drop each centroid into one of K equal
 // bins along the axis (O(n)) — along all three axes in ranges of all_axes_min or more
 // references (bvh.h) — keep each bin's box and count, and evaluate the SAH
@@ -197,7 +299,7 @@ public:
           used_(3 * words_) {}
 
     std::optional<BvhSplit> operator()(std::span<BvhPrimRef> refs, const BvhSplitRequest& r) {
-        const BinMap map(r, bins_);
+        const SahBinMap map(r, bins_);
         const bool all_axes = all_axes_min_ > 0 && refs.size() >= all_axes_min_;
         std::vector<BlockBins> blocks;  // r.parallel: each block's bins
         if (r.parallel) bin_blocks(refs, map, r.axis, all_axes, blocks);
@@ -207,10 +309,10 @@ public:
         // centroids do not spread along has no plane (all of them in one bin); its bins are
         // still emptied.
         int best_axis = r.axis;
-        Plane best;
+        SahPlane best;
         for (int axis = 0; axis < 3; ++axis) {
             if (!all_axes && axis != r.axis) continue;
-            if (const Plane p = best_plane_on(axis); p.sum < best.sum) {
+            if (const SahPlane p = best_plane_on(axis); p.sum < best.sum) {
                 best = p;
                 best_axis = axis;
             }
@@ -225,120 +327,22 @@ public:
     }
 
 private:
-    using F4 = BvhBoxAccumulator::F4;
-    using I4 = int32_t __attribute__((vector_size(16)));
-    static constexpr F4 kInf4 = {kInfinity, kInfinity, kInfinity, kInfinity};
-
-    // Centroid -> bin, along each axis (lanes 0-2): (c - lo) * scale clamped to [0, K - 1].
-    // Clamped in float before the conversion: a tiny extent can make scale infinite, and
-    // (c - lo) * scale then infinite (clamped to K - 1) or, at c = lo, NaN (sent to bin 0,
-    // NaN failing the first comparison). An axis without extent (no
-    // plane; the builder never asks for one when its own axis has none) gets scale 0, not a
-    // division by zero: every centroid in bin 0. Lane 3 maps everything to bin 0.
-    struct BinMap {
-        F4 lo, scale, last;
-        BinMap(const BvhSplitRequest& r, uint32_t bins) {
-            const Bounds3& cb = r.centroid_bounds;
-            // (1 - 1e-6): the largest centroid lands in the last bin, not one past it.
-            const float k = float(bins) * (1.0f - 1e-6f);
-            auto scale_of = [k](float lower, float upper) { return upper > lower ? k / (upper - lower) : 0.0f; };
-            lo = F4{cb.lower.x, cb.lower.y, cb.lower.z, 0.0f};
-            scale = F4{scale_of(cb.lower.x, cb.upper.x), scale_of(cb.lower.y, cb.upper.y),
-                       scale_of(cb.lower.z, cb.upper.z), 0.0f};
-            const float l = float(bins - 1);
-            last = F4{l, l, l, 0.0f};
-        }
-        I4 bins(F4 centroid) const {
-            F4 f = (centroid - lo) * scale;
-            const F4 zero = {};
-            f = zero < f ? f : zero;  // NaN -> 0
-            f = f < last ? f : last;
-            return __builtin_convertvector(f, I4);
-        }
-    };
-    struct Plane {
-        float sum = kInfinity;  // A_left N_left + A_right N_right
-        uint32_t plane = 0;     // 0: none
-        uint32_t left_count = 0;
-        BvhBoxAccumulator left, right;  // the two sides' boxes
-    };
-
     // Moves the references below `best`'s plane to scratch[0, left_count) and the others to
     // scratch[left_count, n), each side in its order, without a branch on the side, and
     // takes the children's centroid boxes on the way. Their boxes come from the bins (the
     // same unions of the same boxes as a fit, so the same floats), so the builder does not
     // read the references again. The side is decided by the binning's own arithmetic
-    // (BinMap::bins), so every reference goes where the sweep counted it.
-    BvhSplit partition(std::span<const BvhPrimRef> refs, std::span<BvhPrimRef> scratch, const BinMap& map, int axis,
-                       const Plane& best) const {
-        Sides sides;
+    // (SahBinMap::bins), so every reference goes where the sweep counted it.
+    BvhSplit partition(std::span<const BvhPrimRef> refs, std::span<BvhPrimRef> scratch, const SahBinMap& map, int axis,
+                       const SahPlane& best) const {
+        SahSides sides;
         const auto [left, right] = sides.move(refs, scratch, map, axis, best.plane, 0, best.left_count);
-        // The sweep counted the sides with the same BinMap::bins, so this cannot fail unless
+        // The sweep counted the sides with the same SahBinMap::bins, so this cannot fail unless
         // that arithmetic stopped being deterministic (it is compiled without contraction).
         if (left != best.left_count || right != refs.size())
             throw std::logic_error("bvh: SAH partition disagrees with its bins");
         return sides.split(axis, best);
     }
-
-    // The children's centroid boxes, taken while moving references to their sides.
-    struct Sides {
-        F4 lo[2] = {kInf4, kInf4}, hi[2] = {-kInf4, -kInf4};
-
-        // Moves refs to scratch, the left ones from `left` on, the right ones from `right`
-        // on; returns where each side ended.
-        std::pair<size_t, size_t> move(std::span<const BvhPrimRef> refs, std::span<BvhPrimRef> scratch,
-                                       const BinMap& map, int axis, uint32_t plane, size_t left, size_t right) {
-            switch (axis) {
-                case 0: return move_along<0>(refs.data(), refs.size(), scratch.data(), map, plane, left, right);
-                case 1: return move_along<1>(refs.data(), refs.size(), scratch.data(), map, plane, left, right);
-                default: return move_along<2>(refs.data(), refs.size(), scratch.data(), map, plane, left, right);
-            }
-        }
-        // The loop, every value it updates a local (not a capture or a member, which each store
-        // of a reference would make the compiler reload and store: it cannot tell they do not
-        // alias). Written as the one-thread partition was, where GCC 12 selects the
-        // destination with cmov; in other forms it made `is_right ? right : left` a branch,
-        // taken as the data says (0.26M more mispredictions per bunny build, 20% more time).
-        template <int A>
-        std::pair<size_t, size_t> move_along(const BvhPrimRef* refs, size_t n, BvhPrimRef* out, const BinMap& map,
-                                             uint32_t plane, size_t left, size_t right) {
-            F4 l[2] = {lo[0], lo[1]}, h[2] = {hi[0], hi[1]};
-            const std::span<BvhPrimRef> scratch(out, right + n);
-            for (const BvhPrimRef& ref : std::span<const BvhPrimRef>(refs, n)) {
-                const F4 c = BvhBoxAccumulator::centroid(ref);
-                const bool is_right = uint32_t(map.bins(c)[A]) >= plane;
-                scratch[is_right ? right : left] = ref;
-                left += !is_right;
-                right += is_right;
-                const I4 m = I4{} - int32_t(is_right);  // all ones on the right
-                l[0] = m ? l[0] : (c < l[0] ? c : l[0]);
-                h[0] = m ? h[0] : (c > h[0] ? c : h[0]);
-                l[1] = m ? (c < l[1] ? c : l[1]) : l[1];
-                h[1] = m ? (c > h[1] ? c : h[1]) : h[1];
-            }
-            for (int k = 0; k < 2; ++k) {
-                lo[k] = l[k];
-                hi[k] = h[k];
-            }
-            return {left, right};
-        }
-        // Merges the boxes of references that came after this one's (the earlier's lanes win
-        // ties, as in one pass).
-        void add(const Sides& o) {
-            for (int k = 0; k < 2; ++k) {
-                lo[k] = o.lo[k] < lo[k] ? o.lo[k] : lo[k];
-                hi[k] = o.hi[k] > hi[k] ? o.hi[k] : hi[k];
-            }
-        }
-        BvhSplit split(int axis, const Plane& best) const {
-            BvhSplit s{best.left_count, axis, /*in_scratch=*/true, /*fitted=*/true};
-            s.bounds[0] = best.left.bounds();
-            s.bounds[1] = best.right.bounds();
-            for (int k = 0; k < 2; ++k)
-                s.centroid_bounds[k] = {{lo[k][0], lo[k][1], lo[k][2]}, {hi[k][0], hi[k][1], hi[k][2]}};
-            return s;
-        }
-    };
 
     // One block's bins of a range split on the build's threads: per axis (axis * bins_ + bin).
     struct BlockBins {
@@ -349,7 +353,7 @@ private:
 
     // bin() for a large range on the build's threads: each block into its own bins, merged in
     // order into the strategy's (a bin's box the same union as in one pass, base/parallel.h).
-    void bin_blocks(std::span<const BvhPrimRef> refs, const BinMap& map, int axis, bool all_axes,
+    void bin_blocks(std::span<const BvhPrimRef> refs, const SahBinMap& map, int axis, bool all_axes,
                     std::vector<BlockBins>& blocks) {
         const size_t per_block = 3 * size_t(bins_);
         blocks.resize(block_count(refs.size(), kBlock));
@@ -387,8 +391,8 @@ private:
     // partition() for a large range on the build's threads: each block moves its references
     // to where the blocks before it end, on either side (the per-block counts of the bins
     // below the plane say how many go left).
-    BvhSplit partition_blocks(std::span<const BvhPrimRef> refs, std::span<BvhPrimRef> scratch, const BinMap& map,
-                              int axis, const Plane& best, const std::vector<BlockBins>& blocks) const {
+    BvhSplit partition_blocks(std::span<const BvhPrimRef> refs, std::span<BvhPrimRef> scratch, const SahBinMap& map,
+                              int axis, const SahPlane& best, const std::vector<BlockBins>& blocks) const {
         std::vector<std::pair<size_t, size_t>> starts(blocks.size());
         size_t left = 0, right = best.left_count;
         for (size_t k = 0; k < blocks.size(); ++k) {
@@ -402,7 +406,7 @@ private:
         }
         if (left != best.left_count || right != refs.size())
             throw std::logic_error("bvh: SAH partition disagrees with its bins");
-        std::vector<Sides> sides(blocks.size());
+        std::vector<SahSides> sides(blocks.size());
         for_blocks(true, refs.size(), kBlock, [&](size_t k, size_t begin, size_t end) {
             const auto [l, r] = sides[k].move(refs.subspan(begin, end - begin), scratch, map, axis, best.plane,
                                               starts[k].first, starts[k].second);
@@ -418,7 +422,7 @@ private:
     // three bins at once, as Embree's binner does) or along `axis` alone. The bins are empty
     // on entry (emptied by best_plane_on).
     template <bool kAll>
-    void bin(std::span<const BvhPrimRef> refs, const BinMap& map, int axis) {
+    void bin(std::span<const BvhPrimRef> refs, const SahBinMap& map, int axis) {
         BvhBoxAccumulator* const bounds = bin_bounds_.data();
         uint32_t* const counts = bin_counts_.data();
         // Which bins are used, kept in registers where one word holds an axis's bins (up to
@@ -447,7 +451,7 @@ private:
     }
 
     // The cheapest bin boundary along `axis`; leaves that axis's bins empty.
-    Plane best_plane_on(int axis) {
+    SahPlane best_plane_on(int axis) {
         BvhBoxAccumulator* const bounds = &bin_bounds_[size_t(axis) * bins_];
         uint32_t* const counts = &bin_counts_[size_t(axis) * bins_];
         uint64_t* const used = &used_[size_t(axis) * words_];
@@ -478,7 +482,7 @@ private:
         // comparison let its rounding decide near ties, so the planes chosen moved with
         // traversal_cost (Tables 4 and 5's max_prims=1 trees differed in a few nodes between
         // traversal_cost 1 and 4). The costs enter the leaf decision only.
-        Plane best;
+        SahPlane best;
         acc = BvhBoxAccumulator{};
         count = 0;
         for (size_t w = 0; w < words_; ++w) {
