@@ -25,17 +25,19 @@
 #include <cstddef>
 #include <cstdlib>
 #include <new>
-#include <type_traits>
-#include <utility>
 #include <vector>
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
 
+#include "accelbench/base/default_init.h"
+
 namespace accelbench {
 
+// resize() and emplace_back() leave new elements unwritten (base/default_init.h): the tree's
+// builders write every element, some of them on several threads.
 template <class T>
-struct HugePageAllocator {
+struct HugePageAllocator : DefaultInitConstruct {
     using value_type = T;
     static constexpr size_t kHugePage = size_t(2) << 20;
 
@@ -58,16 +60,6 @@ struct HugePageAllocator {
     void deallocate(T* p, size_t n) noexcept {
         if (n * sizeof(T) < kHugePage) ::operator delete(p, std::align_val_t(alignof(T)));
         else std::free(p);
-    }
-    // resize() and emplace_back() leave new elements unwritten (as DefaultInitAllocator,
-    // parallel.h): the tree's builders write every element, some of them on several threads.
-    template <class U>
-    void construct(U*) noexcept {
-        static_assert(std::is_trivially_copyable_v<U> && std::is_trivially_destructible_v<U>);
-    }
-    template <class U, class... Args>
-    void construct(U* p, Args&&... args) {
-        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
     }
     template <class U>
     bool operator==(const HugePageAllocator<U>&) const noexcept {

@@ -24,8 +24,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
-#include <type_traits>
 #include <utility>
+
+#include "accelbench/base/default_init.h"
 
 namespace accelbench {
 
@@ -72,29 +73,6 @@ void for_blocks(bool parallel, size_t n, size_t block_size, F&& f) {
 }
 
 inline size_t block_count(size_t n, size_t block_size) { return (n + block_size - 1) / block_size; }
-
-// An allocator whose resize() leaves new elements unwritten, for arrays that are sized
-// first and then written by several tasks, each its own part: value-initialising them would
-// cost a serial pass over memory the tasks overwrite anyway. For implicit-lifetime types
-// only (aggregates, trivially copyable): allocating the storage creates them.
-template <class T>
-struct DefaultInitAllocator : std::allocator<T> {
-    template <class U>
-    struct rebind {
-        using other = DefaultInitAllocator<U>;
-    };
-    DefaultInitAllocator() = default;
-    template <class U>
-    DefaultInitAllocator(const DefaultInitAllocator<U>&) noexcept {}
-    template <class U>
-    void construct(U*) noexcept {
-        static_assert(std::is_trivially_copyable_v<U> && std::is_trivially_destructible_v<U>);
-    }
-    template <class U, class... Args>
-    void construct(U* p, Args&&... args) {
-        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-    }
-};
 
 // Runs a() and b(), at the same time when `parallel`.
 template <class A, class B>

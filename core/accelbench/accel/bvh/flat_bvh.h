@@ -23,7 +23,7 @@ struct LeafTriangle {
 // A finished BVH. Builders fill `nodes` (depth-first, nodes[0] the root) and `prim_ids`
 // (a leaf's slots are [first_prim, first_prim + prim_count)), then call finalize().
 // An empty scene gives no nodes at all; traversal then answers "miss".
-// Nodes are sized before a parallel build writes them (DefaultInitAllocator, parallel.h).
+// Nodes are sized before a parallel build writes them (DefaultInitAllocator, base/default_init.h).
 using BvhNodeArray = std::vector<BvhNode, DefaultInitAllocator<BvhNode>>;
 
 struct FlatBvh {
