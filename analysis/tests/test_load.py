@@ -83,6 +83,10 @@ def test_reps_file_is_not_a_summary(tmp_path):
     p.write_text("config,model,accel,params,repetition,build_s,render_s\n")
     with pytest.raises(ContractError, match="per-repetition"):
         read_csv(p)
+    p = tmp_path / "x.inputs.csv"
+    p.write_text("kind,sha256,name\nconfig," + "0" * 64 + ",x\n")
+    with pytest.raises(ContractError, match="record of its inputs"):
+        read_csv(p)
 
 
 def test_malformed_params_rejected():

@@ -90,14 +90,17 @@ TEST_F(HostileInputTest, AnOutputThatIsNotARegularFileIsRefused) {
 TEST_F(HostileInputTest, ASecondWriterOfOneOutputIsRefused) {
     ASSERT_EQ(run({config, "--out", out}).code, 0);
     const std::string before = read_file(out), reps_before = read_file(repetitions_path(out));
+    ASSERT_EQ(run({path("copy.csv"), out}, true).code, 0);
     for (const std::string& held : {out, repetitions_path(out)}) {
         OutputLock other({held});  // another process's run: flock conflicts across open files
         const Outcome o = run({config, "--out", out, "--resume"});
         EXPECT_EQ(o.code, 2);
         EXPECT_NE(o.err.find("is being written by another process"), std::string::npos) << o.err;
-        fs::remove(path("copy.csv"));
-        fs::remove(path("copy.reps.csv"));
-        EXPECT_EQ(run({path("copy.csv"), out}, true).code, 0);  // reading a locked output is fine
+        // Merging an output a run still writes would read it half-finished: refused.
+        const Outcome from = run({path("copy2.csv"), out}, true);
+        EXPECT_EQ(from.code, 2);
+        EXPECT_NE(from.err.find("is being written by another process"), std::string::npos) << from.err;
+        EXPECT_FALSE(fs::exists(path("copy2.csv")));
         const Outcome into = run({out, path("copy.csv")}, true);
         EXPECT_EQ(into.code, 2);
         EXPECT_NE(into.err.find("is being written by another process"), std::string::npos) << into.err;

@@ -70,4 +70,27 @@ void OutputLock::add(const std::string& path) {
     fds_.push_back(fd);
 }
 
+InputLock::InputLock(const std::vector<std::string>& paths) {
+    for (const auto& p : paths) {
+        const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+        if (fd < 0) continue;  // absent: nothing to read
+        if (::flock(fd, LOCK_SH | LOCK_NB) == 0) {
+            fds_.push_back(fd);
+            continue;
+        }
+        const int err = errno;
+        ::close(fd);
+        for (int held : fds_) ::close(held);
+        if (err == EWOULDBLOCK)
+            throw std::runtime_error("'" + p +
+                                     "' is being written by another process (an accelbench run or merge holds its "
+                                     "lock): wait for it to finish, then merge");
+        throw std::runtime_error("cannot lock '" + p + "': " + std::strerror(err));
+    }
+}
+
+InputLock::~InputLock() {
+    for (int fd : fds_) ::close(fd);
+}
+
 }  // namespace accelbench

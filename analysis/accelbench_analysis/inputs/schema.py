@@ -430,6 +430,11 @@ def read_csv(path: str | Path) -> pd.DataFrame:
             f"{path}: this is a per-repetition file; pass the summary CSV "
             f"beside it (its .reps.csv is read automatically)"
         )
+    if path.name.endswith(".inputs.csv"):
+        raise ContractError(
+            f"{path}: this is a run's record of its inputs (the sha256 of its config, model and "
+            f"ray files); pass the results CSV beside it"
+        )
     header = _read_header(path)
     if (old := old_header_message(path, header)) is not None:
         raise ContractError(old)
