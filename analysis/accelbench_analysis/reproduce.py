@@ -554,7 +554,12 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
         if job.analyse:
             if job.cost_images:
                 print("== cost images", file=sys.stderr, flush=True)
-                cost = subprocess.run(job.cost_images + [str(run_dir)])
+                try:
+                    cost = subprocess.run(job.cost_images + [str(run_dir)])
+                except OSError as e:
+                    raise ReproduceError(
+                        f"cannot run the cost images command {job.cost_images[0]}: {e.strerror}"
+                    )
                 if cost.returncode != 0:
                     print(
                         f"reproduce: the cost images ({' '.join(job.cost_images)}) exited with "

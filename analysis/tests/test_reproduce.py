@@ -337,6 +337,14 @@ def test_a_tag_with_a_dash_continues_and_a_tag_that_is_no_name_is_refused(tmp_pa
         assert "--tag" in capfd.readouterr().err
 
 
+@needs_binary
+def test_a_cost_images_command_that_does_not_exist_is_named(tmp_path):
+    job = tiny_job(tmp_path)
+    job.analyse, job.cost_images = True, [str(tmp_path / "no-such-script.sh")]
+    with pytest.raises(ReproduceError, match="cannot run the cost images command .*no-such-script.sh"):
+        reproduce(job, NOW)
+
+
 def test_a_directory_where_latest_belongs_is_refused_before_measuring(tmp_path, capsys):
     (tmp_path / "latest").mkdir()
     (tmp_path / "latest" / "mine.txt").write_text("keep")

@@ -42,6 +42,9 @@ std::pair<std::string, std::string> split_kv(const std::string& kv) {
 }
 
 int parse_int(const std::string& flag, const std::string& v, int lo, int hi) {
+    // The one rule for how a number is written (configs and parameters alike): --width 010
+    // is refused as `width: 010` is, not read as 10.
+    if (const std::string why = number_form_problem(v); !why.empty()) throw ParamError(flag + ": " + why);
     try {
         size_t used = 0;
         int x = std::stoi(v, &used);
