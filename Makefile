@@ -14,16 +14,17 @@ ACCELBENCH  := $(BUILD_DIR)/accelbench
 QUICK       ?=
 FRESH       ?=
 
-# Debian packages the build, tests and analysis need (checked with dpkg first).
+# Debian packages the build, tests and analysis need (checked with dpkg first); chromium
+# renders the analysis's HTML pages in the browser test (headless, no network).
 DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
   libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
   libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev valgrind clang-format \
-  python3 python3-venv python3-pip
+  python3 python3-venv python3-pip chromium
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: deps venv build models test test-cpp test-python reproduce-tables reference-run \
-        test-sanitize regress update-baseline grid-search robustness clean \
+        test-sanitize regress update-baseline grid-search robustness history clean \
         slurm-deps slurm-submit test-slurm
 
 # ---- set-up -----------------------------------------------------------------------
@@ -76,8 +77,10 @@ test-cpp: models
 
 # In $(JOBS) worker processes (pytest-xdist): run serially the suite (157 s of CPU for its
 # 227 tests, the accelbench runs they start included) keeps one process busy at a time.
+# ACCELBENCH_BROWSER=required: deps installed chromium, so the browser test of the HTML
+# pages must run here (run by hand without it, pytest skips it where chromium is missing).
 test-python: venv
-	cd analysis && ../$(PYTHON) -m pytest -q -n $(JOBS) tests
+	cd analysis && ACCELBENCH_BROWSER=required ../$(PYTHON) -m pytest -q -n $(JOBS) tests
 
 test: test-cpp test-python
 
@@ -179,6 +182,14 @@ update-baseline: build
 	$(call ci_join,$(BASELINE),$(REGRESS_DIR)/baseline/timed.csv,$(REGRESS_DIR)/baseline/callgrind.csv)
 	@echo "update-baseline: wrote $(BASELINE); commit it saying why the baseline changed"
 
+# ---- every run across commits --------------------------------------------------------
+# `make history`: every run on this machine (results/runs/*, the regression check's,
+# results/reference/, the grid searches) into results/history/history.csv, one row per
+# commit x combination x measure, kept across runs (results/history/collected.csv), drawn
+# in results/history/index.html; results/index.html lists the runs.
+history: venv
+	$(ANALYSIS) history
+
 # ---- parameter grid search ----------------------------------------------------------
 # `make grid-search [GRID_CONFIG=configs/grid-NAME.yaml]`: runs the grid through the
 # harness (resumable: rerunning continues an interrupted run) and ranks it into
@@ -195,21 +206,21 @@ GRID_OUT     = results/grid/$(GRID_NAME)
 grid-search: build venv
 	mkdir -p $(GRID_RUNS)
 	$(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-1.csv $(GRID_CONFIG) > $(GRID_RUNS)/pass-1.log
-	@mode=$$(PYTHONPATH=analysis $(PYTHON) -c 'import sys; from accelbench_analysis.grid.grid_config import load_grid_config; print(load_grid_config(sys.argv[1]).mode)' $(GRID_CONFIG)) || exit 2; \
+	@mode=$$(PYTHONPATH=analysis $(PYTHON) -c 'import sys; from accelbench_analysis.grid.grid_config import load_grid_config; print(load_grid_config(sys.argv[1], sys.argv[2]).mode)' $(GRID_CONFIG) $(ACCELBENCH)) || exit 2; \
 	set -ex; \
 	if [ "$$mode" = successive_halving ]; then \
-	  $(ANALYSIS) grid-halve $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_RUNS)/pass-2.yaml; \
+	  $(ANALYSIS) grid-halve $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --accelbench $(ACCELBENCH) --out $(GRID_RUNS)/pass-2.yaml; \
 	  $(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-2.csv $(GRID_RUNS)/pass-2.yaml > $(GRID_RUNS)/pass-2.log; \
-	  $(ANALYSIS) grid $(GRID_RUNS)/pass-2.csv --cheap $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
+	  $(ANALYSIS) grid $(GRID_RUNS)/pass-2.csv --cheap $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --accelbench $(ACCELBENCH) --out $(GRID_OUT); \
 	else \
-	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --out $(GRID_OUT); \
+	  $(ANALYSIS) grid $(GRID_RUNS)/pass-1.csv --config $(GRID_CONFIG) --accelbench $(ACCELBENCH) --out $(GRID_OUT); \
 	fi
 
 # ---- robustness: extreme cases and stiff parameters -----------------------------------
 # configs/robustness.yaml: every case of the extreme-case catalogue judged by every
-# accelerator setting (the verdict table ends the log), the stiff parameters timed on a
+# structure setting (the verdict table ends the log), the stiff parameters timed on a
 # dense cluster and the 871k dragon; then the analysis's robustness report. Always a fresh
-# run (about 70 seconds). Writes results/robustness/{robustness.csv,robustness.log,robustness.md}.
+# run (about 100 seconds). Writes results/robustness/{robustness.csv,robustness.log,robustness.md}.
 ROBUSTNESS_DIR ?= results/robustness
 
 robustness: build models venv

@@ -4,8 +4,6 @@
 #include <exception>
 
 #include "commands/cli.h"
-#include "commands/run_command.h"
-#include "csv/provenance.h"
 #include "csv/results.h"
 
 namespace {

@@ -21,8 +21,8 @@ COMMANDS = {
     "tables": "write Tables 2, 4, 5 (Markdown + LaTeX) to OUT/tables/",
     "claims": "write the claims table to OUT/tables/claims.md",
     "figures": "write the PNG figures to OUT/figures/",
-    "report": "write OUT/REPORT.md linking what exists",
-    "all": "tables, claims, figures, the three-way comparison and REPORT.md",
+    "report": "write OUT/REPORT.md linking what exists, and OUT/index.html showing it",
+    "all": "tables, claims, figures, the three-way comparison, REPORT.md and index.html",
 }
 
 
@@ -59,6 +59,8 @@ def parser(more_commands=()) -> argparse.ArgumentParser:
     add_grid(sub)
     add_scaling(sub)
     add_robustness(sub)
+    add_html(sub)
+    add_history(sub)
     for add in more_commands:
         add(sub)
     return p
@@ -75,6 +77,63 @@ def add_robustness(sub) -> None:
     )
     s.add_argument("--csv", nargs="+", type=Path, required=True, help="the robustness run's CSV(s)")
     s.add_argument("--out", type=Path, required=True, help="output directory")
+
+
+def add_html(sub) -> None:
+    s = sub.add_parser(
+        "html",
+        help="write RUN_DIR/index.html: the run's REPORT.md, tables and figures as one offline page",
+        description="Renders a run directory (REPORT.md, the tables/*.md and figures/*.png it "
+        "links, the interactive figures/*.vl.json) as one self-contained page, as `all` "
+        "does at its end. Computes nothing: run it after changing the directory's outputs.",
+    )
+    s.add_argument(
+        "run_dir", nargs="+", type=Path, help="run directories (results/runs/<run>, results/reference)"
+    )
+
+
+def run_html(args: argparse.Namespace) -> int:
+    from .outputs.run_page import write_run_page
+
+    for d in args.run_dir:
+        print(write_run_page(d))
+    return 0
+
+
+def add_history(sub) -> None:
+    s = sub.add_parser(
+        "history",
+        help="every run on this machine across commits: results/history/{history.csv,index.html}",
+        description="Collects the harness CSVs of every run under RESULTS (runs/*, the "
+        "regression check's, reference/, the grid searches) into OUT/history.csv, one row per "
+        "commit x combination x measure, keeping what earlier calls collected "
+        "(OUT/collected.csv), and draws OUT/index.html; also writes RESULTS/index.html, the "
+        "list of runs.",
+    )
+    s.add_argument("--results", type=Path, default=Path("results"), help="default: results/")
+    s.add_argument("--out", type=Path, help="default: RESULTS/history/")
+    s.add_argument(
+        "--repo", type=Path, default=Path("."), help="the git checkout that orders commits (default: .)"
+    )
+
+
+def run_history(args: argparse.Namespace) -> int:
+    from .outputs.history import update
+    from .outputs.history_page import write_history_page
+    from .outputs.runs_page import write_runs_page
+
+    out = args.out or args.results / "history"
+    c = update(args.results, out, args.repo)
+    for n in c.notes:
+        print(f"note: {n}", file=sys.stderr)
+    print(
+        f"history: {len(c.rows)} rows from {c.rows['run'].nunique() if len(c.rows) else 0} runs, "
+        f"{c.history['commit'].nunique() if len(c.history) else 0} commits, {len(c.history)} rows in "
+        f"{out / 'history.csv'}"
+    )
+    print(write_history_page(c, out, args.results))
+    print(write_runs_page(args.results))
+    return 0
 
 
 def run_robustness(args: argparse.Namespace) -> int:
@@ -153,6 +212,11 @@ def add_grid(sub) -> None:
     )
     s.add_argument("--out", type=Path, help="output directory (default: results/grid/NAME/)")
     s.add_argument("--no-heatmaps", action="store_true", help="skip the PNGs")
+    s.add_argument(
+        "--accelbench",
+        type=Path,
+        help="the accelbench binary that expands the config's axes (default: $ACCELBENCH, else build/accelbench)",
+    )
     h = sub.add_parser(
         "grid-halve",
         help="successive halving: write the second pass's config (top K per model)",
@@ -166,6 +230,11 @@ def add_grid(sub) -> None:
         "--keep", type=int, help="candidates per model to keep (default: grid.successive_halving.keep)"
     )
     h.add_argument("--out", type=Path, required=True, help="the second pass's config (YAML)")
+    h.add_argument(
+        "--accelbench",
+        type=Path,
+        help="the accelbench binary that expands the config's axes (default: $ACCELBENCH, else build/accelbench)",
+    )
 
 
 def add_scaling(sub) -> None:
@@ -317,6 +386,9 @@ def run(args: argparse.Namespace) -> list[Path]:
     if args.command in ("report", "all"):
         copy_report_numbers(args.report_numbers, out)
         written.append(write_report(results, out, claims, figures, comparison, reference, args.reference_run))
+        from .outputs.run_page import write_run_page
+
+        written.append(write_run_page(out))
     return written
 
 
@@ -336,7 +408,7 @@ def run_grid(args: argparse.Namespace) -> int:
     from .grid.grid import analyse, write_outputs
     from .grid.grid_config import load_grid_config
 
-    cfg = load_grid_config(args.config)
+    cfg = load_grid_config(args.config, args.accelbench)
     results = load_results(args.csv)
     cheap = load_results(args.cheap) if args.cheap else None
     for w in results.warnings + (cheap.warnings if cheap else []):
@@ -355,7 +427,7 @@ def run_grid_halve(args: argparse.Namespace) -> int:
     from .grid.grid import analyse, dump_yaml, halve
     from .grid.grid_config import GridConfigError, load_grid_config
 
-    cfg = load_grid_config(args.config)
+    cfg = load_grid_config(args.config, args.accelbench)
     keep = args.keep if args.keep is not None else cfg.keep
     if keep is None:
         raise GridConfigError("give --keep or grid.successive_halving.keep in the config")
@@ -394,6 +466,8 @@ def dispatch(args: argparse.Namespace, more_handlers=None) -> int:
         "scaling": run_scaling,
         "cost-images": run_cost_images,
         "robustness": run_robustness,
+        "html": run_html,
+        "history": run_history,
         **(more_handlers or {}),
     }
     try:

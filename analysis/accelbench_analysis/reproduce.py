@@ -559,7 +559,7 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
                 except OSError as e:
                     raise ReproduceError(
                         f"cannot run the cost images command {job.cost_images[0]}: {e.strerror}"
-                    )
+                    ) from None
                 if cost.returncode != 0:
                     print(
                         f"reproduce: the cost images ({' '.join(job.cost_images)}) exited with "
@@ -578,6 +578,9 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
         record_written(run_dir, meta, foreign)
     if job.latest is not None and job.into is None:
         point_latest(job.latest, run_dir)
+    from .outputs.runs_page import write_runs_page
+
+    write_runs_page(job.runs.parent)
     took = clock(time.monotonic() - progress.start)
     print(
         f"reproduce: done in {took}; see {run_dir / 'REPORT.md'}"

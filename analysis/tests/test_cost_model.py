@@ -143,3 +143,82 @@ def test_complete_trees_note_reads_the_ablation_rows():
     assert "sah" not in text  # only median-split rows
     # No complete tree in the report's numbers: no note.
     assert note_complete_trees(report_nums[report_nums["model"] == "trees"], ["trees"], abl) is None
+
+
+def test_an_ablation_on_another_model_fits_its_own_floor(tmp_path, report_nums):
+    # The floor ablation at the report's Table 2 settings reads the kd-tree sweep of
+    # bunny-35947 (b_e 0, primary rays, mailboxes) for the report's bunny, fits our floor on
+    # those rows, and replays them with the report's floor in tests' worth.
+    from synthetic import KD, row, write_csv
+
+    from accelbench_analysis.inputs.schema import load_results
+
+    settings = {"maxPrims=1": (1, "auto"), "maxPrims=10": (10, "auto"), "maxPrims=100": (100, "auto")}
+    settings.update({f"maxDepth={d}": (1, str(d)) for d in (5, 10, 28, 100)})
+    a, b = 0.01, 5e-9
+    rows = []
+    for i, (mp, md) in enumerate(settings.values()):
+        t = 1e6 * (i + 1) ** 2
+        params = dict(KD, build="nlogn", max_prims=str(mp), max_depth=md, empty_bonus="0", mailbox="true")
+        rows.append(
+            row(
+                "bunny-35947",
+                "kdtree",
+                params,
+                build=0.1,
+                render=a + b * t,
+                prim_tests=t,
+                config="ablations-primary",
+            )
+        )
+        plain = dict(KD, build="nlogn", max_prims=str(mp), max_depth=md, mailbox="false")
+        rows.append(
+            row(
+                "stanford-bunny",
+                "kdtree",
+                plain,
+                build=0.2,
+                render=1.0 + i,
+                prim_tests=1e5 * (i + 1),
+                config="table2",
+            )
+        )
+    results = load_results([write_csv(tmp_path / "t2.csv", rows)])
+    abl = next(x for x in cl.ABLATIONS if x.cost_model and x.models)
+    assert abl.describe().endswith("on bunny-35947 for bunny")
+    fits = cl.sweep_fits(results, report_nums)
+    src = abl.source(results, report_nums, fits)
+    report_floor = fits[0]["maxDepth"].fit.floor_tests
+    t5 = 1e6 * 4**2  # maxDepth=5 is the fourth setting
+    assert src.get("stanford-bunny", "kdtree", "render", "maxDepth=5") == pytest.approx(
+        b * (t5 + report_floor)
+    )
+    assert src.get("stanford-bunny", "kdtree", "build", "maxDepth=5") == 0.1
+    # The plain floor ablation reads the table's bunny rows.
+    plain = next(x for x in cl.ABLATIONS if x.cost_model and not x.models)
+    assert (
+        plain.source(results, report_nums, fits).get("stanford-bunny", "kdtree", "build", "maxDepth=5") == 0.2
+    )
+
+
+def test_what_n_note_reads_the_kd_tree_at_table_3s_settings_only(tmp_path, report_nums):
+    # bunny-35947 carries the kd-tree at Table 3's settings and the ablations' sweeps
+    # (b_e 0, mailboxes, other depths): the note gives the first only.
+    from synthetic import KD, row, write_csv
+
+    from accelbench_analysis.inputs.schema import load_results
+    from accelbench_analysis.outputs.tables import note_what_n
+
+    results = load_results(
+        [write_csv(tmp_path / "t2.csv", [row("stanford-bunny", "kdtree", KD, build=1, render=1)])]
+    )
+
+    def kd(nodes, **params):
+        p = {"max_prims": "1", "max_depth": "auto", "empty_bonus": "0.5", **params}
+        return {"model": "bunny-35947", "accel": "kdtree", "status": "ok", "triangles": 35947, "nodes": nodes,
+                "param_dict": p}  # fmt: skip
+
+    abl = pd.DataFrame([kd(379275), kd(863569, empty_bonus="0", mailbox="true"), kd(61, max_depth="5")])
+    text = note_what_n(report_nums, results, abl)
+    assert "has 379,275 nodes" in text
+    assert "863,569" not in text and " 61 nodes" not in text

@@ -24,13 +24,17 @@ from accelbench_analysis.grid.grid import (
 )
 from accelbench_analysis.grid.grid_config import (
     GridConfigError,
-    expand_range,
+    default_accelbench,
     load_grid_config,
     parse_objective,
 )
 from accelbench_analysis.inputs.schema import load_results, parse_params
 
 REPO = Path(__file__).resolve().parents[2]
+# The harness expands grid configs (accelbench run --dry-run=json): these tests need it built.
+needs_binary = pytest.mark.skipif(
+    not default_accelbench().is_file(), reason=f"{default_accelbench()} not built"
+)
 
 GRID = {"max_prims": [1, 2, 4], "max_depth": [10, 20, 30], "empty_bonus": [0, 0.5]}
 # Three candidates built so that each objective has a different winner:
@@ -130,36 +134,51 @@ def key(best_row) -> tuple:
 # ---- ranges and the config ------------------------------------------------------------------
 
 
-def test_ranges_expand_like_the_harness():
-    assert expand_range({"from": 1, "to": 64, "scale": "log2"}, "x") == [1, 2, 4, 8, 16, 32, 64]
-    assert expand_range({"from": 1, "to": 100, "scale": "log2"}, "x")[-1] == 64
-    assert expand_range({"from": 10, "to": 40, "step": 5}, "x") == [10, 15, 20, 25, 30, 35, 40]
-    assert expand_range({"from": 0, "to": 0.9, "step": 0.3}, "x") == [0, 0.3, 0.6, 0.9]
-    assert expand_range({"from": 0, "to": 0.9, "step": 0.1}, "x")[3] == 0.3
-    assert expand_range({"from": 0.5, "to": 50, "scale": "log10"}, "x") == [0.5, 5.0, 50.0]
-    ints = expand_range({"from": 10, "to": 40, "step": 5}, "x")
-    assert all(isinstance(v, int) for v in ints)
+@needs_binary
+def test_axes_are_the_harness_expansion(tmp_path):
+    """The ranges, lists and zipped groups as the harness expands them, typed as YAML reads them."""
+    params = {
+        "max_prims": {"from": 1, "to": 64, "scale": "log2"},
+        "max_depth": {"from": 10, "to": 40, "step": 5},
+        "empty_bonus": {"from": 0, "to": 0.9, "step": 0.1},
+        "[isect_cost, traversal_cost]": [[80, 1], [0.5, 2.5]],
+    }
+    cfg = load_grid_config(grid_config(tmp_path, params=params))
+    values = {tuple(a.names): a.values for a in cfg.axes}
+    assert values[("max_prims",)] == [(v,) for v in (1, 2, 4, 8, 16, 32, 64)]
+    assert values[("max_depth",)] == [(v,) for v in (10, 15, 20, 25, 30, 35, 40)]
+    assert all(isinstance(v[0], int) for v in values[("max_prims",)] + values[("max_depth",)])
+    assert values[("empty_bonus",)][3] == (0.3,)  # 12 significant digits, not 0.30000000000000004
+    assert len(values[("empty_bonus",)]) == 10
+    assert values[("isect_cost", "traversal_cost")] == [(80, 1), (0.5, 2.5)]
+    assert cfg.combinations() == 7 * 7 * 10 * 2 and cfg.accel == "kdtree" and cfg.name == "grid-test"
 
 
 @pytest.mark.parametrize(
     "spec, message",
     [
-        ({"from": 4, "to": 1, "step": 1}, "is above `to`"),
-        ({"from": 1, "to": 4}, "exactly one of `step` or `scale`"),
-        ({"from": 1, "to": 4, "step": 1, "scale": "log2"}, "exactly one of"),
-        ({"from": 0, "to": 4, "scale": "log2"}, "starts above 0"),
-        ({"from": 1, "to": 4, "scale": "ln"}, "scale must be one of log2, log10"),
-        ({"from": 1, "to": 4, "step": -1}, "positive"),
-        ({"from": 1, "to": 4, "stp": 1}, "unknown range keys ['stp']"),
-        ({"from": 0, "to": 1, "step": 1e-6}, "more than 10000 values"),
+        ({"from": 4, "to": 1, "step": 1}, "`from` (4) is above `to` (1)"),
+        ({"from": 0, "to": 1}, "exactly one of `step` or `scale`"),
+        ({"from": 0, "to": 1, "step": 1, "scale": "log2"}, "exactly one of"),
+        ({"from": 0, "to": 1, "scale": "log2"}, "a log2 range starts above 0"),
+        ({"from": 0.1, "to": 1, "scale": "ln"}, "scale is log2 or log10, got 'ln'"),
+        ({"from": 0, "to": 1, "step": -1}, "out of range"),
+        ({"from": 0, "to": 1, "stp": 1}, "unknown key 'stp' (did you mean 'step'?)"),
+        ({"from": 0, "to": 1, "step": 1e-6}, "the range has more than 10000 values"),
     ],
 )
-def test_bad_ranges_are_refused(spec, message):
-    with pytest.raises(
-        GridConfigError,
-        match=message.replace("[", r"\[").replace("]", r"\]").replace("(", r"\(").replace("`", "`"),
-    ):
-        expand_range(spec, "x")
+@needs_binary
+def test_bad_ranges_are_refused_with_the_harness_message(tmp_path, spec, message):
+    path = grid_config(tmp_path, params={"empty_bonus": spec})
+    with pytest.raises(GridConfigError) as e:
+        load_grid_config(path)
+    assert message in str(e.value)
+    assert f"{path}:" in str(e.value) and "accelerators[0].kdtree.empty_bonus" in str(e.value)
+
+
+def test_without_the_harness_the_config_is_refused_naming_it(tmp_path):
+    with pytest.raises(GridConfigError, match="the harness expands grid configs"):
+        load_grid_config(grid_config(tmp_path), accelbench=tmp_path / "no-accelbench")
 
 
 def test_objectives():
@@ -176,6 +195,7 @@ def test_objectives():
         parse_objective("render", 5, "g")
 
 
+@needs_binary
 def test_config_errors_name_the_key(tmp_path):
     path = grid_config(tmp_path, extra_grid={"mdoe": "full"})
     with pytest.raises(GridConfigError, match=r"grid: unknown keys \['mdoe'\]"):
@@ -202,6 +222,7 @@ def test_integers_yaml_readers_disagree_on_are_refused(tmp_path, written):
         load_grid_config(path)
 
 
+@needs_binary
 def test_example_config_loads_and_counts(tmp_path):
     cfg = load_grid_config(REPO / "configs" / "grid-kdtree-bunny.yaml")
     assert cfg.accel == "kdtree" and cfg.mode == "successive_halving"
@@ -214,6 +235,7 @@ def test_example_config_loads_and_counts(tmp_path):
 
 
 @pytest.mark.parametrize("objective", list(WINNERS))
+@needs_binary
 def test_best_for_each_objective(tmp_path, grid_csv, objective):
     cfg = load_grid_config(grid_config(tmp_path, objective, frames=3 if "k" in objective else None))
     a = analyse(load_results([grid_csv]), cfg)
@@ -223,6 +245,7 @@ def test_best_for_each_objective(tmp_path, grid_csv, objective):
     assert ranked["objective"].is_monotonic_increasing
 
 
+@needs_binary
 def test_constraint_rejects_and_says_why(tmp_path, grid_csv):
     a = analyse(load_results([grid_csv]), load_grid_config(grid_config(tmp_path)))
     d = a.ranked[
@@ -237,6 +260,7 @@ def test_constraint_rejects_and_says_why(tmp_path, grid_csv):
     assert a.constraints_checked == {"false_misses": True}
 
 
+@needs_binary
 def test_without_error_columns_the_constraint_is_reported_unchecked(tmp_path):
     csv = write_csv(tmp_path / "noerr.csv", grid_rows(), with_errors=False)
     a = analyse(load_results([csv]), load_grid_config(grid_config(tmp_path)))
@@ -245,6 +269,7 @@ def test_without_error_columns_the_constraint_is_reported_unchecked(tmp_path):
     assert any("constraint false_misses <= 0 NOT CHECKED" in n and "error columns" in n for n in a.notes)
 
 
+@needs_binary
 def test_missing_grid_points_are_noted(tmp_path):
     csv = write_csv(tmp_path / "part.csv", grid_rows(skip=[(2, 10, 0), (2, 20, 0)]), with_errors=True)
     a = analyse(load_results([csv]), load_grid_config(grid_config(tmp_path)))
@@ -254,6 +279,7 @@ def test_missing_grid_points_are_noted(tmp_path):
     )
 
 
+@needs_binary
 def test_a_second_measurement_with_more_repetitions_wins(tmp_path):
     first = write_csv(tmp_path / "p1.csv", grid_rows(), with_errors=True)
     rows = [
@@ -321,6 +347,7 @@ def outputs(tmp_path_factory):
     return out, cfg, csv
 
 
+@needs_binary
 def test_heatmaps_for_each_pair(outputs):
     out, _, _ = outputs
     maps = sorted(p.name for p in out.glob("heatmap-*.png"))
@@ -338,6 +365,7 @@ def test_heatmaps_for_each_pair(outputs):
             assert len(np.unique(pixels, axis=0)) > 50  # drawn, not blank
 
 
+@needs_binary
 def test_best_yaml_round_trips_into_a_config(outputs, tmp_path):
     out, cfg_path, _ = outputs
     doc = yaml.safe_load((out / "best.yaml").read_text())
@@ -358,6 +386,7 @@ def test_best_yaml_round_trips_into_a_config(outputs, tmp_path):
     assert cfg.points() == [{"max_prims": 2, "max_depth": 20, "empty_bonus": 0.5, "isect_cost": 80}]
 
 
+@needs_binary
 def test_ranked_csv(outputs):
     out, _, _ = outputs
     ranked = pd.read_csv(out / "ranked.csv")
@@ -385,6 +414,7 @@ def test_ranked_csv(outputs):
     assert d["false_misses"] == 2 and ranked["false_misses"].sum() == 2
 
 
+@needs_binary
 def test_summary_states_objective_and_constraints(outputs):
     out, _, _ = outputs
     text = (out / "summary.md").read_text()
@@ -395,6 +425,7 @@ def test_summary_states_objective_and_constraints(outputs):
     assert "| 5.00 / 1.50 | 0 / 0 / n/a / n/a | 16 of 18 |" in text
 
 
+@needs_binary
 def test_grid_exit_codes(tmp_path, capsys):
     cfg = grid_config(tmp_path)
     assert main(["grid", str(tmp_path / "none.csv"), "--config", str(cfg)]) == 2
@@ -412,6 +443,7 @@ def test_grid_exit_codes(tmp_path, capsys):
 # ---- successive halving -----------------------------------------------------------------------
 
 
+@needs_binary
 def test_grid_halve_writes_the_second_pass(tmp_path, grid_csv, capsys):
     cfg_path = grid_config(
         tmp_path,
@@ -475,6 +507,7 @@ def ranked_row(a, point) -> pd.Series:
     return a.ranked[[key(r) == point for _, r in a.ranked.iterrows()]].iloc[0]
 
 
+@needs_binary
 def test_the_best_comes_from_the_final_pass_only(tmp_path):
     final, cheap = halving_csvs(tmp_path)
     a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)), cheap=load_results([cheap]))
@@ -502,6 +535,7 @@ def test_the_best_comes_from_the_final_pass_only(tmp_path):
     assert any("different repetitions (1, 5)" in n and "--cheap" in n for n in both.notes)
 
 
+@needs_binary
 def test_heatmap_cells_cover_the_cheap_pass_and_show_rejections(tmp_path):
     final, cheap = halving_csvs(tmp_path)
     a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)), cheap=load_results([cheap]))
@@ -566,6 +600,7 @@ def test_grid_with_cheap_writes_both_passes(tmp_path):
     assert len(list(out.glob("heatmap-*.png"))) == 3
 
 
+@needs_binary
 def test_a_second_pass_alone_says_the_cheap_pass_is_missing(tmp_path):
     final, _ = halving_csvs(tmp_path)
     a = analyse(load_results([final]), load_grid_config(grid_config(tmp_path)))

@@ -28,7 +28,6 @@ const std::set<std::string> kNotYetSplit = {
     "core/accelbench/scene/mesh_ply.cpp: PlyReader",
     "core/accelbench/scene/procedural.cpp: make_city",
     "core/accelbench/scene/procedural.cpp: make_forest",
-    "harness/config/config.cpp: Loader",
 };
 
 fs::path source_dir() {

@@ -10,6 +10,7 @@
 #include <string>
 #include <utility>
 
+#include "accelbench/accel/bvh/bvh.h"
 #include "accelbench/accel/bvh/morton_code.h"
 #include "accelbench/base/random.h"
 #include "accelbench/scene/procedural.h"
@@ -433,6 +434,32 @@ TEST(Lbvh, ReportBuildGivesTheKarrasTree) {
         std::find_if(info.params.begin(), info.params.end(), [](const ParamSpec& p) { return p.name == "build"; });
     ASSERT_NE(spec, info.params.end());
     EXPECT_EQ(spec->default_value, "karras");
-    EXPECT_EQ(spec->choices, (std::vector<std::string>{"karras", "report"}));
+    EXPECT_EQ(spec->choices, (std::vector<std::string>{"karras", "report", "median"}));
     EXPECT_THROW(make_accelerator("lbvh", {{"build", "binary"}}), ParamError);
+}
+
+// build=median (the LBVH the report's section 5.2 measured: Morton codes and a radix sort,
+// then its BVH's median build) gives the median BVH's tree node for node, and still sorts:
+// on the bunny and the three procedural scenes, at max_prims 1 and 4 and a max_depth that
+// forces leaves.
+TEST(Lbvh, MedianBuildGivesTheMedianBvhTree) {
+    const std::vector<Scene> scenes = {test::stanford_bunny(), make_procedural("forest", {}),
+                                       make_procedural("city", {}), random_soup(20000, 3)};
+    for (const Scene& scene : scenes)
+        for (const auto& [max_prims, max_depth] : {std::pair{"1", "50"}, {"4", "50"}, {"1", "8"}}) {
+            const std::string what = scene.name + " max_prims=" + max_prims + " max_depth=" + max_depth;
+            auto lbvh = build_lbvh(scene, {{"build", "median"}, {"max_prims", max_prims}, {"max_depth", max_depth}});
+            auto accel = make_accelerator(
+                "bvh",
+                {{"split", "median"}, {"max_prims", max_prims}, {"max_depth", max_depth}, {"leaf_test", "scalar"}});
+            const Bvh& bvh = static_cast<const Bvh&>(*accel);
+            accel->build(scene);
+            ASSERT_GT(bvh.tree().nodes.size(), 1u) << what;
+            expect_same_tree(bvh.tree(), lbvh->tree(), what);
+            const BuildStats a = bvh.build_stats(), b = lbvh->build_stats();
+            EXPECT_EQ(a.nodes, b.nodes) << what;
+            EXPECT_EQ(a.extra.at("forced_leaves"), b.extra.at("forced_leaves")) << what;
+            EXPECT_EQ(a.extra.at("degenerate_splits"), b.extra.at("degenerate_splits")) << what;
+            EXPECT_GT(b.extra.at("sort_passes"), 0.0) << what;  // the codes were sorted
+        }
 }

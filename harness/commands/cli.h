@@ -1,4 +1,7 @@
-// The accelbench command line: one function per subcommand, argv after the subcommand.
+// The accelbench command line: one function per subcommand, each in its own file
+// (commands/NAME_command.cpp), given the arguments after the subcommand's name and parsing
+// them with the one argument parser (commands/args.h); returns the exit code. main.cpp
+// holds the table of subcommands.
 #pragma once
 
 #include <string>
@@ -13,9 +16,19 @@ namespace accelbench {
 
 class ModelRegistry;
 
+// accelbench run [--dry-run[=json]] [--out FILE] [--resume] [--shard I/N] [--in-process]
+//                [--show-repetitions] [--benchmark_out=FILE] [--benchmark_*...] CONFIG.yaml
+// Exit codes: 0 all combinations ok, skipped or timed out; 1 some ended in error;
+// 2 the config, the arguments or the output file are wrong (nothing was measured).
+int run_command(int argc, char** argv);
+// accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...
+// Exit codes: 0 merged; 2 bad input; 3 (--config) combinations of the config are in no
+// input (nothing written).
+int merge_command(int argc, char** argv);
 int render_command(int argc, char** argv);
 int list_command(int argc, char** argv);
 int models_command(int argc, char** argv);
+int provenance_command(int argc, char** argv);
 int columns_command(int argc, char** argv);
 int convert_csv_command(int argc, char** argv);
 

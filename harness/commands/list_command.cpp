@@ -1,5 +1,6 @@
 // `accelbench list`: what a config may name — accelerators with their parameters,
 // procedural scenes with theirs, and the robustness cases with their requirements.
+#include "commands/args.h"
 #include "commands/cli.h"
 
 #include <cstdio>
@@ -13,9 +14,16 @@
 namespace accelbench {
 
 int list_command(int argc, char** argv) {
-    // `list --structures`: one line per registered structure, in registry order, for
-    // scripts: name, tab, label at the defaults, tab, whether it counts traversal (yes/no).
-    if (argc > 0 && std::string(argv[0]) == "--structures") {
+    bool structures = false;
+    Args args("list",
+              "usage: accelbench list [--structures]\n"
+              "  the accelerators with their parameters (type, default, range), the procedural scenes\n"
+              "  with theirs, and the robustness cases with their requirements\n"
+              "  --structures: one line per registered structure, in registry order, for scripts:\n"
+              "  name, tab, label at the defaults, tab, whether it counts traversal (yes/no)\n",
+              argc, argv);
+    if (auto code = args.walk([&] { structures = args.flag("--structures") || args.unknown(); })) return *code;
+    if (structures) {
         for (const auto& info : accelerator_registry())
             std::printf("%s\t%s\t%s\n", info.name.c_str(),
                         info.label(resolve_params(info.name, info.params, {})).c_str(),

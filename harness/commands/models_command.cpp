@@ -1,26 +1,23 @@
 // `accelbench models`: the model registry, where each file was found (--fetch: download
 // what is missing).
-#include "commands/cli.h"
-
 #include <cstdio>
-#include <cstring>
 #include <exception>
 #include <string>
 
+#include "commands/args.h"
+#include "commands/cli.h"
 #include "models/model_registry.h"
 
 namespace accelbench {
 
 int models_command(int argc, char** argv) {
     bool fetch = false;
-    for (int i = 0; i < argc; ++i) {
-        if (std::strcmp(argv[i], "--fetch") == 0) fetch = true;
-        else {
-            std::fprintf(stderr, "accelbench models: unknown option '%s'\nusage: accelbench models [--fetch]\n",
-                         argv[i]);
-            return 2;
-        }
-    }
+    Args args("models",
+              "usage: accelbench models [--fetch]\n"
+              "  the model registry (configs/models.yaml): each model, where its file was found;\n"
+              "  --fetch downloads the missing ones. Exit 1 when one is still missing\n",
+              argc, argv);
+    if (auto code = args.walk([&] { fetch = args.flag("--fetch") || args.unknown(); })) return *code;
     int missing = 0;
     try {
         ModelRegistry registry = ModelRegistry::load_default();

@@ -1,5 +1,6 @@
 // `accelbench render`: the interactive side of the harness — one model, one accelerator,
 // one image, with everything it measured.
+#include "commands/args.h"
 #include "commands/cli.h"
 
 #include <chrono>
@@ -24,34 +25,17 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-int usage_error(const std::string& msg) {
-    std::fprintf(stderr, "accelbench render: %s\n", msg.c_str());
-    std::fprintf(stderr,
-                 "usage: accelbench render --model NAME|PATH|procedural:KIND[,k=v...] --accel NAME\n"
-                 "         [--param k=v ...] [--out img.png] [--width W] [--height H] [--spp N]\n"
-                 "         [--no-light] [--threads N] [--cost-out PREFIX]\n"
-                 "--cost-out PREFIX writes PREFIX-node_visits.png, PREFIX-prim_tests.png (heatmaps, inferno,\n"
-                 "each scaled to its own maximum) and PREFIX-cost.csv (per-pixel values)\n");
-    return 2;
-}
+const char* kRenderUsage =
+    "usage: accelbench render --model NAME|PATH|procedural:KIND[,k=v...] --accel NAME\n"
+    "         [--param k=v ...] [--out img.png] [--width W] [--height H] [--spp N]\n"
+    "         [--no-light] [--threads N] [--cost-out PREFIX]\n"
+    "--cost-out PREFIX writes PREFIX-node_visits.png, PREFIX-prim_tests.png (heatmaps, inferno,\n"
+    "each scaled to its own maximum) and PREFIX-cost.csv (per-pixel values)\n";
 
 std::pair<std::string, std::string> split_kv(const std::string& kv) {
     auto eq = kv.find('=');
     if (eq == std::string::npos || eq == 0) throw ParamError("expected k=v, got '" + kv + "'");
     return {kv.substr(0, eq), kv.substr(eq + 1)};
-}
-
-int parse_int(const std::string& flag, const std::string& v, int lo, int hi) {
-    // The one rule for how a number is written (configs and parameters alike): --width 010
-    // is refused as `width: 010` is, not read as 10.
-    if (const std::string why = number_form_problem(v); !why.empty()) throw ParamError(flag + ": " + why);
-    try {
-        size_t used = 0;
-        int x = std::stoi(v, &used);
-        if (used == v.size() && x >= lo && x <= hi) return x;
-    } catch (const std::exception&) {}
-    throw ParamError(flag + " expects an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got '" +
-                     v + "'");
 }
 
 }  // namespace
@@ -87,38 +71,34 @@ LoadedModel resolve_model(const std::string& text, const ModelRegistry& registry
 }
 
 int render_command(int argc, char** argv) {
-    std::string model, accel_name, out, cost_out;
+    std::string model, accel_name, out, cost_out, param;
     std::map<std::string, std::string> params;
     TraceRequest req;
     req.counts = CountMode::Totals;
-    try {
-        for (int i = 0; i < argc; ++i) {
-            std::string a = argv[i];
-            auto value = [&]() -> std::string {
-                if (i + 1 >= argc) throw ParamError(a + " needs a value");
-                return argv[++i];
-            };
-            if (a == "--model") model = value();
-            else if (a == "--accel") accel_name = value();
-            else if (a == "--param") {
-                auto [k, v] = split_kv(value());
-                if (!params.emplace(k, v).second) throw ParamError("--param " + k + " given twice");
-            } else if (a == "--out") out = value();
-            else if (a == "--cost-out") cost_out = value();
-            else if (a == "--width") req.settings.width = parse_int(a, value(), 1, 16384);
-            else if (a == "--height") req.settings.height = parse_int(a, value(), 1, 16384);
-            else if (a == "--spp") req.settings.spp = parse_int(a, value(), 1, 4096);
-            else if (a == "--threads") req.settings.threads = parse_int(a, value(), 1, 1024);
-            else if (a == "--no-light") req.settings.light = false;
-            else return usage_error("unknown option '" + a + "'");
+    RenderSettings& r = req.settings;
+    Args args("render", kRenderUsage, argc, argv);
+    const auto each = [&] {
+        if (args.value("--param", param)) {
+            try {
+                auto [k, v] = split_kv(param);
+                if (!params.emplace(k, v).second) throw ArgError("--param " + k + " given twice");
+            } catch (const ParamError& e) {
+                throw ArgError(e.what());
+            }
+        } else if (args.flag("--no-light")) {
+            r.light = false;
+        } else if (!(args.value("--model", model) || args.value("--accel", accel_name) || args.value("--out", out) ||
+                     args.value("--cost-out", cost_out) || args.value("--width", r.width, 1, 16384) ||
+                     args.value("--height", r.height, 1, 16384) || args.value("--spp", r.spp, 1, 4096) ||
+                     args.value("--threads", r.threads, 1, 1024))) {
+            args.unknown();
         }
-    } catch (const ParamError& e) {
-        return usage_error(e.what());
-    }
-    if (model.empty() || accel_name.empty()) return usage_error("--model and --accel are required");
+    };
+    if (auto code = args.walk(each)) return *code;
+    if (model.empty() || accel_name.empty()) return args.error("--model and --accel are required");
     const AcceleratorInfo* info = find_accelerator(accel_name);
     if (!cost_out.empty() && info && !info->counts_traversal)
-        return usage_error("--cost-out needs traversal counters, which " + accel_name + " does not expose");
+        return args.error("--cost-out needs traversal counters, which " + accel_name + " does not expose");
     req.settings.shading = !out.empty();  // no image asked for: no shading work
 
     std::unique_ptr<Accelerator> accel;

@@ -1,4 +1,5 @@
-#include "commands/run_command.h"
+#include "commands/args.h"
+#include "commands/cli.h"
 
 #include <benchmark/benchmark.h>
 
@@ -25,6 +26,8 @@ namespace {
 const char* kRunUsage =
     "usage: accelbench run [options] CONFIG.yaml\n"
     "  --dry-run             print the expanded combinations and their count; measure nothing\n"
+    "  --dry-run=json        the same as one JSON document, with each accelerator entry's axes (ranges\n"
+    "                        expanded, canonical values): for programs, such as the grid search\n"
     "  --out FILE            results CSV (default results/runs/<name>-<timestamp>.csv); repetitions go\n"
     "                        beside it in FILE minus .csv plus .reps.csv\n"
     "  --resume              append to the output file, skipping combinations already in it (without\n"
@@ -38,11 +41,6 @@ const char* kRunUsage =
     "                        count the instructions of one render per combination (column instructions)\n"
     "  --benchmark_out=FILE  also write Google Benchmark's JSON (for compare.py); other --benchmark_*\n"
     "                        flags go to Google Benchmark\n";
-
-int usage_error(const std::string& msg) {
-    std::fprintf(stderr, "accelbench run: %s\n%s", msg.c_str(), kRunUsage);
-    return 2;
-}
 
 // Google Benchmark's own flags (all but --benchmark_out, which this process owns). The
 // arguments outlive the call: GB keeps argv[0] for its context line ("Running ...").
@@ -63,7 +61,7 @@ int run(const RunOptions& opt) {
     try {
         RunPlan plan = plan_run(opt);
         if (opt.dry_run) {
-            print_dry_run(plan);
+            print_dry_run(plan, opt.dry_run_json);
             return 0;
         }
         initialize_google_benchmark(opt.benchmark_args);
@@ -87,7 +85,7 @@ int run(const RunOptions& opt) {
                      e.issues().size() == 1 ? "" : "s", opt.config_path.c_str());
         return 2;
     } catch (const UsageError& e) {
-        return usage_error(e.what());
+        return usage_error("run", kRunUsage, e.what());
     } catch (const std::exception& e) {
         std::fprintf(stderr, "accelbench run: %s\n", e.what());
         return 2;
@@ -98,116 +96,45 @@ int run(const RunOptions& opt) {
 
 int run_command(int argc, char** argv) {
     RunOptions opt;
-    for (int i = 0; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto value = [&]() -> std::string {
-            if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-            return argv[++i];
-        };
-        try {
-            if (a == "-h" || a == "--help") {
-                std::printf("%s", kRunUsage);
-                return 0;
-            } else if (a == "--dry-run") opt.dry_run = true;
-            else if (a == "--resume") opt.resume = true;
-            else if (a == "--in-process") opt.in_process = true;
-            else if (a == "--show-repetitions") opt.show_repetitions = true;
-            else if (a == "--out") opt.out = value();
-            else if (a == "--instructions") opt.callgrind_out = value();
-            else if (a == "--shard") opt.shard = parse_shard(value());
-            else if (a.rfind("--benchmark_out=", 0) == 0) opt.json_out = a.substr(16);
-            else if (a.rfind("--benchmark_out_format=", 0) == 0) {
-                if (a.substr(23) != "json")
-                    return usage_error(
-                        "only --benchmark_out_format=json is supported (our own CSV is the results file)");
-            } else if (a.rfind("--benchmark_filter", 0) == 0 || a.rfind("--benchmark_list_tests", 0) == 0)
-                return usage_error(a + ": choose combinations in the config (or with --shard) instead");
-            else if (a.rfind("--benchmark_", 0) == 0) opt.benchmark_args.push_back(a);
-            else if (a.rfind("-", 0) == 0) return usage_error("unknown option '" + a + "'");
-            else if (opt.config_path.empty()) opt.config_path = a;
-            else return usage_error("one config at a time (got '" + opt.config_path + "' and '" + a + "')");
-        } catch (const std::invalid_argument& e) {
-            return usage_error(e.what());
-        }
+    std::vector<std::string> configs;
+    std::string shard;
+    Args args("run", kRunUsage, argc, argv);
+    const auto each = [&] {
+        const std::string& a = args.current();
+        if (args.flag("--dry-run")) opt.dry_run = true;
+        else if (args.flag("--dry-run=json")) opt.dry_run = opt.dry_run_json = true;
+        else if (args.flag("--resume")) opt.resume = true;
+        else if (args.flag("--in-process")) opt.in_process = true;
+        else if (args.flag("--show-repetitions")) opt.show_repetitions = true;
+        else if (args.value("--out", opt.out) || args.value("--instructions", opt.callgrind_out)) return;
+        else if (args.value("--shard", shard)) opt.shard = parse_shard(shard);
+        else if (args.value("--benchmark_out", opt.json_out)) return;
+        else if (a.rfind("--benchmark_out_format=", 0) == 0) {
+            if (a.substr(23) != "json")
+                throw ArgError("only --benchmark_out_format=json is supported (our own CSV is the results file)");
+            args.take();
+        } else if (a.rfind("--benchmark_filter", 0) == 0 || a.rfind("--benchmark_list_tests", 0) == 0)
+            throw ArgError(a + ": choose combinations in the config (or with --shard) instead");
+        else if (a.rfind("--benchmark_", 0) == 0) opt.benchmark_args.push_back(args.take());
+        else if (args.positional(configs)) {
+            if (configs.size() > 1)
+                throw ArgError("one config at a time (got '" + configs[0] + "' and '" + configs[1] + "')");
+        } else args.unknown();
+    };
+    try {
+        if (auto code = args.walk(each)) return *code;
+    } catch (const std::invalid_argument& e) {  // parse_shard
+        return args.error(e.what());
     }
-    if (opt.config_path.empty()) return usage_error("no config given");
+    if (configs.empty()) return args.error("no config given");
+    opt.config_path = configs[0];
     if (!opt.callgrind_out.empty() && !opt.dry_run && !running_on_valgrind())
-        return usage_error(
+        return args.error(
             "--instructions counts with callgrind: run under valgrind --tool=callgrind "
             "--instr-atstart=no --callgrind-out-file=" +
             opt.callgrind_out);
-    if (opt.resume && opt.out.empty() && opt.dry_run) return usage_error("--resume and --dry-run do not go together");
+    if (opt.resume && opt.out.empty() && opt.dry_run) return args.error("--resume and --dry-run do not go together");
     return run(opt);
-}
-
-int merge_command(int argc, char** argv) {
-    bool allow_mixed = false;
-    std::string take, config_path;
-    uint64_t shards = 1;
-    std::vector<std::string> files;
-    for (int i = 0; i < argc; ++i) {
-        const std::string a = argv[i];
-        if (a == "--allow-mixed") allow_mixed = true;
-        else if (a == "--take-column" && i + 1 < argc) take = argv[++i];
-        else if (a == "--config" && i + 1 < argc) config_path = argv[++i];
-        else if (a == "--shards" && i + 1 < argc) {
-            try {
-                shards = parse_shard("0/" + std::string(argv[++i])).count;
-            } catch (const std::invalid_argument&) {
-                std::fprintf(stderr, "accelbench merge: --shards expects a count > 0, got '%s'\n", argv[i]);
-                return 2;
-            }
-        } else if (a == "-h" || a == "--help") {
-            std::printf(
-                "usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
-                "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
-                "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
-                "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa), config\n"
-                "  or record of inputs (NAME.inputs.csv: sha256 of the config, mesh and ray files) differs,\n"
-                "  or that have no such record, unless --allow-mixed; a combination present in two inputs;\n"
-                "  and an input a run is still writing (it holds the file's lock).\n"
-                "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
-                "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"
-                "  and refuses rows that are not of CONFIG or measured from other contents than it has now\n"
-                "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
-                "  instructions of a callgrind run added to a timed run of the same config)\n");
-            return 0;
-        } else if (a.rfind("-", 0) == 0) {
-            std::fprintf(stderr, "accelbench merge: unknown option '%s'\n", a.c_str());
-            return 2;
-        } else files.push_back(a);
-    }
-    if (files.size() < 2) {
-        std::fprintf(stderr, "accelbench merge: usage: accelbench merge [--allow-mixed] OUT.csv IN.csv...\n");
-        return 2;
-    }
-    if (!take.empty()) {
-        if (files.size() != 3) {
-            std::fprintf(stderr, "accelbench merge: --take-column needs OUT.csv IN.csv FROM.csv\n");
-            return 2;
-        }
-        try {
-            const size_t n = take_column(files[0], files[1], files[2], take, allow_mixed);
-            std::fprintf(stderr, "accelbench merge: %s written with %s of %zu rows taken from %s\n", files[0].c_str(),
-                         take.c_str(), n, files[2].c_str());
-        } catch (const std::exception& e) {
-            std::fprintf(stderr, "accelbench merge: %s\n", e.what());
-            return 2;
-        }
-        return 0;
-    }
-    if (!config_path.empty())
-        if (int rc = check_shards_complete(config_path, shards, {files.begin() + 1, files.end()}, allow_mixed); rc != 0)
-            return rc;
-    try {
-        const size_t rows = merge_results(files[0], {files.begin() + 1, files.end()}, allow_mixed);
-        std::fprintf(stderr, "accelbench merge: %zu rows from %zu files written to %s\n", rows, files.size() - 1,
-                     files[0].c_str());
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "accelbench merge: %s\n", e.what());
-        return 2;
-    }
-    return 0;
 }
 
 }  // namespace accelbench

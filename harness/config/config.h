@@ -16,7 +16,7 @@
 #include "accelbench/render/ray_sets.h"
 #include "accelbench/render/renderer.h"
 #include "accelbench/scene/camera.h"
-#include "config/checked_yaml.h"
+#include "util/checked_yaml.h"
 
 namespace accelbench {
 

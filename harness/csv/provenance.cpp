@@ -74,21 +74,6 @@ std::vector<std::pair<std::string, std::string>> provenance_values() {
             {"isa", p.isa}};
 }
 
-int provenance_command(int argc, char** argv) {
-    if (argc > 0 && (std::string(argv[0]) == "-h" || std::string(argv[0]) == "--help")) {
-        std::printf(
-            "usage: accelbench provenance\n"
-            "  prints the provenance columns this build writes into every results row, NAME=VALUE\n");
-        return 0;
-    }
-    if (argc > 0) {
-        std::fprintf(stderr, "accelbench provenance: takes no arguments (got '%s')\n", argv[0]);
-        return 2;
-    }
-    for (const auto& [name, value] : provenance_values()) std::printf("%s=%s\n", name.c_str(), value.c_str());
-    return 0;
-}
-
 const Provenance& provenance() {
     static const Provenance p = [] {
         Provenance p;

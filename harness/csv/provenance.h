@@ -33,7 +33,4 @@ const Provenance& provenance();
 // that compares runs (analysis/accelbench_analysis/reproduce.py) sees what rows will record.
 std::vector<std::pair<std::string, std::string>> provenance_values();
 
-// `accelbench provenance`: prints provenance_values() as NAME=VALUE lines.
-int provenance_command(int argc, char** argv);
-
 }  // namespace accelbench

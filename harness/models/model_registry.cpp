@@ -7,13 +7,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <set>
+#include <map>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
 
 #include "accelbench/base/temp_dir.h"
 #include "accelbench/scene/mesh_io.h"
+#include "models/camera_yaml.h"
+#include "util/checked_yaml.h"
 #include "util/sha256.h"
 
 namespace accelbench {
@@ -22,87 +25,46 @@ namespace {
 namespace fs = std::filesystem;
 
 // ---- reading the registry ------------------------------------------------------------
-
-// Every error points at the offending spot as file:line:column (1-based).
-[[noreturn]] void yaml_error(const std::string& file, const YAML::Mark& mark, const std::string& what) {
-    std::string where = file;
-    if (!mark.is_null()) where += ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
-    throw std::runtime_error(where + ": " + what);
-}
-
-template <class T>
-T scalar(const std::string& file, const YAML::Node& node, const std::string& what) {
-    if (!node.IsScalar()) yaml_error(file, node.Mark(), what + " must be a single value");
-    try {
-        return node.as<T>();
-    } catch (const YAML::Exception&) {
-        yaml_error(file, node.Mark(), what + ": '" + node.Scalar() + "' is not a valid value");
-    }
-}
-
-Vec3 vec3(const std::string& file, const YAML::Node& node, const std::string& what) {
-    if (!node.IsSequence() || node.size() != 3) yaml_error(file, node.Mark(), what + " must be a list [x, y, z]");
-    return {scalar<float>(file, node[0], what), scalar<float>(file, node[1], what), scalar<float>(file, node[2], what)};
-}
-
-// Keys a map may have; anything else is a typo and an error, never silently ignored.
-void check_keys(const std::string& file, const YAML::Node& map, const std::set<std::string>& allowed,
-                const std::string& what) {
-    for (const auto& kv : map) {
-        const std::string key = kv.first.Scalar();
-        if (!allowed.count(key)) {
-            std::string known;
-            for (const auto& k : allowed) known += (known.empty() ? "" : ", ") + k;
-            yaml_error(file, kv.first.Mark(), "unknown key '" + key + "' in " + what + " (known: " + known + ")");
-        }
-    }
-}
-
-const YAML::Node required(const std::string& file, const YAML::Node& map, const std::string& key,
-                          const std::string& what) {
-    const YAML::Node node = map[key];
-    if (!node) yaml_error(file, map.Mark(), what + " has no '" + key + "'");
-    return node;
-}
-
-Camera parse_camera(const std::string& file, const YAML::Node& node, const std::string& what) {
-    if (!node.IsMap()) yaml_error(file, node.Mark(), what + " must be a map {eye, look_at, up, fov}");
-    check_keys(file, node, {"eye", "look_at", "up", "fov"}, what);
-    Camera camera;
-    camera.eye = vec3(file, required(file, node, "eye", what), what + ".eye");
-    camera.look_at = vec3(file, required(file, node, "look_at", what), what + ".look_at");
-    if (node["up"]) camera.up = vec3(file, node["up"], what + ".up");
-    if (node["fov"]) camera.fov_deg = scalar<float>(file, node["fov"], what + ".fov");
-    if (!(camera.fov_deg > 0.0f && camera.fov_deg < 180.0f))
-        yaml_error(file, node["fov"].Mark(), what + ".fov must be between 0 and 180 degrees");
-    return camera;
-}
+// Through checked_yaml, as a benchmark config is read: every problem with its
+// file:line:column and key path, all of them at once (ConfigError).
 
 bool is_sha256(const std::string& s) {
     return s.size() == 64 && s.find_first_not_of("0123456789abcdef") == std::string::npos;
 }
 
-ModelEntry parse_entry(const std::string& file, const YAML::Node& node) {
-    if (!node.IsMap()) yaml_error(file, node.Mark(), "each model must be a map");
-    const std::string what = node["name"] ? "model '" + node["name"].Scalar() + "'" : "model";
-    check_keys(file, node,
-               {"name", "file", "sha256", "triangles", "vertices", "source", "derived", "credit", "camera", "light"},
-               what);
+// A required string of the entry; nullopt (with its issue) when missing or not a string.
+std::optional<std::string> required_string(Checker& c, const Fields& f, const char* key) {
+    const auto* e = f.require(key);
+    return e ? read_string(c, e->value, f.child(key)) : std::nullopt;
+}
+
+std::optional<ModelEntry> read_entry(Checker& c, const YAML::Node& node, const std::string& path) {
+    Fields f(c, node, path,
+             {"name", "file", "sha256", "triangles", "vertices", "source", "derived", "credit", "camera", "light"});
+    if (!f.ok()) return std::nullopt;
+    const size_t issues = c.issues.size();
     ModelEntry entry;
-    entry.name = scalar<std::string>(file, required(file, node, "name", what), "name");
-    entry.file = scalar<std::string>(file, required(file, node, "file", what), what + ".file");
-    if (entry.file.empty() || entry.file.find('/') != std::string::npos)
-        yaml_error(file, node["file"].Mark(), what + ".file must be a plain file name");
-    entry.sha256 = scalar<std::string>(file, required(file, node, "sha256", what), what + ".sha256");
-    if (!is_sha256(entry.sha256))
-        yaml_error(file, node["sha256"].Mark(), what + ".sha256 must be 64 lowercase hex digits");
-    entry.triangles = scalar<uint64_t>(file, required(file, node, "triangles", what), what + ".triangles");
-    entry.vertices = scalar<uint64_t>(file, required(file, node, "vertices", what), what + ".vertices");
-    entry.source = scalar<std::string>(file, required(file, node, "source", what), what + ".source");
-    if (node["derived"]) entry.derived = scalar<std::string>(file, node["derived"], what + ".derived");
-    entry.credit = scalar<std::string>(file, required(file, node, "credit", what), what + ".credit");
-    if (node["camera"]) entry.camera = parse_camera(file, node["camera"], what + ".camera");
-    if (node["light"]) entry.light = Light{vec3(file, node["light"], what + ".light")};
+    entry.name = required_string(c, f, "name").value_or("");
+    if (auto file = required_string(c, f, "file")) {
+        if (file->find('/') != std::string::npos)
+            c.error(f.find("file")->value, f.child("file"), "'" + *file + "' is not a plain file name");
+        entry.file = *file;
+    }
+    if (auto sha = required_string(c, f, "sha256")) {
+        if (!is_sha256(*sha)) c.error(f.find("sha256")->value, f.child("sha256"), "must be 64 lowercase hex digits");
+        entry.sha256 = *sha;
+    }
+    for (const char* key : {"triangles", "vertices"})
+        if (const auto* e = f.require(key))
+            if (auto v = read_int(c, e->value, f.child(key), 1, int64_t(1) << 53))
+                (std::string(key) == "triangles" ? entry.triangles : entry.vertices) = uint64_t(*v);
+    entry.source = required_string(c, f, "source").value_or("");
+    entry.credit = required_string(c, f, "credit").value_or("");
+    if (const auto* e = f.find("derived")) entry.derived = read_string(c, e->value, f.child("derived")).value_or("");
+    if (const auto* e = f.find("camera")) entry.camera = read_camera(c, e->value, f.child("camera"));
+    if (const auto* e = f.find("light"))
+        if (auto v = read_vec3(c, e->value, f.child("light"))) entry.light = Light{*v};
+    if (c.issues.size() != issues) return std::nullopt;
     return entry;
 }
 
@@ -205,27 +167,22 @@ std::string download_url(const std::string& url, const fs::path& work, const fs:
 }  // namespace
 
 ModelRegistry ModelRegistry::load(const std::string& yaml_path) {
-    YAML::Node root;
-    try {
-        root = YAML::LoadFile(yaml_path);
-    } catch (const YAML::BadFile&) {
-        throw std::runtime_error(yaml_path + ": cannot read the model registry");
-    } catch (const YAML::Exception& e) {
-        yaml_error(yaml_path, e.mark, e.msg);
-    }
-    if (!root.IsMap()) yaml_error(yaml_path, root.Mark(), "the model registry must be a map with a 'models' list");
-    check_keys(yaml_path, root, {"models"}, "the model registry");
-    const YAML::Node models = root["models"];
-    if (!models || !models.IsSequence() || models.size() == 0)
-        yaml_error(yaml_path, root.Mark(), "the model registry needs a non-empty 'models' list");
-
+    const YAML::Node root = load_yaml_document(yaml_path);
+    Checker c{yaml_path, {}};
+    Fields top(c, root, "", {"models"});
+    if (!top.ok()) throw ConfigError(c.issues);
     ModelRegistry registry;
     registry.project_dir_ = project_dir_default();
-    for (const YAML::Node& node : models) {
-        ModelEntry entry = parse_entry(yaml_path, node);
-        if (registry.find(entry.name)) yaml_error(yaml_path, node.Mark(), "model '" + entry.name + "' is listed twice");
-        registry.entries_.push_back(std::move(entry));
-    }
+    std::map<std::string, std::string> seen;  // name -> its key path
+    if (const auto* models = top.require("models"))
+        read_list(c, models->value, "models", [&](const YAML::Node& node, const std::string& path) {
+            std::optional<ModelEntry> entry = read_entry(c, node, path);
+            if (!entry) return;
+            if (auto [it, fresh] = seen.emplace(entry->name, path); !fresh)
+                c.error(node, path, "model '" + entry->name + "' is listed twice (also " + it->second + ")");
+            else registry.entries_.push_back(std::move(*entry));
+        });
+    if (!c.issues.empty()) throw ConfigError(c.issues);
     return registry;
 }
 

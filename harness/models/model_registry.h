@@ -41,7 +41,8 @@ struct ModelLocation {
 
 class ModelRegistry {
 public:
-    // Reads the registry; throws std::runtime_error with file:line:column on bad YAML.
+    // Reads the registry through checked_yaml (the camera with models/camera_yaml.h's rules);
+    // throws ConfigError listing every problem, each as file:line:column: key.path: message.
     static ModelRegistry load(const std::string& yaml_path);
     // configs/models.yaml of the source tree this binary was built from.
     static ModelRegistry load_default();

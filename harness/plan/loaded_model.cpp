@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
-#include <type_traits>
 
 #include "accelbench/accel/registry.h"
 #include "accelbench/scene/mesh_io.h"
@@ -12,6 +11,7 @@
 #include "accelbench/verify/robustness_cases.h"
 #include "models/model_registry.h"
 #include "plan/derived_model.h"
+#include "util/wire.h"
 
 namespace accelbench {
 
@@ -121,75 +121,7 @@ const GeneratedRaySet& LoadedModel::ray_set(RaySetKind kind) const {
 
 namespace {
 
-// Raw bytes, in this machine's layout: they only cross a pipe from a child process to its
-// parent, both this program.
-class ByteWriter {
-public:
-    template <class T>
-    void put(const T& v) {
-        static_assert(std::is_trivially_copyable_v<T>);
-        out_.append(reinterpret_cast<const char*>(&v), sizeof v);
-    }
-    template <class T>
-    void put_vector(const std::vector<T>& v) {
-        static_assert(std::is_trivially_copyable_v<T>);
-        put(uint64_t(v.size()));
-        out_.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
-    }
-    void put_string(const std::string& s) {
-        put(uint64_t(s.size()));
-        out_ += s;
-    }
-    std::string take() { return std::move(out_); }
-
-private:
-    std::string out_;
-};
-
-// Reads what ByteWriter wrote; throws std::runtime_error naming `what` when the bytes end
-// before a value does.
-class ByteReader {
-public:
-    ByteReader(std::string_view in, const char* what) : in_(in), what_(what) {}
-
-    template <class T>
-    T take() {
-        T v;
-        std::memcpy(&v, next(sizeof v), sizeof v);
-        return v;
-    }
-    template <class T>
-    std::vector<T> take_vector() {
-        const uint64_t n = take<uint64_t>();
-        if (n > (in_.size() - at_) / sizeof(T)) truncated();
-        std::vector<T> v(n);
-        // An empty vector's data() may be null, and memcpy from or to null is undefined
-        // even for 0 bytes (UBSan's nonnull-attribute check).
-        if (n > 0) std::memcpy(v.data(), next(n * sizeof(T)), n * sizeof(T));
-        return v;
-    }
-    std::string take_string() {
-        const uint64_t n = take<uint64_t>();
-        if (n > in_.size() - at_) truncated();
-        return std::string(next(n), n);
-    }
-    bool at_end() const { return at_ == in_.size(); }
-
-private:
-    const char* next(size_t n) {
-        if (n > in_.size() - at_) truncated();
-        const char* p = in_.data() + at_;
-        at_ += n;
-        return p;
-    }
-    [[noreturn]] void truncated() const { throw std::runtime_error(std::string(what_) + ": truncated"); }
-
-    std::string_view in_;
-    const char* what_;
-    size_t at_ = 0;
-};
-
-void put_reference(ByteWriter& w, const ReferenceAnswers& r) {
+void put_reference(WireWriter& w, const ReferenceAnswers& r) {
     w.put(r.seconds);
     w.put_vector(r.hits);
     w.put(uint8_t(r.image.has_value()));
@@ -200,7 +132,7 @@ void put_reference(ByteWriter& w, const ReferenceAnswers& r) {
     }
 }
 
-std::shared_ptr<const ReferenceAnswers> take_reference(ByteReader& r) {
+std::shared_ptr<const ReferenceAnswers> take_reference(WireReader& r) {
     auto a = std::make_shared<ReferenceAnswers>();
     a->seconds = r.take<double>();
     a->hits = r.take_vector<Hit>();
@@ -215,7 +147,7 @@ std::shared_ptr<const ReferenceAnswers> take_reference(ByteReader& r) {
     return a;
 }
 
-void put_ray_set(ByteWriter& w, const GeneratedRaySet& s) {
+void put_ray_set(WireWriter& w, const GeneratedRaySet& s) {
     w.put(s.kind);
     w.put(s.query);
     w.put_vector(s.rays);
@@ -225,7 +157,7 @@ void put_ray_set(ByteWriter& w, const GeneratedRaySet& s) {
     w.put(s.hash);
 }
 
-GeneratedRaySet take_ray_set(ByteReader& r) {
+GeneratedRaySet take_ray_set(WireReader& r) {
     GeneratedRaySet s;
     s.kind = r.take<RaySetKind>();
     s.query = r.take<RayQuery>();
@@ -241,9 +173,8 @@ GeneratedRaySet take_ray_set(ByteReader& r) {
 
 // The scene's own arrays only: the derived ones (bounds, centroids) are made again by
 // finalize(), which is deterministic, so the parent's scene is the child's bit for bit.
-std::string loaded_model_bytes(const LoadedModel& m) {
+void put_loaded_model(WireWriter& w, const LoadedModel& m) {
     if (m.robustness_case) throw std::logic_error("a robustness case is made where it is judged, never sent");
-    ByteWriter w;
     w.put_string(m.scene.name);
     w.put_vector(m.scene.vertices);
     w.put_vector(m.scene.triangles);
@@ -262,11 +193,9 @@ std::string loaded_model_bytes(const LoadedModel& m) {
         w.put(kind);
         w.put_string(why);
     }
-    return w.take();
 }
 
-LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spec) {
-    ByteReader r(bytes, "prepared model");
+LoadedModel take_loaded_model(WireReader& r, const ModelSpec& spec) {
     LoadedModel m;
     m.scene.name = r.take_string();
     m.scene.vertices = r.take_vector<Vec3>();
@@ -277,8 +206,8 @@ LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spe
     m.albedo = r.take_vector<Vec3>();
     if (r.take<uint8_t>()) m.reference = take_reference(r);
     if (r.take<uint8_t>()) {
-        const uint64_t n = r.take<uint64_t>();
-        if (n > bytes.size()) throw std::runtime_error("prepared model: truncated");
+        // A set is its kind, query, hash and four vectors' lengths at least.
+        const uint64_t n = r.take_count(sizeof(RaySetKind) + sizeof(RayQuery) + 5 * sizeof(uint64_t));
         auto sets = std::make_shared<std::vector<GeneratedRaySet>>(n);
         for (GeneratedRaySet& s : *sets) s = take_ray_set(r);
         m.ray_sets = std::move(sets);
@@ -289,7 +218,6 @@ LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spe
         const auto kind = r.take<RaySetKind>();
         m.ray_set_errors[kind] = r.take_string();
     }
-    if (!r.at_end()) throw std::runtime_error("prepared model: bytes after the end");
     m.rays = spec.rays;  // the config's ray file, read by the parent when it read the config
     return m;
 }

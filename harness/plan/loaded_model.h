@@ -6,7 +6,6 @@
 #include <map>
 #include <memory>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "accelbench/render/renderer.h"
@@ -17,6 +16,8 @@
 namespace accelbench {
 
 class ModelRegistry;
+class WireReader;
+class WireWriter;
 
 struct RobustnessCase;
 
@@ -67,15 +68,15 @@ void add_reference_answers(LoadedModel& model, const RenderSettings& render);
 // are made all the same.
 void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySetsSpec& spec);
 
-// A prepared model (loaded, with its reference answers and ray sets when made) as bytes
-// and back, to bring it from the child process that prepares it under the time limit
-// (runner.cpp) to the parent: the scene's vertices and triangles (finalized again on
-// arrival), view, light, colours, reference answers and ray sets. The ray file is not
-// sent: it is the config's (spec.rays), which the parent has. A robustness case is never
-// sent (std::logic_error): it is made in the parent. Throws std::runtime_error for bytes
-// that end early or go on after the model.
-std::string loaded_model_bytes(const LoadedModel& model);
-LoadedModel loaded_model_from_bytes(std::string_view bytes, const ModelSpec& spec);
+// A prepared model (loaded, with its reference answers and ray sets when made) in the
+// wire form (util/wire.h), to bring it from the child process that prepares it under the
+// time limit (runner.cpp) to the parent: the scene's vertices and triangles (finalized
+// again on arrival), view, light, colours, reference answers and ray sets. The ray file is
+// not sent: it is the config's (spec.rays), which the parent has. A robustness case is
+// never sent (std::logic_error): it is made in the parent. The reader throws
+// std::runtime_error for bytes that end early.
+void put_loaded_model(WireWriter& w, const LoadedModel& model);
+LoadedModel take_loaded_model(WireReader& r, const ModelSpec& spec);
 
 // The view: the config's camera, else the registry's or procedural scene's own, else
 // Camera::fit for the image's aspect. The light: the registry's or procedural scene's,

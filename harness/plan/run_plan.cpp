@@ -108,17 +108,25 @@ RunPlan plan_run(const RunOptions& options) {
     return plan;
 }
 
-void print_dry_run(const RunPlan& plan) {
+namespace {
+
+// One selected combination as the dry run shows it: the model's triangle count when known
+// (or cheaply found) and, with it, the skip rule that matches.
+struct DryRunRow {
+    const Combination* combination;
+    std::optional<uint64_t> triangles;
+    std::optional<std::string> skip;
+};
+
+// Triangle counts decide the skip rules: the registry knows them; other models are
+// generated or loaded here (procedural scenes take moments; mesh files are the user's).
+std::vector<DryRunRow> dry_run_rows(const RunPlan& plan) {
     const Config& config = plan.config;
-    // Triangle counts decide the skip rules: the registry knows them; other models are
-    // generated or loaded here (procedural scenes take moments; mesh files are the user's).
     std::map<size_t, std::optional<uint64_t>> triangles;
-    size_t skipped = 0;
-    std::printf("%-4s %-16s %s\n", "#", "combo_id", "model/accel:given parameters  [status]");
-    for (size_t i = 0; i < plan.selected.size(); ++i) {
-        const Combination& c = *plan.selected[i];
-        if (!triangles.count(c.model)) {
-            const ModelSpec& spec = config.models[c.model];
+    std::vector<DryRunRow> rows;
+    for (const Combination* c : plan.selected) {
+        if (!triangles.count(c->model)) {
+            const ModelSpec& spec = config.models[c->model];
             std::optional<uint64_t> t = known_triangles(spec, plan.registry);
             if (!t && !config.skip.empty()) {
                 try {
@@ -127,19 +135,28 @@ void print_dry_run(const RunPlan& plan) {
                     std::fprintf(stderr, "accelbench run: cannot load %s: %s\n", spec.label.c_str(), e.what());
                 }
             }
-            triangles[c.model] = t;
+            triangles[c->model] = t;
         }
+        const std::optional<uint64_t> t = triangles[c->model];
+        rows.push_back({c, t, t ? skip_reason(config, *c, *t) : std::nullopt});
+    }
+    return rows;
+}
+
+void print_dry_run_text(const RunPlan& plan, const std::vector<DryRunRow>& rows) {
+    const Config& config = plan.config;
+    size_t skipped = 0;
+    std::printf("%-4s %-16s %s\n", "#", "combo_id", "model/accel:given parameters  [status]");
+    for (size_t i = 0; i < rows.size(); ++i) {
+        const Combination& c = *rows[i].combination;
         std::string status;
-        if (auto t = triangles[c.model]) {
-            if (auto reason = skip_reason(config, c, *t)) {
-                status = "  [skip: " + *reason + "]";
-                ++skipped;
-            }
-        } else if (!config.skip.empty()) {
+        if (rows[i].skip) {
+            status = "  [skip: " + *rows[i].skip + "]";
+            ++skipped;
+        } else if (!rows[i].triangles && !config.skip.empty()) {
             status = "  [triangle count unknown until loaded]";
         }
-        if (status.find("skip") == std::string::npos &&
-            (repetitions_of(config, c) != config.repetitions || warmup_of(config, c) != config.warmup))
+        if (!rows[i].skip && (repetitions_of(config, c) != config.repetitions || warmup_of(config, c) != config.warmup))
             status += "  [" + std::to_string(repetitions_of(config, c)) + " repetitions, warm-up " +
                 std::to_string(warmup_of(config, c)) + "]";
         std::printf("%-4zu %-16s %s%s\n", i + 1, c.id.c_str(), c.name.c_str(), status.c_str());
@@ -157,6 +174,76 @@ void print_dry_run(const RunPlan& plan) {
     std::printf("inputs (compared by --resume and merge):\n");
     for (const RunInput& i : plan.inputs)
         std::printf("  %-6s %s %s\n", i.kind.c_str(), i.sha256.c_str(), i.name.c_str());
+}
+
+std::string json_list(const std::vector<std::string>& items) {
+    std::string s = "[";
+    for (size_t i = 0; i < items.size(); ++i) s.append(i ? ", " : "").append(items[i]);
+    return s + "]";
+}
+
+std::string json_strings(const std::vector<std::string>& texts) {
+    std::vector<std::string> quoted;
+    for (const std::string& t : texts) quoted.push_back(json_quoted(t));
+    return json_list(quoted);
+}
+
+std::string json_accelerator(const AcceleratorSpec& a) {
+    std::vector<std::string> axes;
+    for (const ParamAxis& axis : a.axes) {
+        std::vector<std::string> tuples;
+        for (const auto& tuple : axis.values) tuples.push_back(json_strings(tuple));
+        axes.push_back("{\"names\": " + json_strings(axis.names) + ", \"values\": " + json_list(tuples) + "}");
+    }
+    return "{\"entry\": " + json_quoted(a.key_path) + ", \"name\": " + json_quoted(a.name) +
+        ", \"axes\": " + json_list(axes) + "}";
+}
+
+std::string json_combination(const Config& config, const DryRunRow& row) {
+    const Combination& c = *row.combination;
+    std::vector<std::string> given;
+    for (const auto& [name, value] : c.given) given.push_back(json_quoted(name) + ": " + json_quoted(value));
+    std::string s = "{\"combo_id\": " + json_quoted(c.id) +
+        ", \"model\": " + json_quoted(config.models[c.model].label) + ", \"accel\": " + json_quoted(c.accel) +
+        ", \"entry\": " + json_quoted(config.accelerators[c.accelerator].key_path) + ", \"given\": {";
+    for (size_t i = 0; i < given.size(); ++i) s.append(i ? ", " : "").append(given[i]);
+    s += "}, \"params\": " + json_quoted(c.params.canonical()) + ", \"threads\": " + std::to_string(c.threads);
+    s += ", \"ray_set\": " + (c.ray_set ? json_quoted(std::string(ray_set_name(*c.ray_set))) : std::string("null"));
+    s += ", \"triangles\": " + (row.triangles ? std::to_string(*row.triangles) : std::string("null"));
+    s += ", \"skip\": " + (row.skip ? json_quoted(*row.skip) : std::string("null"));
+    s += ", \"repetitions\": " + std::to_string(repetitions_of(config, c)) +
+        ", \"warmup\": " + std::to_string(warmup_of(config, c)) + "}";
+    return s;
+}
+
+// The expansion for programs (the analysis's grid search reads its axes here instead of
+// expanding ranges itself): the config's models and accelerator entries with their axes as
+// canonical values, then every selected combination.
+void print_dry_run_json(const RunPlan& plan, const std::vector<DryRunRow>& rows) {
+    const Config& config = plan.config;
+    std::vector<std::string> models, accelerators, combinations;
+    for (const ModelSpec& m : config.models) models.push_back(json_quoted(m.label));
+    for (const AcceleratorSpec& a : config.accelerators) accelerators.push_back(json_accelerator(a));
+    for (const DryRunRow& row : rows) combinations.push_back(json_combination(config, row));
+    const auto lines = [](const std::vector<std::string>& items) {
+        std::string s = "[";
+        for (size_t i = 0; i < items.size(); ++i) s.append(i ? ",\n    " : "\n    ").append(items[i]);
+        return s + (items.empty() ? "]" : "\n  ]");
+    };
+    const std::string shard =
+        plan.shard ? json_quoted(std::to_string(plan.shard->index) + "/" + std::to_string(plan.shard->count)) : "null";
+    std::printf("{\n  \"config\": %s,\n  \"combinations_in_config\": %zu,\n  \"shard\": %s,\n",
+                json_quoted(config.name).c_str(), plan.all.size(), shard.c_str());
+    std::printf("  \"models\": %s,\n  \"accelerators\": %s,\n  \"combinations\": %s\n}\n", lines(models).c_str(),
+                lines(accelerators).c_str(), lines(combinations).c_str());
+}
+
+}  // namespace
+
+void print_dry_run(const RunPlan& plan, bool json) {
+    const std::vector<DryRunRow> rows = dry_run_rows(plan);
+    if (json) print_dry_run_json(plan, rows);
+    else print_dry_run_text(plan, rows);
 }
 
 void choose_output(RunPlan& plan, const RunOptions& options) {

@@ -19,7 +19,7 @@ namespace accelbench {
 // `accelbench run`'s options (run_command.cpp parses them).
 struct RunOptions {
     std::string config_path;
-    bool dry_run = false, resume = false, in_process = false, show_repetitions = false;
+    bool dry_run = false, dry_run_json = false, resume = false, in_process = false, show_repetitions = false;
     std::string out, json_out, callgrind_out;
     std::optional<Shard> shard;
     std::vector<std::string> benchmark_args;
@@ -60,8 +60,10 @@ std::string model_file_changed(const RunPlan& plan, const ModelSpec& model);
 RunPlan plan_run(const RunOptions& options);
 
 // --dry-run: every selected combination with its id and, where the triangle count is known
-// (or cheaply found), whether a skip rule matches; then the counts.
-void print_dry_run(const RunPlan& plan);
+// (or cheaply found), whether a skip rule matches; then the counts. --dry-run=json (`json`):
+// one JSON document with the config's models, its accelerator entries with their axes
+// (canonical values, ranges expanded) and every selected combination.
+void print_dry_run(const RunPlan& plan, bool json = false);
 
 // The results file: --out, else with --resume the newest results/runs/<name>-*.csv of
 // this shard, else results/runs/<name>-<timestamp>[-shardIofN].csv. Refuses (UsageError)

@@ -5,18 +5,11 @@
 #include "util/text.h"
 
 #include <benchmark/benchmark.h>
-#include <poll.h>
-#include <signal.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
-#include <cstring>
 #include <ctime>
 #include <iostream>
 #include <set>
@@ -527,253 +520,46 @@ std::map<std::string, std::string> error_columns(const HitErrors& hits, const st
     return c;
 }
 
-// ---- the text form --------------------------------------------------------------------
+// ---- the wire form ----------------------------------------------------------------------
 
-namespace {
-
-std::string escape(const std::string& s) {
-    std::string out;
-    for (char ch : s) {
-        if (ch == '\\') out += "\\\\";
-        else if (ch == '\n') out += "\\n";
-        else out += ch;
+void put_measurement(WireWriter& w, const Measurement& m) {
+    w.put_string(m.status);
+    w.put_string(m.message);
+    w.put_string(m.stage);
+    w.put_vector(m.build_s);
+    w.put_vector(m.render_s);
+    w.put_vector(m.render_cpu_s);
+    for (const auto& f : build_stat_fields()) {
+        if (f.count) w.put_optional(m.build.*f.count);
+        else w.put_optional(m.build.*f.real);
     }
-    return out;
+    w.put_map(m.build.extra);
+    for (uint64_t v : {m.rays, m.hits, m.shadow_rays, m.shadow_hits}) w.put(v);
+    w.put_optional(m.counts);
+    w.put_optional(m.instructions);
+    w.put_map(m.columns);
+    w.put_string(m.json);
 }
 
-std::string unescape(const std::string& s) {
-    std::string out;
-    for (size_t i = 0; i < s.size(); ++i) {
-        if (s[i] == '\\' && i + 1 < s.size()) {
-            out += s[i + 1] == 'n' ? '\n' : s[i + 1];
-            ++i;
-        } else {
-            out += s[i];
-        }
-    }
-    return out;
-}
-
-// Exact: 17 significant digits give back the same double.
-std::string real_text(double v) { return number_text(v, 17); }
-
-std::string list_text(const std::vector<double>& v) {
-    std::string s;
-    for (double x : v) append_item(s, " ", real_text(x));
-    return s;
-}
-
-std::vector<double> parse_list(const std::string& s) {
-    std::vector<double> v;
-    std::istringstream in(s);
-    for (std::string tok; in >> tok;) v.push_back(std::strtod(tok.c_str(), nullptr));
-    return v;
-}
-
-}  // namespace
-
-std::string serialize(const Measurement& m) {
-    std::string s;
-    auto put = [&](const std::string& k, const std::string& v) { s += k + "=" + escape(v) + "\n"; };
-    put("status", m.status);
-    put("message", m.message);
-    put("stage", m.stage);
-    put("build_s", list_text(m.build_s));
-    put("render_s", list_text(m.render_s));
-    put("render_cpu_s", list_text(m.render_cpu_s));
-    for (const auto& f : build_stat_fields())
-        if (auto v = f.get(m.build))
-            put(std::string("build.") + f.name, f.count ? std::to_string(*(m.build.*f.count)) : real_text(*v));
-    for (const auto& [k, v] : m.build.extra) put("extra." + k, real_text(v));
-    put("rays", std::to_string(m.rays));
-    put("hits", std::to_string(m.hits));
-    put("shadow_rays", std::to_string(m.shadow_rays));
-    put("shadow_hits", std::to_string(m.shadow_hits));
-    if (m.counts) {
-        put("node_visits", std::to_string(m.counts->node_visits));
-        put("box_tests", std::to_string(m.counts->box_tests));
-        put("prim_tests", std::to_string(m.counts->prim_tests));
-    }
-    if (m.instructions) put("instructions", std::to_string(*m.instructions));
-    for (const auto& [k, v] : m.columns) put("column." + k, v);
-    put("json", m.json);
-    return s;
-}
-
-Measurement deserialize(const std::string& text) {
+Measurement take_measurement(WireReader& r) {
     Measurement m;
-    std::istringstream in(text);
-    for (std::string line; std::getline(in, line);) {
-        const size_t eq = line.find('=');
-        if (eq == std::string::npos) throw std::runtime_error("malformed measurement line '" + line + "'");
-        const std::string k = line.substr(0, eq), v = unescape(line.substr(eq + 1));
-        auto u = [&] { return uint64_t(std::strtoull(v.c_str(), nullptr, 10)); };
-        auto d = [&] { return std::strtod(v.c_str(), nullptr); };
-        auto counts = [&]() -> RayStats& {
-            if (!m.counts) m.counts = RayStats{};
-            return *m.counts;
-        };
-        if (k == "status") m.status = v;
-        else if (k == "message") m.message = v;
-        else if (k == "stage") m.stage = v;
-        else if (k == "build_s") m.build_s = parse_list(v);
-        else if (k == "render_s") m.render_s = parse_list(v);
-        else if (k == "render_cpu_s") m.render_cpu_s = parse_list(v);
-        else if (k.rfind("build.", 0) == 0) {
-            const BuildStatField* f = nullptr;
-            for (const auto& field : build_stat_fields())
-                if (k.substr(6) == field.name) f = &field;
-            if (!f) throw std::runtime_error("unknown build statistic '" + k + "'");
-            if (f->count) m.build.*(f->count) = u();
-            else m.build.*(f->real) = d();
-        } else if (k.rfind("extra.", 0) == 0) m.build.extra[k.substr(6)] = d();
-        else if (k == "rays") m.rays = u();
-        else if (k == "hits") m.hits = u();
-        else if (k == "shadow_rays") m.shadow_rays = u();
-        else if (k == "shadow_hits") m.shadow_hits = u();
-        else if (k == "node_visits") counts().node_visits = u();
-        else if (k == "box_tests") counts().box_tests = u();
-        else if (k == "prim_tests") counts().prim_tests = u();
-        else if (k == "instructions") m.instructions = u();
-        else if (k.rfind("column.", 0) == 0) m.columns[k.substr(7)] = v;
-        else if (k == "json") m.json = v;
-        else throw std::runtime_error("unknown measurement key '" + k + "'");
+    m.status = r.take_string();
+    m.message = r.take_string();
+    m.stage = r.take_string();
+    m.build_s = r.take_vector<double>();
+    m.render_s = r.take_vector<double>();
+    m.render_cpu_s = r.take_vector<double>();
+    for (const auto& f : build_stat_fields()) {
+        if (f.count) m.build.*f.count = r.take_optional<uint64_t>();
+        else m.build.*f.real = r.take_optional<double>();
     }
+    m.build.extra = r.take_map<double>();
+    for (uint64_t* v : {&m.rays, &m.hits, &m.shadow_rays, &m.shadow_hits}) *v = r.take<uint64_t>();
+    m.counts = r.take_optional<RayStats>();
+    m.instructions = r.take_optional<uint64_t>();
+    m.columns = r.take_map<std::string>();
+    m.json = r.take_string();
     return m;
-}
-
-// ---- the child process ------------------------------------------------------------------
-
-namespace {
-
-void write_all(int fd, const std::string& data) {
-    size_t done = 0;
-    while (done < data.size()) {
-        ssize_t n = ::write(fd, data.data() + done, data.size() - done);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) return;  // the parent is gone; nothing to report to
-        done += size_t(n);
-    }
-}
-
-// Frames on the pipe: a tag ('S' stage begun, 'R' result), the payload length, a newline,
-// the payload.
-void send_frame(int fd, char tag, const std::string& payload) {
-    write_all(fd, std::string(1, tag) + std::to_string(payload.size()) + "\n" + payload);
-}
-
-// Everything buffered for stdout and stderr, C++ streams and C stdio, written out: before a
-// fork (or the child would write the parent's buffered text a second time), before a child
-// exits, and before the parent stops itself.
-void flush_all_output() {
-    std::cout.flush();
-    std::cerr.flush();
-    std::fflush(nullptr);
-}
-
-// A child killed by a request to stop — SIGTERM (scancel, a Slurm time limit, kill),
-// SIGINT (Ctrl-C), SIGHUP, SIGQUIT — was not failed by its combination: the whole run is
-// being stopped, and the same signal is on its way to this process (Slurm and a terminal
-// signal every process of the job). Found by make test-slurm: the child died
-// first, this parent wrote `status=error, the measurement process died from signal 15
-// (Terminated)` before its own SIGTERM arrived, and `--resume` then kept that row instead
-// of measuring the combination again, so the merged grid differed from a single-process
-// run. So the parent stops itself the same way, now, without a row for the combination;
-// its earlier rows are on disk (each is flushed when written), and --resume measures the
-// interrupted combination again (dropping its orphaned repetition rows). A crash of the
-// structure (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT) and the kernel's OOM kill (SIGKILL)
-// stay error rows.
-void stop_if_asked_to_stop(int signal_number) {
-    if (signal_number != SIGTERM && signal_number != SIGINT && signal_number != SIGHUP && signal_number != SIGQUIT)
-        return;
-    flush_all_output();
-    std::signal(signal_number, SIG_DFL);
-    sigset_t set;
-    sigemptyset(&set);
-    sigaddset(&set, signal_number);
-    sigprocmask(SIG_UNBLOCK, &set, nullptr);
-    std::raise(signal_number);
-    _exit(128 + signal_number);  // not reached; the shell's code for a death by that signal
-}
-
-}  // namespace
-
-ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s,
-                          const std::string& first_stage) {
-    int fds[2];
-    if (pipe(fds) != 0) throw std::runtime_error(std::string("pipe: ") + std::strerror(errno));
-    flush_all_output();
-    const pid_t pid = fork();
-    if (pid < 0) throw std::runtime_error(std::string("fork: ") + std::strerror(errno));
-    if (pid == 0) {
-        ::close(fds[0]);
-        prctl(PR_SET_PDEATHSIG, SIGKILL);  // never outlive a killed parent
-        const std::string result = work([&](const std::string& s) { send_frame(fds[1], 'S', s); });
-        send_frame(fds[1], 'R', result);
-        flush_all_output();
-        _exit(0);
-    }
-    ::close(fds[1]);
-
-    const auto deadline =
-        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout_s));
-    std::string buffer;
-    ChildOutcome o;
-    o.stage = first_stage;
-    for (;;) {
-        const double left = seconds_between(Clock::now(), deadline);
-        // Past the deadline, what the child already sent is still read (without waiting), so
-        // a stage it reported before the limit names the stage it was stopped in — under load
-        // the parent can wake after the deadline with the child's last frames unread.
-        pollfd p{fds[0], POLLIN, 0};
-        const int r = poll(&p, 1, left <= 0 ? 0 : int(std::min(left * 1000.0 + 1.0, 3.6e6)));
-        if (r < 0 && errno == EINTR) continue;
-        if (r == 0 && left <= 0) {
-            o.timed_out = true;
-            break;
-        }
-        if (r == 0) continue;  // the loop head decides whether time is up
-        char chunk[65536];
-        const ssize_t n = ::read(fds[0], chunk, sizeof chunk);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) break;  // the child closed the pipe: finished or died
-        buffer.append(chunk, size_t(n));
-        for (;;) {
-            const size_t nl = buffer.find('\n');
-            if (nl == std::string::npos) break;
-            const size_t len = std::strtoull(buffer.c_str() + 1, nullptr, 10);
-            if (buffer.size() < nl + 1 + len) {
-                buffer.reserve(nl + 1 + len);  // a prepared model can be hundreds of MB: grow once
-                break;
-            }
-            if (buffer[0] == 'R' && buffer.size() == nl + 1 + len) {
-                // The last frame, alone in the buffer (as a result is): taken without a copy.
-                buffer.erase(0, nl + 1);
-                o.result = std::move(buffer);
-                buffer.clear();
-                break;
-            }
-            if (buffer[0] == 'S') o.stage = buffer.substr(nl + 1, len);
-            else if (buffer[0] == 'R') o.result = buffer.substr(nl + 1, len);
-            buffer.erase(0, nl + 1 + len);
-        }
-    }
-    if (o.timed_out) kill(pid, SIGKILL);
-    ::close(fds[0]);
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
-    if (!o.timed_out && WIFSIGNALED(status)) stop_if_asked_to_stop(WTERMSIG(status));
-    if (o.timed_out) o.result.reset();
-    if (!o.result && !o.timed_out) {
-        o.failure = WIFSIGNALED(status)
-            ? "died from signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")"
-            : "exited with status " + std::to_string(WEXITSTATUS(status)) + " without a result";
-    }
-    return o;
-}
-
-std::string time_limit_message(double timeout_s, const std::string& stage) {
-    return "exceeded the time limit (timeout_s = " + limit_text(timeout_s) + " s) during " + stage;
 }
 
 Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s) {
@@ -789,10 +575,17 @@ Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work,
                 m.status = "error";
                 m.message = "unknown exception";
             }
-            return serialize(m);
+            WireWriter w;
+            put_measurement(w, m);
+            return w.take();
         },
         timeout_s);
-    if (o.result) return deserialize(*o.result);
+    if (o.result) {
+        WireReader r(*o.result, "the measurement from its process");
+        Measurement m = take_measurement(r);
+        r.expect_end();
+        return m;
+    }
     Measurement m;
     m.stage = o.stage;
     if (o.timed_out) {

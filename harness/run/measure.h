@@ -27,6 +27,8 @@
 #include "accelbench/render/renderer.h"
 #include "accelbench/verify/error_metrics.h"
 #include "plan/loaded_model.h"
+#include "run/child_process.h"
+#include "util/wire.h"
 
 namespace accelbench {
 
@@ -79,8 +81,6 @@ struct BuildStatField {
 };
 const std::vector<BuildStatField>& build_stat_fields();
 
-using StageFn = std::function<void(const std::string&)>;
-
 // The error columns of a combination (false_misses ... hole_pixels) as CSV text; the
 // image columns only with image errors, the t columns only when a t was compared.
 std::map<std::string, std::string> error_columns(const HitErrors& hits, const std::optional<ImageErrors>& image);
@@ -101,33 +101,16 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
                     const LoadedModel& model, const RenderSettings& render, const MeasureSettings& settings,
                     const StageFn& stage = {}, std::optional<RaySetKind> ray_set = std::nullopt);
 
-// Runs `work` in a forked child process and returns its Measurement. The child reports
-// each stage it begins; if it runs longer than timeout_s it is killed and the result is
-// status "timeout" naming the stage. A child that crashes (signal) or exits without a
-// result gives status "error" with the signal or exit code, so one broken structure does
-// not end the run. The parent must not have started threads (fork copies one thread).
+// Runs `work` in a forked child process (run_in_child) and returns its Measurement. The
+// child reports each stage it begins; if it runs longer than timeout_s it is killed and the
+// result is status "timeout" naming the stage. A child that crashes (signal) or exits
+// without a result gives status "error" with the signal or exit code, so one broken
+// structure does not end the run. The parent must not have started threads (fork copies
+// one thread).
 Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s);
 
-// What a forked child gave back (run_in_child): its result, or why there is none.
-struct ChildOutcome {
-    std::optional<std::string> result;  // the work's return value, when it finished in time
-    bool timed_out = false;             // killed at the deadline
-    std::string failure;                // no result otherwise: "died from signal 11 (...)", "exited with status 3 ..."
-    std::string stage;                  // the last stage the child began
-};
-
-// Runs `work` in a forked child with the deadline `timeout_s` and brings its return value
-// (any bytes) back through a pipe; the child reports each stage it begins, `first_stage`
-// until it reports one. `work` must not throw. The parent must not have started threads
-// (fork copies one thread).
-ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s,
-                          const std::string& first_stage = "start-up");
-
-// "exceeded the time limit (timeout_s = 2 s) during <stage>"
-std::string time_limit_message(double timeout_s, const std::string& stage);
-
-// The text form that crosses the pipe from child to parent.
-std::string serialize(const Measurement& m);
-Measurement deserialize(const std::string& text);
+// The wire form (util/wire.h) a measurement crosses the pipe in, every value exact.
+void put_measurement(WireWriter& w, const Measurement& m);
+Measurement take_measurement(WireReader& r);
 
 }  // namespace accelbench

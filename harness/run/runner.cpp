@@ -6,9 +6,11 @@
 
 #include "accelbench/accel/registry.h"
 #include "plan/loaded_model.h"
+#include "run/child_process.h"
 #include "run/measure.h"
 #include "run/verdicts.h"
 #include "util/text.h"
+#include "util/wire.h"
 
 namespace accelbench {
 
@@ -26,7 +28,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // transform, procedural generation), making its ray sets and tracing the reference's
 // answers, once per model, before its first measurement. It runs in one child process under
 // the config's timeout_s, like each measurement (unless --in-process), and comes back to
-// the parent as bytes (loaded_model_bytes): a model whose preparation cannot finish in time
+// the parent in the wire form (util/wire.h): a model whose preparation cannot finish in time
 // gets timeout rows naming the stage, never an unbounded wait in the parent. A robustness
 // case (a small generated scene that brings its own reference answers) is made in the parent.
 class ModelOnDemand {
@@ -131,20 +133,26 @@ private:
         reference_error = std::move(p.reference_error);
     }
 
-    // The child's answer: 'L' and why the model does not load, or 'M', the length of why the
-    // reference cannot trace it (0: it can), a newline, that text and the model's bytes.
+    // The child's answer, in the wire form: whether a model follows, why the model does not
+    // load, why the reference cannot trace it (each empty when it can), then the model.
     void prepare_in_child() {
         const double limit = plan_.config.timeout_s;
         const ChildOutcome o = run_in_child(
             [&](const StageFn& stage) -> std::string {
+                WireWriter w;
                 try {
                     Preparation p = prepare_here(stage);
-                    if (!p.model) return concat("L", p.load_error);
-                    return concat("M", std::to_string(p.reference_error.size()), "\n", p.reference_error,
-                                  loaded_model_bytes(*p.model));
+                    w.put(uint8_t(p.model.has_value()));
+                    w.put_string(p.load_error);
+                    w.put_string(p.reference_error);
+                    if (p.model) put_loaded_model(w, *p.model);
                 } catch (const std::exception& e) {  // the model does not fit into bytes (bad_alloc)
-                    return concat("L", "cannot bring the prepared model to the parent process: ", e.what());
+                    w = WireWriter();
+                    w.put(uint8_t(0));
+                    w.put_string(concat("cannot bring the prepared model to the parent process: ", e.what()));
+                    w.put_string("");
                 }
+                return w.take();
             },
             limit, loading_stage());
         if (o.timed_out) {
@@ -154,15 +162,16 @@ private:
             const std::string why = concat("the process preparing the model ", o.failure, " during ", o.stage);
             if (o.stage == loading_stage()) load_error = why;
             else reference_error = why;
-        } else if ((*o.result)[0] == 'L') {
-            load_error = o.result->substr(1);
         } else {
-            const size_t nl = o.result->find('\n');
-            const size_t n = std::stoull(o.result->substr(1, nl - 1));
-            reference_error = o.result->substr(nl + 1, n);
             try {
-                loaded_ = loaded_model_from_bytes(std::string_view(*o.result).substr(nl + 1 + n), spec_);
+                WireReader r(*o.result, "prepared model");
+                const bool has_model = r.take<uint8_t>();
+                load_error = r.take_string();
+                reference_error = r.take_string();
+                if (has_model) loaded_ = take_loaded_model(r, spec_);
+                r.expect_end();
             } catch (const std::exception& e) {  // a bug of ours: no model, no rows
+                loaded_.reset();
                 load_error = concat("the prepared model came back damaged from its process: ", e.what());
             }
         }

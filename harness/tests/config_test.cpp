@@ -3,9 +3,11 @@
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
+#include "accelbench/accel/registry.h"
 #include "accelbench/verify/robustness_cases.h"
 #include "config/config.h"
 #include "harness_test_util.h"
+#include "plan/combinations.h"
 
 namespace accelbench {
 namespace {
@@ -156,6 +158,83 @@ accelerators:
     EXPECT_TRUE(has_issue(e, 5, 34, "accelerators[2].brute_force.max_triangle", "did you mean 'max_triangles'"));
     EXPECT_TRUE(has_issue(e, 6, 44, "accelerators[3].embree.quality[1]", "'best' is not one of {low, medium, high}"));
     EXPECT_TRUE(has_issue(e, 6, 59, "accelerators[3].embree.robust", "quoted string"));
+}
+
+// `{name: all, except, params}`: every registered structure but those excepted, in registry
+// order, each at its defaults unless `params` gives some; other entries stand beside it.
+TEST_F(ConfigTest, AllMeansEveryRegisteredStructureButThoseExcepted) {
+    const Config c = load_config(write("a.yaml", R"(models: [stanford-bunny]
+accelerators:
+  - {name: bvh, params: {split: median, max_prims: 1}}
+  - name: all
+    except: [bvh, reference]
+    params: {wbvh: {width: [4, 8]}, kdtree: {"[max_prims, max_depth]": [[1, 20], [4, 30]]}}
+    repetitions: 2
+)"),
+                                 registry());
+    std::vector<std::string> expected = {"bvh"};
+    for (const AcceleratorInfo& info : accelerator_registry())
+        if (info.name != "bvh" && info.name != "reference") expected.push_back(info.name);
+    std::vector<std::string> names;
+    for (const AcceleratorSpec& a : c.accelerators) names.push_back(a.name);
+    EXPECT_EQ(names, expected);
+    for (const AcceleratorSpec& a : c.accelerators) {
+        SCOPED_TRACE(a.name);
+        EXPECT_EQ(a.mark.line, a.name == "bvh" ? 3 : 4);
+        EXPECT_EQ(a.repetitions, a.name == "bvh" ? std::nullopt : std::optional<int>(2));
+        if (a.name == "wbvh") {
+            ASSERT_EQ(a.axes.size(), 1u);
+            EXPECT_EQ(a.axes[0].values, (std::vector<std::vector<std::string>>{{"4"}, {"8"}}));
+        } else if (a.name == "kdtree") {
+            ASSERT_EQ(a.axes.size(), 1u);
+            EXPECT_EQ(a.axes[0].names, (std::vector<std::string>{"max_prims", "max_depth"}));
+        } else if (a.name != "bvh") {
+            EXPECT_TRUE(a.axes.empty());
+        }
+    }
+    // Without `except`, every structure, the reference and brute force included.
+    const Config every =
+        load_config(write("b.yaml", "models: [stanford-bunny]\naccelerators: [{name: all}]\n"), registry());
+    EXPECT_EQ(every.accelerators.size(), accelerator_registry().size());
+}
+
+TEST_F(ConfigTest, AllRefusesUnknownNamesNamingTheKnownOnes) {
+    const ConfigError e = load_error(write("a.yaml", R"(models: [stanford-bunny]
+accelerators:
+  - {name: all, except: [bhv, embree, embree], params: {kdtre: {max_prims: 2}, embree: {robust: true}}}
+  - {name: all, params: {kdtree: {max_prim: 2}}}
+  - {name: kdtree, except: [bvh]}
+  - {name: al}
+)"));
+    EXPECT_TRUE(has_issue(e, 3, 26, "accelerators[0].except[0]",
+                          "unknown accelerator 'bhv' (did you mean 'bvh'?) (known: brute_force, bvh"));
+    EXPECT_TRUE(has_issue(e, 3, 39, "accelerators[0].except[2]", "'embree' is excepted twice"));
+    EXPECT_TRUE(
+        has_issue(e, 3, 57, "accelerators[0].params.kdtre", "unknown accelerator 'kdtre' (did you mean 'kdtree'?)"));
+    EXPECT_TRUE(has_issue(e, 3, 80, "accelerators[0].params.embree", "'embree' is in `except`"));
+    EXPECT_TRUE(has_issue(e, 4, 35, "accelerators[1].kdtree.max_prim", "did you mean 'max_prims'"));
+    EXPECT_TRUE(has_issue(e, 5, 20, "accelerators[2].except", "`except` goes with `name: all`"));
+    EXPECT_TRUE(has_issue(e, 6, 12, "accelerators[3].name", "unknown accelerator 'al' (did you mean 'all'?)"));
+    EXPECT_EQ(e.issues().size(), 7u) << all_issues(e);
+
+    std::string every;
+    for (const AcceleratorInfo& info : accelerator_registry()) every += (every.empty() ? "" : ", ") + info.name;
+    const ConfigError none =
+        load_error(write("b.yaml", "models: [stanford-bunny]\naccelerators: [{name: all, except: [" + every + "]}]\n"));
+    EXPECT_TRUE(has_issue(none, 2, 36, "accelerators[0].except", "every structure is excepted"));
+}
+
+// An explicit entry beside `all` that names the same setting is the same combination twice.
+TEST_F(ConfigTest, AllBesideAnEntryOfTheSameStructureRepeatsItsCombinations) {
+    const Config c = load_config(
+        write("a.yaml", "models: [stanford-bunny]\naccelerators: [{name: embree}, {name: all, except: [reference]}]\n"),
+        registry());
+    try {
+        expand(c);
+        FAIL() << "expected the repeated embree combination to be refused";
+    } catch (const ConfigError& e) {
+        EXPECT_TRUE(has_issue(e, 2, 32, "accelerators[1] (all: embree)", "repeats")) << all_issues(e);
+    }
 }
 
 TEST_F(ConfigTest, DuplicateKeysAreFoundInEveryMapping) {

@@ -1,5 +1,6 @@
 // Helpers shared by the harness tests: config files in a private temporary directory,
-// the project's model registry, and matching ConfigError issues.
+// the project's model registry, matching ConfigError issues, and a prepared model through
+// the wire form.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -11,6 +12,8 @@
 #include "accelbench/base/temp_dir.h"
 #include "config/config.h"
 #include "models/model_registry.h"
+#include "plan/loaded_model.h"
+#include "util/wire.h"
 
 namespace accelbench::testing_util {
 
@@ -24,6 +27,19 @@ inline std::string write_file(const std::filesystem::path& dir, const std::strin
 inline std::string read_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// A prepared model in the wire form, as its child process sends it (runner.cpp), and back.
+inline std::string model_wire_bytes(const LoadedModel& m) {
+    WireWriter w;
+    put_loaded_model(w, m);
+    return w.take();
+}
+inline LoadedModel model_from_wire(std::string_view bytes, const ModelSpec& spec) {
+    WireReader r(bytes, "prepared model");
+    LoadedModel m = take_loaded_model(r, spec);
+    r.expect_end();
+    return m;
 }
 
 // configs/models.yaml of this source tree: the names only matter here, no mesh is read.

@@ -14,7 +14,7 @@
 #include <chrono>
 #include <filesystem>
 
-#include "commands/run_command.h"
+#include "commands/cli.h"
 #include "csv/csv.h"
 #include "csv/results.h"
 #include "harness_test_util.h"

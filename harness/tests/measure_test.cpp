@@ -2,6 +2,7 @@
 // or slow structure is caught (in this process and in a child process).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <thread>
@@ -11,10 +12,13 @@
 
 #include "accelbench/accel/baseline/brute_force.h"
 #include "accelbench/accel/baseline/embree_accel.h"
+#include "harness_test_util.h"
 #include "run/measure.h"
 
 namespace accelbench {
 namespace {
+
+using namespace testing_util;
 
 // A small closed box of 12 triangles, seen by the default camera.
 LoadedModel box_model() {
@@ -204,8 +208,8 @@ TEST(PreparedModelTest, BytesBringBackEveryField) {
     ModelSpec spec;
     spec.rays = std::make_shared<RaySet>();
 
-    const std::string bytes = loaded_model_bytes(m);
-    const LoadedModel back = loaded_model_from_bytes(bytes, spec);
+    const std::string bytes = model_wire_bytes(m);
+    const LoadedModel back = model_from_wire(bytes, spec);
     EXPECT_EQ(back.scene.name, "box");
     EXPECT_TRUE(same_bits(back.scene.vertices, m.scene.vertices));
     EXPECT_EQ(back.scene.triangles, m.scene.triangles);
@@ -239,13 +243,13 @@ TEST(PreparedModelTest, BytesBringBackEveryField) {
 
     // Without reference or ray sets; and bytes cut short or with more after the model.
     LoadedModel bare = box_model();
-    const LoadedModel bare_back = loaded_model_from_bytes(loaded_model_bytes(bare), ModelSpec{});
+    const LoadedModel bare_back = model_from_wire(model_wire_bytes(bare), ModelSpec{});
     EXPECT_FALSE(bare_back.reference);
     EXPECT_FALSE(bare_back.ray_sets);
     EXPECT_FALSE(bare_back.rays);
     for (size_t cut : {size_t(0), size_t(7), bytes.size() / 2, bytes.size() - 1})
-        EXPECT_THROW(loaded_model_from_bytes(bytes.substr(0, cut), spec), std::runtime_error) << cut;
-    EXPECT_THROW(loaded_model_from_bytes(bytes + "x", spec), std::runtime_error);
+        EXPECT_THROW(model_from_wire(bytes.substr(0, cut), spec), std::runtime_error) << cut;
+    EXPECT_THROW(model_from_wire(bytes + "x", spec), std::runtime_error);
 }
 
 TEST(IsolationTest, ResultCrossesTheProcessBoundary) {
@@ -266,18 +270,26 @@ TEST(IsolationTest, ResultCrossesTheProcessBoundary) {
     EXPECT_EQ(m.counts->node_visits, direct.counts->node_visits);
 }
 
-TEST(IsolationTest, SerializationRoundTrips) {
+TEST(IsolationTest, TheWireFormRoundTripsEveryValueExactly) {
     Measurement m;
     m.status = "error";
+    m.stage = "render repetition 2 of 3";
     m.message = "line one\nline two \\ with backslash";
     m.build_s = {0.1, 1.0 / 3.0};
+    m.render_cpu_s = {std::nextafter(1.0, 2.0)};
+    m.instructions = 123456789012ull;
+    m.shadow_hits = 5;
     m.build.nodes = 7;
     m.build.sah_cost = 12.5;
     m.build.extra["prim_refs"] = 99;
     m.counts = RayStats{1, 2, 3};
     m.json = "{\n  \"a\": 1\n}";
     m.columns = {{"false_misses", "3"}, {"verdict_counts", "leaks=0 rays=7"}};
-    const Measurement r = deserialize(serialize(m));
+    WireWriter w;
+    put_measurement(w, m);
+    WireReader reader(w.bytes(), "measurement");
+    const Measurement r = take_measurement(reader);
+    EXPECT_TRUE(reader.at_end());
     EXPECT_EQ(r.columns, m.columns);
     EXPECT_EQ(r.message, m.message);
     EXPECT_EQ(r.build_s, m.build_s);
@@ -288,6 +300,17 @@ TEST(IsolationTest, SerializationRoundTrips) {
     ASSERT_TRUE(r.counts);
     EXPECT_EQ(r.counts->prim_tests, 3u);
     EXPECT_EQ(r.json, m.json);
+    EXPECT_EQ(r.status, m.status);
+    EXPECT_EQ(r.stage, m.stage);
+    EXPECT_EQ(r.render_cpu_s, m.render_cpu_s);  // bit for bit, no text in between
+    EXPECT_TRUE(r.render_s.empty());
+    EXPECT_EQ(r.instructions, m.instructions);
+    EXPECT_EQ(r.shadow_hits, 5u);
+    // Cut short anywhere: refused, never read as a shorter measurement.
+    for (size_t cut = 0; cut < w.bytes().size(); cut += 7) {
+        WireReader part(std::string_view(w.bytes()).substr(0, cut), "measurement");
+        EXPECT_THROW(take_measurement(part), std::runtime_error) << cut;
+    }
 }
 
 TEST(IsolationTest, ACrashIsAnErrorAndTheCallerGoesOn) {

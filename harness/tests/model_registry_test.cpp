@@ -282,16 +282,17 @@ TEST_F(PrivateRegistry, YamlErrorsNameFileLineAndColumn) {
 
     const std::string typo = entry_yaml("tetra", "tetra.obj", std::string(64, 'b'), "x", "    trinagles: 3\n");
     error = error_of([&] { load("models:\n" + typo); });
-    EXPECT_NE(error.find(path + ":9:5: unknown key 'trinagles'"), std::string::npos) << error;
+    EXPECT_NE(error.find(path + ":9:5: models[0].trinagles: unknown key 'trinagles' (did you mean 'triangles'?)"),
+              std::string::npos)
+        << error;
 
     std::string bad_count = entry_yaml("tetra", "tetra.obj", std::string(64, 'b'), "x");
     bad_count.replace(bad_count.find("triangles: 4"), 12, "triangles: many");
     error = error_of([&] { load("models:\n" + bad_count); });
-    EXPECT_NE(error.find(path + ":5:16: model 'tetra'.triangles: 'many' is not a valid value"), std::string::npos)
-        << error;
+    EXPECT_NE(error.find(path + ":5:16: models[0].triangles: expected an integer"), std::string::npos) << error;
 
     error = error_of([&] { load("models:\n" + entry_yaml("tetra", "tetra.obj", "abc", "x")); });
-    EXPECT_NE(error.find("sha256 must be 64 lowercase hex digits"), std::string::npos) << error;
+    EXPECT_NE(error.find("models[0].sha256: must be 64 lowercase hex digits"), std::string::npos) << error;
 }
 
 }  // namespace

@@ -7,7 +7,7 @@
 #include <map>
 #include <set>
 
-#include "commands/run_command.h"
+#include "commands/cli.h"
 #include "config/config.h"
 #include "csv/csv.h"
 #include "csv/results.h"
@@ -111,8 +111,8 @@ accelerators: [{name: bvh}]
     EXPECT_EQ((*model.ray_sets)[1].kind, RaySetKind::Random);
     ASSERT_EQ(model.ray_set_errors.count(RaySetKind::Ao), 1u);
     EXPECT_NE(model.ray_set_errors.at(RaySetKind::Ao).find("ao samples must be at least 1"), std::string::npos);
-    // Through the bytes that bring a prepared model from its child process.
-    const LoadedModel back = loaded_model_from_bytes(loaded_model_bytes(model), config.models[0]);
+    // Through the wire form that brings a prepared model from its child process.
+    const LoadedModel back = model_from_wire(model_wire_bytes(model), config.models[0]);
     EXPECT_EQ(back.ray_set_errors, model.ray_set_errors);
     EXPECT_EQ(back.ray_sets->size(), 2u);
 }

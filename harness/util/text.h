@@ -40,3 +40,24 @@ inline std::string number_text(double v, int digits = 9) {
 }
 
 }  // namespace accelbench
+
+namespace accelbench {
+
+// A JSON string literal of `text` (RFC 8259: quotes, backslashes and control characters
+// escaped; other bytes as they are, so UTF-8 stays UTF-8).
+inline std::string json_quoted(std::string_view text) {
+    std::string s = "\"";
+    for (unsigned char ch : text) {
+        if (ch == '"' || ch == '\\') s.append(1, '\\').append(1, char(ch));
+        else if (ch == '\n') s += "\\n";
+        else if (ch == '\t') s += "\\t";
+        else if (ch < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", ch);
+            s += buf;
+        } else s += char(ch);
+    }
+    return s + "\"";
+}
+
+}  // namespace accelbench

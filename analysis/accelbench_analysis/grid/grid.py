@@ -1,8 +1,8 @@
 """Parameter grid search: rank the harness's rows of a grid config, write the winners.
 
-The config (grid_config.py) gives the accelerator, the objective and the constraints;
-the CSV gives what ran: parameter values are read back from its `params` text, which is
-authoritative. Outputs, under results/grid/<config>/: best.yaml (per model, the winner as
+The config (grid_config.py, its axes expanded by the harness) gives the accelerator, the
+objective and the constraints; the CSV gives what ran: parameter values are read back from
+its `params` text, which is authoritative. Outputs, under results/grid/<config>/: best.yaml (per model, the winner as
 an entry for another config's `accelerators:` list), ranked.csv (every candidate with its
 objective, rank, and why it was rejected), heatmap-<model>-<p>-<q>.png (the objective over
 each pair of varied parameters, minimum over the others, with the report's and pbrt's
@@ -32,7 +32,7 @@ from ..inputs.schema import ERROR_COLUMNS, RENDER_SETTING_COLUMNS, Results, norm
 from ..mapping.selection import kd_auto_depth_pbrt, kd_auto_depth_report
 from ..outputs.errors import COMPACT_HEADER, compact_errors
 from ..outputs.formatting import fmt_sig, md_table
-from .grid_config import GridConfig, GridConfigError
+from .grid_config import GridConfig, GridConfigError, typed
 
 # ---- published default settings, marked on the heatmaps ---------------------------------------------------
 
@@ -374,17 +374,6 @@ def _coverage(cfg: GridConfig, ranked: pd.DataFrame, second_pass_only: bool) -> 
 
 
 # ---- outputs -------------------------------------------------------------------------------------------
-
-
-def typed(text: str):
-    """A parameter's canonical text as the YAML scalar the harness reads back to the same value."""
-    t = normalise_value(text)
-    if t in ("true", "false"):
-        return t == "true"
-    if re.fullmatch(r"-?[0-9]+", t):
-        return int(t)
-    f = _num(t)
-    return f if f is not None else t
 
 
 def snippet(cfg: GridConfig, row: pd.Series) -> list[dict]:

@@ -1,20 +1,22 @@
 """Grid configs (configs/grid-*.yaml): a harness config with one accelerator whose parameters
 are lists or ranges, plus a `grid:` section (objective, constraints, mode) the harness ignores.
 
-Ranges are expanded here exactly as the harness expands them (analysis/README.md, "Grid
-search"): `{from: a, to: b, step: s}` gives a, a+s, ... up to b; `{from: a, to: b, scale:
-log2}` gives a, 2a, 4a, ... up to b (`log10`: a, 10a, ...). Integer endpoints and steps give
-integers; other values are rounded to 12 significant digits so that 0.1 steps read 0.3, not
-0.30000000000000004. The analysis itself reads the values the harness actually ran from the
-CSV; the expansion here serves the coverage check, the combination counts and the second
-pass of successive halving.
+The harness reads the config and expands its ranges (docs/configs.md, `accelerators`): this
+module asks it, through `accelbench run --dry-run=json`, for the accelerator's axes (each value
+in its canonical text) and the models, and never expands a range itself, so the grid is the
+one the harness runs. The analysis reads the values the harness actually ran from the CSV;
+the axes serve the coverage check, the combination counts and the second pass of successive
+halving.
 """
 
 from __future__ import annotations
 
 import itertools
+import json
 import math
+import os
 import re
+import subprocess
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -26,65 +28,59 @@ from ..inputs.schema import normalise_value
 GRID_KEYS = {"objective", "frames", "constraint", "mode", "successive_halving", "halved_from"}
 HALVING_KEYS = {"keep", "repetitions", "warmup"}
 MODES = ("full", "successive_halving")
-RANGE_SCALES = {"log2": 2, "log10": 10}
-RANGE_SIGNIFICANT = 12
-MAX_RANGE_VALUES = 10000  # a typo like step: 0.0001 should not hang the expansion
-NAME_PATTERN = re.compile(r"^[A-Za-z0-9._-]+$")  # the harness uses `name` in file names
+REPO = Path(__file__).resolve().parents[3]
 
 
 class GridConfigError(ValueError):
     """A grid config that cannot be used (names the file and the key)."""
 
 
-# ---- ranges and axes ---------------------------------------------------------------------------
-
-
 def _is_number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
-def _round(v: float) -> float:
-    return float(f"{v:.{RANGE_SIGNIFICANT}g}")
+def typed(text: str):
+    """A parameter's canonical text as the YAML scalar the harness reads back to the same value."""
+    t = normalise_value(text)
+    if t in ("true", "false"):
+        return t == "true"
+    if re.fullmatch(r"-?[0-9]+", t):
+        return int(t)
+    try:
+        f = float(t)
+    except ValueError:
+        return t
+    return f if math.isfinite(f) else t
 
 
-def expand_range(spec: dict, where: str) -> list:
-    """The values of a `{from, to, step}` or `{from, to, scale}` range (see module doc)."""
-    unknown = set(spec) - {"from", "to", "step", "scale"}
-    if unknown:
+# ---- the harness's expansion ---------------------------------------------------------------
+
+
+def default_accelbench() -> Path:
+    """$ACCELBENCH, else the build of this source tree."""
+    return Path(os.environ.get("ACCELBENCH") or REPO / "build" / "accelbench")
+
+
+def harness_expansion(path: Path, accelbench: Path | None = None) -> dict:
+    """`accelbench run --dry-run=json CONFIG`: the config as the harness reads it (its models,
+    its accelerator entries with their axes, its combinations). A config the harness refuses
+    is a GridConfigError with the harness's messages (file:line:column: key: message)."""
+    binary = Path(accelbench) if accelbench else default_accelbench()
+    if not binary.is_file():
         raise GridConfigError(
-            f"{where}: unknown range keys {sorted(unknown)} (a range has "
-            f"from, to and either step or scale: log2/log10)"
+            f"{path}: the harness expands grid configs, and {binary} is not there "
+            f"(build it with `make build`, or give --accelbench / $ACCELBENCH)"
         )
-    lo, hi = spec.get("from"), spec.get("to")
-    if not (_is_number(lo) and _is_number(hi)):
-        raise GridConfigError(f"{where}: a range needs numeric `from` and `to`")
-    if lo > hi:
-        raise GridConfigError(f"{where}: `from` ({lo}) is above `to` ({hi})")
-    if ("step" in spec) == ("scale" in spec):
-        raise GridConfigError(f"{where}: give exactly one of `step` or `scale` (log2, log10)")
-    if "step" in spec:
-        step = spec["step"]
-        if not _is_number(step) or step <= 0:
-            raise GridConfigError(f"{where}: `step` must be a positive number")
-        n = math.floor((hi - lo) / step + 1e-9) + 1
-        integral = all(isinstance(v, int) for v in (lo, hi, step))
-        values = [
-            lo + i * step if integral else _round(lo + i * step) for i in range(min(n, MAX_RANGE_VALUES + 1))
-        ]
-    else:
-        base = RANGE_SCALES.get(spec["scale"])
-        if base is None:
-            raise GridConfigError(f"{where}: scale must be one of {', '.join(RANGE_SCALES)}")
-        if lo <= 0:
-            raise GridConfigError(f"{where}: a {spec['scale']} range starts above 0")
-        n = math.floor(math.log(hi / lo, base) + 1e-9) + 1
-        integral = isinstance(lo, int)
-        values = [
-            lo * base**i if integral else _round(lo * base**i) for i in range(min(n, MAX_RANGE_VALUES + 1))
-        ]
-    if len(values) > MAX_RANGE_VALUES:
-        raise GridConfigError(f"{where}: more than {MAX_RANGE_VALUES} values")
-    return values
+    # Not one shard of a Slurm array: the whole grid.
+    env = {k: v for k, v in os.environ.items() if not k.startswith("SLURM_ARRAY_TASK_")}
+    done = subprocess.run(
+        [str(binary), "run", "--dry-run=json", str(path)], capture_output=True, text=True, env=env
+    )
+    if done.returncode != 0:
+        raise GridConfigError(
+            done.stderr.strip() or f"{binary} run --dry-run=json {path}: exit {done.returncode}"
+        )
+    return json.loads(done.stdout)
 
 
 @dataclass
@@ -96,37 +92,9 @@ class Axis:
     values: list[tuple]
 
 
-def _scalar(v, where: str):
-    if isinstance(v, (dict, list)):
-        raise GridConfigError(f"{where}: expected a single value, got a {type(v).__name__}")
-    return v
-
-
-def parse_axis(key: str, node, where: str) -> Axis:
-    if key.startswith("[") and key.endswith("]"):
-        names = [n.strip() for n in key[1:-1].split(",")]
-        if len(names) < 2 or not all(names):
-            raise GridConfigError(f"{where}: a zipped group names two or more parameters")
-        if not isinstance(node, list) or not node:
-            raise GridConfigError(f"{where}: a zipped group takes a non-empty list of tuples")
-        tuples = []
-        for i, t in enumerate(node):
-            if not isinstance(t, list) or len(t) != len(names):
-                raise GridConfigError(f"{where}[{i}]: expected a tuple of {len(names)} values")
-            tuples.append(tuple(_scalar(v, f"{where}[{i}]") for v in t))
-        return Axis(names, tuples)
-    if isinstance(node, dict):
-        values = expand_range(node, where)
-    elif isinstance(node, list):
-        if not node:
-            raise GridConfigError(f"{where}: an empty list of values")
-        values = [_scalar(v, f"{where}[{i}]") for i, v in enumerate(node)]
-    else:
-        values = [node]
-    texts = [normalise_value(str(v)) for v in values]
-    if len(set(texts)) != len(texts):
-        raise GridConfigError(f"{where}: a value is listed twice ({values})")
-    return Axis([key], [(v,) for v in values])
+def harness_axes(entry: dict) -> list[Axis]:
+    """An accelerator entry's axes from the harness's expansion, values typed as YAML reads them."""
+    return [Axis(list(a["names"]), [tuple(typed(v) for v in t) for t in a["values"]]) for a in entry["axes"]]
 
 
 # ---- objective -------------------------------------------------------------------------------------
@@ -244,7 +212,9 @@ def _construct_int(loader: _GridLoader, node: yaml.ScalarNode) -> int:
 _GridLoader.add_constructor("tag:yaml.org,2002:int", _construct_int)
 
 
-def load_grid_config(path: str | Path) -> GridConfig:
+def load_grid_config(path: str | Path, accelbench: Path | None = None) -> GridConfig:
+    """The grid config at `path`, its axes as the harness (`accelbench`, default
+    default_accelbench()) expands them."""
     path = Path(path)
     try:
         raw = yaml.load(path.read_text(), Loader=_GridLoader)  # noqa: S506 (a SafeLoader)
@@ -257,31 +227,17 @@ def load_grid_config(path: str | Path) -> GridConfig:
     if not isinstance(raw, dict):
         raise GridConfigError(f"{path}: expected a mapping at the top level")
     where = str(path)
-    name = str(raw.get("name", path.stem))
-    if not NAME_PATTERN.match(name):
-        raise GridConfigError(f"{where}: name {name!r} must use letters, digits, '.', '_', '-'")
-    models = raw.get("models")
-    if not isinstance(models, list) or not models:
-        raise GridConfigError(f"{where}: models: expected a non-empty list")
     accels = raw.get("accelerators")
     if (
         not isinstance(accels, list)
         or len(accels) != 1
         or not isinstance(accels[0], dict)
-        or "name" not in accels[0]
+        or accels[0].get("name") in (None, "all")
     ):
         raise GridConfigError(
             f"{where}: accelerators: a grid config has exactly one accelerator "
             f"(a mapping with `name` and `params`)"
         )
-    accel = str(accels[0]["name"])
-    params = accels[0].get("params") or {}
-    if not isinstance(params, dict):
-        raise GridConfigError(f"{where}: accelerators[0].params: expected a mapping")
-    axes = [parse_axis(str(k), v, f"{where}: accelerators[0].{accel}.{k}") for k, v in params.items()]
-    names = [n for a in axes for n in a.names]
-    if len(set(names)) != len(names):
-        raise GridConfigError(f"{where}: accelerators[0].params: a parameter is given twice")
 
     grid = raw.get("grid")
     gw = f"{where}: grid"
@@ -307,17 +263,22 @@ def load_grid_config(path: str | Path) -> GridConfig:
     if halving and mode != "successive_halving":
         raise GridConfigError(f"{gw}.successive_halving: settings given but mode is {mode!r}")
     hw = f"{gw}.successive_halving"
+    keep = _int_setting(halving, "keep", hw)
+    final_repetitions = _int_setting(halving, "repetitions", hw)
+    final_warmup = _int_setting(halving, "warmup", hw)
+    expansion = harness_expansion(path, accelbench)
+    (entry,) = expansion["accelerators"]
     return GridConfig(
         path=path,
         raw=raw,
-        name=name,
-        accel=accel,
-        axes=axes,
+        name=expansion["config"],
+        accel=entry["name"],
+        axes=harness_axes(entry),
         objective=objective,
         constraints={str(k): float(v) for k, v in constraint.items()},
         mode=mode,
-        keep=_int_setting(halving, "keep", hw),
-        final_repetitions=_int_setting(halving, "repetitions", hw),
-        final_warmup=_int_setting(halving, "warmup", hw),
-        models=len(models),
+        keep=keep,
+        final_repetitions=final_repetitions,
+        final_warmup=final_warmup,
+        models=len(expansion["models"]),
     )

@@ -28,6 +28,7 @@ from ..inputs.schema import Results  # noqa: E402
 from ..mapping.selection import STRUCTURE, Picker, setting_spec  # noqa: E402
 from ..mapping.styles import Styles, accel_styles  # noqa: E402
 from .errors import wrong_answers  # noqa: E402
+from .interactive import build_vs_render_spec, error_pareto_spec, write_spec  # noqa: E402
 from .tables import preferred_variant, ratio, structure_rows  # noqa: E402
 
 SEED = 0
@@ -79,6 +80,7 @@ def structure_frame(results: Results) -> pd.DataFrame:
                     "structure": sr.structure.label,
                     "traversal": sr.variant or NO_MODES,
                     "structure_key": sr.structure.key,
+                    "params": r["params"],
                     **{
                         c: r[c]
                         for c in (
@@ -176,10 +178,11 @@ def build_vs_render(results: Results, path: Path) -> Path | Skipped:
     for ax in g.axes.flat:
         plain_log_ticks(ax, "x")
         plain_log_ticks(ax, "y")
-    g.figure.suptitle(
-        "Build vs render time at the report's default parameters (lower left is better)", y=1.02
-    )
-    return save_figure(g, path)
+    title = "Build vs render time at the report's default parameters (lower left is better)"
+    g.figure.suptitle(title, y=1.02)
+    save_figure(g, path)
+    write_spec(path, build_vs_render_spec(df, title))
+    return path
 
 
 # ---- Table 2 sweeps -------------------------------------------------------------------------
@@ -403,11 +406,15 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
         alpha=0.8,
         facet_kws={"sharex": False, "sharey": True},
     )
+    # Each structure's own trade-off over its parameter sets, and the points nothing beats
+    # overall (ringed), per model.
+    fronts = pd.concat([pareto_front(pts, "render_s_median", y) for _, pts in df.groupby(["model", "accel"])])
+    df["optimal"] = df.index.isin(
+        pd.concat([pareto_front(sub, "render_s_median", y) for _, sub in df.groupby("model")]).index
+    )
     for name, ax in g.axes_dict.items():
         sub = df[df["model"] == name]
-        # Each structure's own trade-off over its parameter sets ...
-        for accel, pts in sub.groupby("accel"):
-            front = pareto_front(pts, "render_s_median", y)
+        for accel, front in fronts[fronts["model"] == name].groupby("accel"):
             if len(front) > 1:
                 ax.step(
                     front["render_s_median"],
@@ -418,8 +425,7 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
                     ls="--",
                     alpha=0.9,
                 )
-        # ... and the points nothing beats overall, ringed.
-        best = pareto_front(sub, "render_s_median", y)
+        best = sub[sub["optimal"]]
         ax.scatter(
             best["render_s_median"],
             best[y],
@@ -455,12 +461,14 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
     )
     g.set_titles("{col_name}")
     zero = ": every row has 0 wrong answers" if (df[y] == 0).all() else ""
-    g.figure.suptitle(
+    title = (
         f"Render time vs wrong answers over every parameter set{zero}\n(dashed: each "
-        "structure's Pareto front; ringed: optimal overall)",
-        y=1.04,
+        "structure's Pareto front; ringed: optimal overall)"
     )
-    return save_figure(g, path)
+    g.figure.suptitle(title, y=1.04)
+    save_figure(g, path)
+    write_spec(path, error_pareto_spec(df, fronts, y, title.replace("\n", " "), colours))
+    return path
 
 
 # ---- relative to BVH --------------------------------------------------------------------------

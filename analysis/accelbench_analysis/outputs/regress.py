@@ -343,13 +343,16 @@ class EmbreeRatio:
     denominator: str = ""  # the Embree row divided by, or why there is no ratio
 
 
-def embree_ratios(results: Results, by_id: bool, path: str) -> dict[str, EmbreeRatio]:
-    """render_s_median of each row over that of the Embree row with the same model and
-    render settings in the same file. Several Embree rows (quality/robust variants): the one
-    whose params text sorts first, in every file alike."""
+def embree_ratios(
+    results: Results, by_id: bool, path: str, column: str = "render_s_median"
+) -> dict[str, EmbreeRatio]:
+    """`column` (render_s_median; the history also divides build_s_median) of each row
+    over that of the Embree row with the same model and render settings in the same file.
+    Several Embree rows (quality/robust variants): the one whose params text sorts first,
+    in every file alike."""
     df = results.rows
     settings = [c for c in RENDER_SETTING_COLUMNS if c in df.columns]
-    ok = df[(df["status"] == "ok") & (df["render_s_median"] > 0)]
+    ok = df[(df["status"] == "ok") & (df[column] > 0)]
     embree = ok[ok["accel"] == RATIO_DENOMINATOR].sort_values("params")
     group = ["model"] + settings
     first: dict[tuple, pd.Series] = {}
@@ -359,16 +362,14 @@ def embree_ratios(results: Results, by_id: bool, path: str) -> dict[str, EmbreeR
     for k, r in keyed(df, by_id, path).items():
         if r["accel"] == RATIO_DENOMINATOR:
             continue
-        if r["status"] != "ok" or _missing(r["render_s_median"]):
-            out[k] = EmbreeRatio(math.nan, f"status {r['status']}, no render time")
+        if r["status"] != "ok" or _missing(r[column]):
+            out[k] = EmbreeRatio(math.nan, f"status {r['status']}, no {column}")
             continue
         e = first.get(tuple(str(r[c]) for c in group))
         if e is None:
             out[k] = EmbreeRatio(math.nan, "no Embree row with this model and render settings")
             continue
-        out[k] = EmbreeRatio(
-            float(r["render_s_median"]) / float(e["render_s_median"]), f"embree [{e['params']}]"
-        )
+        out[k] = EmbreeRatio(float(r[column]) / float(e[column]), f"embree [{e['params']}]")
     return out
 
 
@@ -499,8 +500,17 @@ def compare(
     return Comparison(tiers, provenance, warnings, matched_by)
 
 
+VERDICT_HEADING = "# Regression check: "
+
+
+def verdict_of_report(text: str) -> str | None:
+    """The verdict a report written by to_markdown states (PASS, FAIL, ...), or None."""
+    first = text.split("\n", 1)[0]
+    return first[len(VERDICT_HEADING) :].strip() if first.startswith(VERDICT_HEADING) else None
+
+
 def to_markdown(cmp: Comparison, exit_code_note: bool = True) -> str:
-    out = [f"# Regression check: {cmp.verdict}", ""]
+    out = [f"{VERDICT_HEADING}{cmp.verdict}", ""]
     out += [f"- {line}" for line in cmp.provenance]
     out += [f"- combinations matched by {cmp.matched_by}", ""]
     for w in cmp.warnings:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
 from ..inputs.schema import Results
-from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow, summary_line
+from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow, reference_ablation_text, summary_line
 from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
 from .figures import FIGURES, Skipped
 from .formatting import md_escape
@@ -92,6 +92,8 @@ def claims_lines(rows: list[ClaimRow] | None) -> list[str]:
         out.append(
             "  Every claim judged on both has the same verdict here as on the committed reference run."
         )
+    if any(r.reference is not None for r in rows):
+        out.append("  " + reference_ablation_text(rows))
     unsupported = [r for r in rows if r.report.verdict == FAILS]
     if unsupported:
         out.append(

@@ -18,6 +18,7 @@ from ..inputs.schema import ContractError, Results, record_lines, scan_records, 
 from ..mapping.selection import label_of  # noqa: E402
 from ..mapping.styles import Styles  # noqa: E402
 from .figures import DPI, plain_log_ticks  # noqa: E402
+from .interactive import scaling_spec, write_spec  # noqa: E402
 
 TIMES = {"build_s_median": "build", "render_s_median": "render"}
 FAMILY_MARKERS = ["o", "s", "^", "D", "v"]
@@ -72,6 +73,32 @@ def fit_slopes(frame: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def fit_lines(frame: pd.DataFrame, slopes: pd.DataFrame) -> pd.DataFrame:
+    """Each fit drawn as in the figure: from the series' smallest to its largest size,
+    (time, family, structure, triangles, seconds, slope) at both ends."""
+    out = []
+    column = {what: col for col, what in TIMES.items()}
+    for _, f in slopes.iterrows():
+        col = column[f["time"]]
+        g = frame[
+            (frame["structure"] == f["structure"]) & (frame["family"] == f["family"]) & (frame[col] > 0)
+        ]
+        for x in (float(g["triangles"].min()), float(g["triangles"].max())):
+            out.append(
+                {
+                    "time": f["time"],
+                    "family": f["family"],
+                    "structure": f["structure"],
+                    "triangles": x,
+                    "seconds": 10 ** (f["intercept"] + f["slope"] * np.log10(x)),
+                    "slope": f["slope"],
+                }
+            )
+    return pd.DataFrame.from_records(
+        out, columns=["time", "family", "structure", "triangles", "seconds", "slope"]
+    )
+
+
 def _triangles_tick(v: float, _pos) -> str:
     """10000 -> 10k, 1000000 -> 1M."""
     if v >= 1e6:
@@ -81,7 +108,9 @@ def _triangles_tick(v: float, _pos) -> str:
 
 def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Path:
     """Build (left) and render (right) time against triangles, log-log: one colour per
-    structure, one marker per source model, each series with its fitted line and slope."""
+    structure, one marker per source model, each series with its fitted line and slope
+    (the interactive version beside it: the same points and lines)."""
+    lines = fit_lines(frame, slopes)
     styles = Styles(frame["structure"])
     structures = styles.order
     families = sorted(frame["family"].unique())
@@ -93,22 +122,11 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
                 g = frame[(frame["structure"] == s) & (frame["family"] == fam) & (frame[col] > 0)]
                 if g.empty:
                     continue
-                fit = slopes[
-                    (slopes["structure"] == s) & (slopes["family"] == fam) & (slopes["time"] == what)
-                ]
+                fit = lines[(lines["structure"] == s) & (lines["family"] == fam) & (lines["time"] == what)]
                 label = f"{s}, {fam}"
                 if not fit.empty:
-                    f = fit.iloc[0]
-                    xs = np.array([g["triangles"].min(), g["triangles"].max()], dtype=float)
-                    ax.plot(
-                        xs,
-                        10 ** (f["intercept"] + f["slope"] * np.log10(xs)),
-                        "-",
-                        color=colour,
-                        lw=1.2,
-                        alpha=0.8,
-                    )
-                    label += f": slope {f['slope']:.2f}"
+                    ax.plot(fit["triangles"], fit["seconds"], "-", color=colour, lw=1.2, alpha=0.8)
+                    label += f": slope {fit['slope'].iloc[0]:.2f}"
                 ax.plot(
                     g["triangles"],
                     g[col],
@@ -131,6 +149,14 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=DPI, metadata={"Software": None})
     plt.close(fig)
+    points = frame.melt(
+        id_vars=["family", "model", "structure", "triangles"],
+        value_vars=list(TIMES),
+        var_name="time",
+        value_name="seconds",
+    )
+    points["time"] = points["time"].map(TIMES)
+    write_spec(path, scaling_spec(points[points["seconds"] > 0], lines))
     return path
 
 

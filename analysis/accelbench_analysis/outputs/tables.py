@@ -329,6 +329,16 @@ def note_complete_trees(
     )
 
 
+# The kd-tree at Table 3's settings with our defaults, as a row's param_dict: not the
+# ablations' sweeps (other max_prims, max_depth, empty_bonus, mailboxes) on the same model.
+TABLE3_KDTREE = {"max_prims": "1", "max_depth": "auto", "empty_bonus": "0.5", "mailbox": "false"}
+
+
+def is_table3_kdtree(params: dict) -> bool:
+    """A parameter the row does not have (an older CSV's mailbox) counts as its default."""
+    return all(params.get(k, v) == v for k, v in TABLE3_KDTREE.items())
+
+
 def note_what_n(report_nums: pd.DataFrame, results: Results, ablations: pd.DataFrame | None) -> str | None:
     """Which N the report's Equation 5 (kd-tree depth 8 + 1.3 log2 N) and its BVH node counts
     use: its #Primitives (the bunny's vertex count), not the triangle count we build over.
@@ -349,7 +359,7 @@ def note_what_n(report_nums: pd.DataFrame, results: Results, ablations: pd.DataF
     same_n = ablations[(ablations["triangles"] == n) & (ablations["status"] == "ok")]
     found = []
     for _, r in same_n.iterrows():
-        if r["accel"] == "kdtree":
+        if r["accel"] == "kdtree" and is_table3_kdtree(r["param_dict"]):
             found.append(
                 f"its kd-tree (max_depth auto) is {kd_auto_depth_report(n)} deep at most and has {int(r['nodes']):,} nodes"
             )

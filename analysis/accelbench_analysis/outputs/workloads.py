@@ -32,6 +32,7 @@ import seaborn as sns  # noqa: E402
 from ..inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results  # noqa: E402
 from ..mapping.selection import EMBREE_PREFERRED  # noqa: E402
 from .formatting import md_escape  # noqa: E402
+from .interactive import ray_sets_spec, thread_scaling_spec, write_spec  # noqa: E402
 
 BASELINE = "embree"
 
@@ -234,13 +235,23 @@ def ranking_markdown(rank: pd.DataFrame) -> str:
     return "\n".join(out)
 
 
-def ray_set_figure(rows: pd.DataFrame, path: Path) -> Path:
+def hue_palette(labels: pd.Series) -> dict[str, str]:
+    """Seaborn's default colours for a hue, in order of first appearance (its own choice,
+    written out so that the interactive version draws the same)."""
+    order = list(dict.fromkeys(labels))
+    colours = sns.color_palette(None if len(order) <= 10 else "husl", len(order)).as_hex()
+    return dict(zip(order, colours))
+
+
+def ray_set_figure(rows: pd.DataFrame, path: Path, palette: dict[str, str]) -> Path:
     g = sns.catplot(
         data=rows,
         kind="bar",
         x="ray_set",
         y="mrays_per_s",
         hue="structure",
+        hue_order=list(palette),
+        palette=palette,
         col="panel",
         sharey=False,
         height=3.6,
@@ -303,13 +314,15 @@ def thread_scaling_markdown(rows: pd.DataFrame) -> str:
     return "\n".join(out)
 
 
-def thread_scaling_figure(rows: pd.DataFrame, path: Path) -> Path:
+def thread_scaling_figure(rows: pd.DataFrame, path: Path, palette: dict[str, str]) -> Path:
     g = sns.relplot(
         data=rows,
         kind="line",
         x="render_threads",
         y="speedup",
         hue="structure",
+        hue_order=list(palette),
+        palette=palette,
         col="model",
         marker="o",
         height=3.4,
@@ -337,6 +350,7 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
         tables.mkdir(parents=True, exist_ok=True)
         figures.mkdir(parents=True, exist_ok=True)
         table = ray_set_table(rows)
+        palette = hue_palette(rows["structure"])
         table.drop(columns=["panel"]).to_csv(tables / "ray_sets.csv", index=False)
         (tables / "ray_sets.md").write_text(ray_set_markdown(table))
         (tables / "ray_set_ranking.md").write_text(ranking_markdown(ranking(rows)))
@@ -344,7 +358,10 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
             tables / "ray_sets.md",
             tables / "ray_sets.csv",
             tables / "ray_set_ranking.md",
-            ray_set_figure(rows, figures / "ray_sets.png"),
+            ray_set_figure(rows, figures / "ray_sets.png", palette),
+            write_spec(
+                figures / "ray_sets.png", ray_sets_spec(table, list(rows["ray_set"].cat.categories), palette)
+            ),
         ]
     ts = thread_scaling_rows(results)
     if not ts.empty:
@@ -370,6 +387,9 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
         written += [
             tables / "thread_scaling.md",
             tables / "thread_scaling.csv",
-            thread_scaling_figure(ts, figures / "thread_scaling.png"),
+            thread_scaling_figure(ts, figures / "thread_scaling.png", hue_palette(ts["structure"])),
+            write_spec(
+                figures / "thread_scaling.png", thread_scaling_spec(ts[cols], hue_palette(ts["structure"]))
+            ),
         ]
     return written

@@ -146,16 +146,6 @@ std::optional<BvhSplit> partition_at(std::span<BvhPrimRef> refs, int axis, float
     return BvhSplit{mid, axis};
 }
 
-// Object median (report 2.2.1): half the primitives on each side, by centroid order.
-// Balanced by construction, blind to the primitives' sizes and to empty space.
-struct MedianSplit {
-    using Ref = BvhCentroidRef;  // the median looks at centroids only
-    std::optional<BvhSplit> operator()(std::span<Ref> refs, const BvhRangeRequest<Ref>& r) {
-        return equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis], r.centroid_bounds.upper[r.axis]);
-    }
-    detail::EqualCountSplitter<Ref> equal_counts;
-};
-
 // The report's centroid method (equation 1): cut the node's centroid box in half. Adapts
 // to the distribution (sparse regions are cut off quickly) but gives unbalanced trees on
 // clustered input.
@@ -458,7 +448,7 @@ void Bvh::build(const Scene& scene) {
     const BvhTopDownSettings settings{config_.leaf_limit(), config_.max_depth, config_.axis};
     auto build_with = [&](auto&& strategy) { bvh_ = build_bvh_top_down(scene, settings, strategy, counts_); };
     switch (config_.split) {
-        case Split::median: build_with(MedianSplit{}); break;
+        case Split::median: build_with(BvhMedianSplit{}); break;
         case Split::midpoint: build_with(MidpointSplit{}); break;
         case Split::mean: build_with(MeanSplit{}); break;
         case Split::spatial_median: build_with(SpatialMedianSplit(scene)); break;

@@ -402,6 +402,17 @@ private:
 
 }  // namespace detail
 
+// Object median (report 2.2.1): half the primitives on each side, by centroid order.
+// Balanced by construction, blind to the primitives' sizes and to empty space. The
+// median BVH's split, and the tree of the LBVH's build=median (lbvh.h).
+struct BvhMedianSplit {
+    using Ref = BvhCentroidRef;  // the median looks at centroids only
+    std::optional<BvhSplit> operator()(std::span<Ref> refs, const BvhRangeRequest<Ref>& r) {
+        return equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis], r.centroid_bounds.upper[r.axis]);
+    }
+    detail::EqualCountSplitter<Ref> equal_counts;
+};
+
 // The references the builder starts from: one per scene triangle, in scene order.
 inline void put_refs(const Scene& scene, BvhPrimRef* out) {
     for (size_t i = 0; i < scene.triangle_count(); ++i) out[i] = {scene.prim_bounds[i], uint32_t(i)};

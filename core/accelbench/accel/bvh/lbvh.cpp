@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
+#include "accelbench/accel/bvh/bvh_top_down.h"
 #include "accelbench/accel/bvh/morton_code.h"
 #include "accelbench/base/radix_sort.h"
 
@@ -22,8 +23,9 @@ AcceleratorInfo Lbvh::info() {
             {
                 {"build", ParamType::Enum, std::string(kBuildNames[size_t(d.build)]), enum_choices(kBuildNames), 0, 0,
                  "karras: split by binary search, boxes bottom-up, O(N) after the sort (Karras 2012); report: the "
-                 "report's Algorithm 2, each node's box fitted from its primitives and the split by a linear scan. "
-                 "Both give the same tree"},
+                 "report's Algorithm 2, each node's box fitted from its primitives and the split by a linear scan "
+                 "(both give the same tree); median: the codes and the sort, then the median BVH's build and tree, "
+                 "the LBVH the report's section 5.2 measured (one thread)"},
                 {"bits",
                  ParamType::Int,
                  format_param(int64_t(d.bits)),
@@ -93,6 +95,7 @@ Lbvh::Lbvh(const Config& config) : config_(config) {}
 Lbvh::Counts& Lbvh::Counts::operator+=(const Counts& o) {
     equal_code_splits += o.equal_code_splits;
     forced_leaves += o.forced_leaves;
+    degenerate_splits += o.degenerate_splits;
     tasks += o.tasks;
     sort_passes += o.sort_passes;
     sort_skipped_passes += o.sort_skipped_passes;
@@ -284,6 +287,17 @@ void Lbvh::build_with(const Scene& scene) {
             const RadixSortStats sort = radix_sort(sorted, buffers.scratch, 3 * config_.bits, config_.sort_digit_bits);
             counts_.sort_passes = uint64_t(sort.passes);
             counts_.sort_skipped_passes = uint64_t(sort.skipped_passes);
+            if (config_.build == Build::median) {
+                // The report's LBVH: after the codes and the sort, the median BVH's build
+                // over the scene, so the tree is the median BVH's bit for bit.
+                BvhMedianSplit median;
+                BvhTopDownCounts top_down;
+                bvh_ = build_bvh_top_down(scene, {config_.max_prims, config_.max_depth, BvhAxisRule::longest}, median,
+                                          top_down);
+                counts_.forced_leaves = top_down.forced_leaves;
+                counts_.degenerate_splits = top_down.degenerate_splits;
+                return;
+            }
 
             // The leaves' boxes come from the primitives' boxes in sorted order. Gathering
             // them here, in one loop of independent loads, is much cheaper than gathering
@@ -319,6 +333,7 @@ BuildStats Lbvh::build_stats() const {
     s.extra["morton_bits"] = config_.bits;
     s.extra["equal_code_splits"] = double(counts_.equal_code_splits);
     s.extra["forced_leaves"] = double(counts_.forced_leaves);
+    if (config_.build == Build::median) s.extra["degenerate_splits"] = double(counts_.degenerate_splits);
     s.extra["build_tasks"] = double(counts_.tasks);
     s.extra["sort_passes"] = double(counts_.sort_passes);
     s.extra["sort_skipped_passes"] = double(counts_.sort_skipped_passes);

@@ -1,4 +1,4 @@
-#include "config/checked_yaml.h"
+#include "util/checked_yaml.h"
 
 #include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/parser.h>

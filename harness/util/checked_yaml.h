@@ -2,8 +2,8 @@
 // problem becomes one ConfigIssue with the file, line, column and key path
 // (`accelerators[2].kdtree.max_depth`), a value of the wrong type says what it got, an
 // unknown key gets a did-you-mean hint (unknown_name.h), and the caller collects every
-// issue of a document before it refuses it. The benchmark config's loader (config.cpp)
-// reads its keys with these.
+// issue of a document before it refuses it. The benchmark configs (config/) and the model
+// registry, configs/models.yaml (models/), are read with these.
 #pragma once
 
 #include <yaml-cpp/yaml.h>

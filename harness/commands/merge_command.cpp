@@ -1,0 +1,85 @@
+// `accelbench merge`: result files (shards) joined into one, or one column taken from
+// another run of the same config (--take-column).
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "commands/args.h"
+#include "commands/cli.h"
+#include "csv/results.h"
+#include "plan/combinations.h"
+#include "plan/shard_check.h"
+
+namespace accelbench {
+
+namespace {
+
+const char* kMergeUsage =
+    "usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
+    "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
+    "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
+    "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa), config\n"
+    "  or record of inputs (NAME.inputs.csv: sha256 of the config, mesh and ray files) differs,\n"
+    "  or that have no such record, unless --allow-mixed; a combination present in two inputs;\n"
+    "  and an input a run is still writing (it holds the file's lock).\n"
+    "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
+    "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"
+    "  and refuses rows that are not of CONFIG or measured from other contents than it has now\n"
+    "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
+    "  instructions of a callgrind run added to a timed run of the same config)\n";
+
+// OUT.csv is IN.csv with `column` taken from FROM.csv.
+int take_one_column(const std::vector<std::string>& files, const std::string& column, bool allow_mixed) {
+    if (files.size() != 3) return usage_error("merge", kMergeUsage, "--take-column needs OUT.csv IN.csv FROM.csv");
+    try {
+        const size_t n = take_column(files[0], files[1], files[2], column, allow_mixed);
+        std::fprintf(stderr, "accelbench merge: %s written with %s of %zu rows taken from %s\n", files[0].c_str(),
+                     column.c_str(), n, files[2].c_str());
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "accelbench merge: %s\n", e.what());
+        return 2;
+    }
+    return 0;
+}
+
+}  // namespace
+
+int merge_command(int argc, char** argv) {
+    bool allow_mixed = false;
+    std::string take, config_path, shards_text;
+    std::vector<std::string> files;
+    Args args("merge", kMergeUsage, argc, argv);
+    if (auto code = args.walk([&] {
+            if (args.flag("--allow-mixed")) allow_mixed = true;
+            else if (args.value("--take-column", take) || args.value("--config", config_path) ||
+                     args.value("--shards", shards_text) || args.positional(files))
+                return;
+            else args.unknown();
+        }))
+        return *code;
+    uint64_t shards = 1;
+    if (!shards_text.empty()) {
+        try {
+            shards = parse_shard("0/" + shards_text).count;
+        } catch (const std::invalid_argument&) {
+            return args.error("--shards expects a count > 0, got '" + shards_text + "'");
+        }
+    }
+    if (files.size() < 2) return args.error("give OUT.csv and at least one IN.csv");
+    if (!take.empty()) return take_one_column(files, take, allow_mixed);
+    if (!config_path.empty())
+        if (int rc = check_shards_complete(config_path, shards, {files.begin() + 1, files.end()}, allow_mixed); rc != 0)
+            return rc;
+    try {
+        const size_t rows = merge_results(files[0], {files.begin() + 1, files.end()}, allow_mixed);
+        std::fprintf(stderr, "accelbench merge: %zu rows from %zu files written to %s\n", rows, files.size() - 1,
+                     files[0].c_str());
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "accelbench merge: %s\n", e.what());
+        return 2;
+    }
+    return 0;
+}
+
+}  // namespace accelbench
