@@ -576,6 +576,12 @@ def read_reps(path: Path) -> pd.DataFrame:
     return df
 
 
+def is_companion(path: str | Path) -> bool:
+    """A file the harness writes beside a results CSV (NAME.reps.csv: the repetitions;
+    NAME.inputs.csv: the record of its inputs), not a results file itself."""
+    return Path(path).name.endswith((".reps.csv", ".inputs.csv"))
+
+
 def reps_path(path: str | Path) -> Path:
     p = Path(path)
     return p.with_name(p.name[:-4] + ".reps.csv" if p.name.endswith(".csv") else p.name + ".reps.csv")
