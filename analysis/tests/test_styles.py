@@ -6,6 +6,7 @@ from synthetic import BVH, KD, LBVH, row, write_csv
 from accelbench_analysis.inputs.schema import load_results
 from accelbench_analysis.mapping.selection import Picker, label_of
 from accelbench_analysis.mapping.styles import Styles, accel_styles
+from accelbench_analysis.outputs.comparison import three_way
 from accelbench_analysis.outputs.figures import structure_frame
 from accelbench_analysis.outputs.tables import build_tables, to_markdown
 
@@ -32,6 +33,13 @@ def test_an_unknown_structure_is_in_every_table_and_figure_with_its_own_colour(t
     assert "octree" in [s.label for s in Picker(results).structures()]
     tables = build_tables(results, report_nums)
     assert "octree" in "\n".join(to_markdown(d) for d in tables["table4"])
+    # The three-way comparison (comparison.md, REPORT.md) too, with its own numbers.
+    octree = [r for r in three_way(results, None, report_nums) if r.structure == "octree"]
+    assert {(r.metric, r.this) for r in octree if r.model.startswith("Stanford bunny")} >= {
+        ("build", 0.3),
+        ("render", 0.9),
+        ("nodes", 700),
+    }
     frame = structure_frame(results)
     labels = set(frame["structure"])
     assert {"octree", "wide BVH (8, SIMD)", "wide BVH (4, SIMD)"} <= labels

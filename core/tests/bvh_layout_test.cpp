@@ -65,21 +65,22 @@ TEST(FlatBvh, FinalizeCopiesTrianglesAndMeasuresDepth) {
 
 TEST(BvhMetrics, CountsAndSahCostByHand) {
     HandTree t;
-    const BvhMetrics m = measure_bvh(t.bvh);
+    const BuildStats m = measure_bvh(t.bvh);
     EXPECT_EQ(m.nodes, 7u);
     EXPECT_EQ(m.leaves, 4u);
     EXPECT_EQ(m.max_depth, 2u);
-    EXPECT_DOUBLE_EQ(m.avg_leaf_size, 1.0);
+    ASSERT_TRUE(m.avg_leaf_size.has_value());
+    EXPECT_DOUBLE_EQ(*m.avg_leaf_size, 1.0);
     EXPECT_EQ(m.memory_bytes, 7u * 32 + 4u * 4 + 4u * 36);
     // Flat boxes: area 2 * dx * dy. Inner: root 14, A 6, B 6; leaves 2 each with 1 prim.
     ASSERT_TRUE(m.sah_cost.has_value());
     EXPECT_DOUBLE_EQ(*m.sah_cost, (14.0 + 6.0 + 6.0 + 4 * 2.0) / 14.0);
 
     FlatBvh empty;
-    const BvhMetrics e = measure_bvh(empty);
+    const BuildStats e = measure_bvh(empty);
     EXPECT_EQ(e.nodes, 0u);
     EXPECT_FALSE(e.sah_cost.has_value());
-    EXPECT_FALSE(bvh_build_stats(empty).avg_leaf_size.has_value());
+    EXPECT_FALSE(e.avg_leaf_size.has_value());
 }
 
 TEST(BvhTraversal, OrderedCountsOnHandTree) {

@@ -114,8 +114,10 @@ TEST_P(StiffParams, TerminatesWithBoundedMemoryOrRefusesClearly) {
                 rss_reset ? "" : " (process-wide peak)");
     ASSERT_TRUE(stats.memory_bytes.has_value()) << "our structures report their memory";
     EXPECT_LE(*stats.memory_bytes, memory_limit);
-    if (auto it = stiff.params.find("max_depth"); it != stiff.params.end() && stats.max_depth) {
-        EXPECT_LE(*stats.max_depth, std::stoull(it->second));
+    const AcceleratorInfo& info = *find_accelerator(stiff.accelerator);
+    const auto limit = info.depth_limit(resolve_params(info.name, info.params, stiff.params));
+    if (limit && stats.max_depth) {
+        EXPECT_LE(*stats.max_depth, *limit);
     }
     EXPECT_LT(rss_after - rss_before, uint64_t(256) << 20) << "peak RSS grew by more than 256 MiB";
 

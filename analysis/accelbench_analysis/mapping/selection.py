@@ -262,11 +262,17 @@ class Picker:
         # Robustness-catalogue verdicts are not measurements of a structure on a model.
         self.rows = results.measured_rows()
         self.models = set(self.rows["model"])
+        self._structures: list[Structure] | None = None
 
     def structures(self) -> list[Structure]:
         """STRUCTURES, then one structure at its defaults for every other accelerator the data
         holds (a newly registered one appears in every table and figure with no edit here),
         labelled by the rows' `label` column where the CSV has it, else by its name."""
+        if self._structures is None:
+            self._structures = self._find_structures()
+        return self._structures
+
+    def _find_structures(self) -> list[Structure]:
         known = {s.spec.accel for s in STRUCTURES} | set(NOT_STRUCTURES)
         out = list(STRUCTURES)
         for accel in dict.fromkeys(self.rows["accel"]) if len(self.rows) else []:
@@ -376,7 +382,7 @@ def setting_spec(setting: str, structure: str, picker: Picker, model: str, depth
     """Our spec for one of the report's settings ("default" or a Table 2 setting)."""
     parsed = parse_setting(setting)
     if parsed is None:
-        return STRUCTURE[structure].spec
+        return next(s for s in picker.structures() if s.key == structure).spec
     if structure != "kdtree":
         raise ValueError(f"Table 2 settings apply to the kd-tree only, not {structure}")
     name, value = parsed

@@ -23,7 +23,7 @@ import pandas as pd
 
 from ..inputs.report_numbers import REPORT_MODEL, TABLE2_MODEL, TABLE4_MODELS, TABLE5_MODELS, report_value
 from ..inputs.schema import Results
-from ..mapping.selection import STRUCTURES
+from ..mapping.selection import Structure
 from .claims import Missing, OurSource
 from .formatting import fmt_count, fmt_sig, is_missing, md_table
 from .tables import METRIC, ratio
@@ -51,15 +51,24 @@ class ThreeWay:
         return ratio(self.this, self.reference)
 
 
-def _cells(report_nums: pd.DataFrame) -> list[tuple[str, str, str, str]]:
+def _cells(report_nums: pd.DataFrame, structures: list[Structure]) -> list[tuple[str, str, str, str]]:
     """(report model, structure key, setting, label) of every cell compared, table order."""
     out = [
         (TABLE2_MODEL, "kdtree", s, f"kd-tree {s}")
         for s in report_nums.loc[report_nums["table"] == 2, "setting"]
     ]
     for rm in TABLE4_MODELS + TABLE5_MODELS:
-        out += [(rm, s.key, "default", s.label) for s in STRUCTURES]
+        out += [(rm, s.key, "default", s.label) for s in structures]
     return out
+
+
+def _structures(*sources: OurSource | None) -> list[Structure]:
+    """STRUCTURES, then every other structure either run measured, in order of appearance."""
+    out: dict[str, Structure] = {}
+    for src in sources:
+        for s in src.picker.structures() if src is not None else []:
+            out.setdefault(s.key, s)
+    return list(out.values())
 
 
 def _ours(src: OurSource | None, rm: str, structure: str, metric: str, setting: str) -> float | None:
@@ -75,12 +84,13 @@ def three_way(this: Results, reference: Results | None, report_nums: pd.DataFram
     """Every cell where this run or the reference run has a number."""
     here = OurSource(this, report_nums)
     there = OurSource(reference, report_nums) if reference is not None else None
+    structures = _structures(here, there)
     out = []
     for metric in TIME_METRICS + COUNT_METRICS:
-        for rm, skey, setting, label in _cells(report_nums):
+        for rm, skey, setting, label in _cells(report_nums, structures):
             ours_model = here.model(rm)
             model = REPORT_MODEL[rm].label + (f" → {ours_model}" if REPORT_MODEL[rm].stand_in else "")
-            s = next(s for s in STRUCTURES if s.key == skey)
+            s = next(s for s in structures if s.key == skey)
             rep = (
                 report_value(report_nums, rm, s.report_accel, setting, METRIC[metric].report)
                 if s.report_accel

@@ -123,6 +123,10 @@ struct AcceleratorInfo {
     // Code that is not ours (a production library as baseline): a robustness failure is a
     // finding to report, not a bug the tests hold against it.
     bool third_party = false;
+    // The deepest tree (BuildStats::max_depth) these resolved parameters allow, where they
+    // bound it: robustness cases hold the structure to it. Empty: no bound of its own.
+    std::function<std::optional<uint64_t>(const ParamSet&)> depth_limit =
+        [](const ParamSet&) -> std::optional<uint64_t> { return std::nullopt; };
 };
 
 // A label that does not depend on the parameters.

@@ -164,42 +164,59 @@ struct LeafCluster {
 constexpr Vec3 kGround{0.30f, 0.36f, 0.15f}, kBark{0.28f, 0.19f, 0.11f};
 constexpr Vec3 kBroadLeaf{0.20f, 0.42f, 0.10f}, kNeedle{0.07f, 0.24f, 0.09f};
 
-ProceduralScene make_forest(const ParamSet& p) {
-    const int64_t target = p.get_int("triangles");
-    SplitMix64 rng(mix_seed(uint64_t(p.get_int("seed")), 0xF0235Full));
-    ProceduralScene out;
-    out.scene.name = scene_name("forest", p);
-    ColouredSoupBuilder mesh(out);
+// How big the forest is: about one tree per 10k triangles, so leaves stay small and dense
+// at any size.
+struct ForestLayout {
+    int trees;
+    float radius;       // metres
+    float ground_half;  // half the ground's side: reaches far toward the horizon
+};
 
-    // About one tree per 10k triangles, so leaves stay small and dense at any size.
+ForestLayout forest_layout(int64_t target) {
     const int trees = std::clamp(int(std::lround(double(target) / 10000.0)), 2, 60);
-    const float forest_radius = 6.0f * std::sqrt(float(trees)) + 10.0f;  // metres
-    const float ground_half = 6.0f * forest_radius;                      // reaches far toward the horizon
+    const float forest_radius = 6.0f * std::sqrt(float(trees)) + 10.0f;
+    return {trees, forest_radius, 6.0f * forest_radius};
+}
 
-    // Gently rolling ground, a grid of about 0.8% of the triangles.
-    const float ph0 = rng.uniform(0, 2 * kPi), ph1 = rng.uniform(0, 2 * kPi), ph2 = rng.uniform(0, 2 * kPi);
-    auto ground_height = [&](float x, float z) {
+// Gently rolling ground: the sum of two waves with random phases.
+struct Ground {
+    float ph0 = 0, ph1 = 0, ph2 = 0;
+    float height(float x, float z) const {
         return 0.8f * std::sin(0.07f * x + ph0) * std::cos(0.05f * z + ph1) + 0.4f * std::sin(0.13f * (x + z) + ph2);
-    };
+    }
+};
+
+// The ground as a grid of about 0.8% of the triangles.
+Ground build_ground(ColouredSoupBuilder& mesh, SplitMix64& rng, const ForestLayout& forest, int64_t target) {
+    Ground ground;
+    ground.ph0 = rng.uniform(0, 2 * kPi);
+    ground.ph1 = rng.uniform(0, 2 * kPi);
+    ground.ph2 = rng.uniform(0, 2 * kPi);
+    const float ground_half = forest.ground_half;
     const int grid = std::clamp(int(std::sqrt(double(target) * 0.004)), 2, 48);
     const float cell = 2 * ground_half / float(grid);
     for (int i = 0; i < grid; ++i)
         for (int j = 0; j < grid; ++j) {
             const float x0 = -ground_half + cell * float(i), z0 = -ground_half + cell * float(j);
             const float x1 = x0 + cell, z1 = z0 + cell;
-            mesh.quad({x0, ground_height(x0, z0), z0}, {x0, ground_height(x0, z1), z1}, {x1, ground_height(x1, z1), z1},
-                      {x1, ground_height(x1, z0), z0}, vary(rng, kGround, 0.08f));
+            mesh.quad({x0, ground.height(x0, z0), z0}, {x0, ground.height(x0, z1), z1}, {x1, ground.height(x1, z1), z1},
+                      {x1, ground.height(x1, z0), z0}, vary(rng, kGround, 0.08f));
         }
+    return ground;
+}
 
-    // Groves: trees gather around a few centres, keeping a minimum gap between trunks.
-    const int groves = std::max(1, trees / 5);
+// Groves: trees gather around a few centres, keeping a minimum gap between trunks. The
+// trunks' positions on the ground plane (y = 0).
+std::vector<Vec3> place_trunks(SplitMix64& rng, const ForestLayout& forest) {
+    const float forest_radius = forest.radius;
+    const int groves = std::max(1, forest.trees / 5);
     std::vector<Vec3> grove_centres;
     for (int g = 0; g < groves; ++g) {
         const float r = 0.6f * forest_radius * std::sqrt(rng.uniform()), a = rng.uniform(0, 2 * kPi);
         grove_centres.push_back({r * std::cos(a), 0, r * std::sin(a)});
     }
     std::vector<Vec3> trunks;
-    for (int t = 0; t < trees; ++t) {
+    for (int t = 0; t < forest.trees; ++t) {
         Vec3 best;
         for (int attempt = 0; attempt < 40; ++attempt) {
             const Vec3 c = grove_centres[rng.below(uint32_t(groves))];
@@ -217,57 +234,58 @@ ProceduralScene make_forest(const ParamSet& p) {
         }
         trunks.push_back(best);
     }
+    return trunks;
+}
 
-    // Trunks and branches first (their count is fixed); leaves take what is left.
-    std::vector<LeafCluster> clusters;
-    float tallest = 0;
-    for (const Vec3& base_xz : trunks) {
-        const Vec3 base{base_xz.x, ground_height(base_xz.x, base_xz.z) - 0.3f, base_xz.z};
-        const bool conifer = rng.uniform() < 0.35f;
-        const float h = conifer ? rng.uniform(12, 20) : rng.uniform(9, 16);
-        tallest = std::max(tallest, h);
-        const Vec3 leaf_colour = vary(rng, conifer ? kNeedle : kBroadLeaf, 0.2f);
-        // The trunk: three tapering segments with a slight random lean.
-        const float trunk_top = conifer ? 0.97f * h : 0.62f * h;
-        const Vec3 lean{rng.uniform(-0.04f, 0.04f) * h, 0, rng.uniform(-0.04f, 0.04f) * h};
-        const float r_base = (conifer ? 0.028f : 0.035f) * h, r_top = conifer ? 0.006f * h : 0.022f * h;
-        Vec3 prev = base;
-        for (int s = 1; s <= 3; ++s) {
-            const float f = float(s) / 3.0f;
-            const Vec3 next = base + Vec3{0, trunk_top * f, 0} + lean * (f * f);
-            mesh.tube(prev, next, r_base + (r_top - r_base) * (f - 1.0f / 3.0f), r_base + (r_top - r_base) * f, 7,
-                      kBark);
-            prev = next;
-        }
-        const Vec3 top = prev;
-        if (conifer) {
-            // Whorls of needles, widest at the bottom: a layered cone.
-            const int whorls = 6 + int(rng.below(3));
-            for (int w = 0; w < whorls; ++w) {
-                const float f = float(w) / float(whorls);
-                const float r = (0.30f * (1.0f - f) + 0.05f) * h * rng.uniform(0.9f, 1.1f);
-                const Vec3 c = base + Vec3{0, (0.22f + 0.72f * f) * h, 0} + lean * (f * f);
-                clusters.push_back({c, {r, 0.07f * h, r}, true, leaf_colour});
-            }
-        } else {
-            // Branches from the upper trunk, each ending in a leaf cluster, plus one on top.
-            const int branches = 4 + int(rng.below(3));
-            for (int b = 0; b < branches; ++b) {
-                const float az = 2 * kPi * (float(b) + rng.uniform(-0.3f, 0.3f)) / float(branches);
-                const float el = rng.uniform(0.6f, 1.05f);  // radians above the horizontal
-                const float from = rng.uniform(0.45f, 0.62f) / 0.62f;
-                const Vec3 start = base + (top - base) * from;
-                const Vec3 dir{std::cos(az) * std::cos(el), std::sin(el), std::sin(az) * std::cos(el)};
-                const Vec3 end = start + dir * (rng.uniform(0.25f, 0.35f) * h);
-                mesh.tube(start, end, 0.012f * h, 0.007f * h, 5, kBark);
-                const float r = rng.uniform(0.17f, 0.24f) * h;
-                clusters.push_back({end + Vec3{0, 0.3f * r, 0}, {r, 0.75f * r, r}, false, leaf_colour});
-            }
-            const float r = rng.uniform(0.2f, 0.25f) * h;
-            clusters.push_back({top + Vec3{0, 0.6f * r, 0}, {r, 0.8f * r, r}, false, leaf_colour});
-        }
+// One tree standing at `base`: its trunk and branches, its leaf clusters appended to
+// `clusters` (filled with leaves later, when the leaves' budget is known). Returns its height.
+float build_tree(ColouredSoupBuilder& mesh, SplitMix64& rng, Vec3 base, std::vector<LeafCluster>& clusters) {
+    const bool conifer = rng.uniform() < 0.35f;
+    const float h = conifer ? rng.uniform(12, 20) : rng.uniform(9, 16);
+    const Vec3 leaf_colour = vary(rng, conifer ? kNeedle : kBroadLeaf, 0.2f);
+    // The trunk: three tapering segments with a slight random lean.
+    const float trunk_top = conifer ? 0.97f * h : 0.62f * h;
+    const Vec3 lean{rng.uniform(-0.04f, 0.04f) * h, 0, rng.uniform(-0.04f, 0.04f) * h};
+    const float r_base = (conifer ? 0.028f : 0.035f) * h, r_top = conifer ? 0.006f * h : 0.022f * h;
+    Vec3 prev = base;
+    for (int s = 1; s <= 3; ++s) {
+        const float f = float(s) / 3.0f;
+        const Vec3 next = base + Vec3{0, trunk_top * f, 0} + lean * (f * f);
+        mesh.tube(prev, next, r_base + (r_top - r_base) * (f - 1.0f / 3.0f), r_base + (r_top - r_base) * f, 7, kBark);
+        prev = next;
     }
+    const Vec3 top = prev;
+    if (conifer) {
+        // Whorls of needles, widest at the bottom: a layered cone.
+        const int whorls = 6 + int(rng.below(3));
+        for (int w = 0; w < whorls; ++w) {
+            const float f = float(w) / float(whorls);
+            const float r = (0.30f * (1.0f - f) + 0.05f) * h * rng.uniform(0.9f, 1.1f);
+            const Vec3 c = base + Vec3{0, (0.22f + 0.72f * f) * h, 0} + lean * (f * f);
+            clusters.push_back({c, {r, 0.07f * h, r}, true, leaf_colour});
+        }
+        return h;
+    }
+    // Branches from the upper trunk, each ending in a leaf cluster, plus one on top.
+    const int branches = 4 + int(rng.below(3));
+    for (int b = 0; b < branches; ++b) {
+        const float az = 2 * kPi * (float(b) + rng.uniform(-0.3f, 0.3f)) / float(branches);
+        const float el = rng.uniform(0.6f, 1.05f);  // radians above the horizontal
+        const float from = rng.uniform(0.45f, 0.62f) / 0.62f;
+        const Vec3 start = base + (top - base) * from;
+        const Vec3 dir{std::cos(az) * std::cos(el), std::sin(el), std::sin(az) * std::cos(el)};
+        const Vec3 end = start + dir * (rng.uniform(0.25f, 0.35f) * h);
+        mesh.tube(start, end, 0.012f * h, 0.007f * h, 5, kBark);
+        const float r = rng.uniform(0.17f, 0.24f) * h;
+        clusters.push_back({end + Vec3{0, 0.3f * r, 0}, {r, 0.75f * r, r}, false, leaf_colour});
+    }
+    const float r = rng.uniform(0.2f, 0.25f) * h;
+    clusters.push_back({top + Vec3{0, 0.6f * r, 0}, {r, 0.8f * r, r}, false, leaf_colour});
+    return h;
+}
 
+// The leaves: everything the trees left of the triangle target, shared among the clusters.
+void fill_leaves(ColouredSoupBuilder& mesh, SplitMix64& rng, const std::vector<LeafCluster>& clusters, int64_t target) {
     const size_t fixed = mesh.triangles();
     if (size_t(target) < fixed + 10 * clusters.size())
         too_few_triangles("forest", target, fixed + 10 * clusters.size());
@@ -295,13 +313,34 @@ ProceduralScene make_forest(const ParamSet& p) {
             else mesh.random_triangle(rng, at, r, 0.866f * r, colour);
         }
     }
+}
+
+// The stages in the order they draw from the one random stream: ground, trunk positions,
+// trees (trunks and branches first, their count is fixed), then the leaves take what is left.
+ProceduralScene make_forest(const ParamSet& p) {
+    const int64_t target = p.get_int("triangles");
+    SplitMix64 rng(mix_seed(uint64_t(p.get_int("seed")), 0xF0235Full));
+    ProceduralScene out;
+    out.scene.name = scene_name("forest", p);
+    ColouredSoupBuilder mesh(out);
+
+    const ForestLayout forest = forest_layout(target);
+    const Ground ground = build_ground(mesh, rng, forest, target);
+    const std::vector<Vec3> trunks = place_trunks(rng, forest);
+    std::vector<LeafCluster> clusters;
+    float tallest = 0;
+    for (const Vec3& base_xz : trunks) {
+        const Vec3 base{base_xz.x, ground.height(base_xz.x, base_xz.z) - 0.3f, base_xz.z};
+        tallest = std::max(tallest, build_tree(mesh, rng, base, clusters));
+    }
+    fill_leaves(mesh, rng, clusters, target);
 
     // The view: from the south-east, low enough that the sky shows above the far edge of
     // the ground; the light: a high sun to the right, so trees cast shadows toward the
     // viewer's left.
     const Vec3 target_point{0, 0.3f * tallest, 0};
-    out.camera = orbit_camera(target_point, 35.0f, 16.0f, 1.9f * forest_radius);
-    out.light = Light{Vec3{0, 0, 0} + normalize(Vec3{0.9f, 1.3f, -0.2f}) * (4.0f * forest_radius)};
+    out.camera = orbit_camera(target_point, 35.0f, 16.0f, 1.9f * forest.radius);
+    out.light = Light{Vec3{0, 0, 0} + normalize(Vec3{0.9f, 1.3f, -0.2f}) * (4.0f * forest.radius)};
     out.scene.finalize();
     return out;
 }
@@ -413,94 +452,110 @@ void build_palm(ColouredSoupBuilder& mesh, SplitMix64& rng, Vec3 base) {
     }
 }
 
-ProceduralScene make_city(const ParamSet& p) {
-    const int64_t target = p.get_int("triangles");
-    const uint64_t seed = uint64_t(p.get_int("seed"));
-    SplitMix64 rng(mix_seed(seed, 0xC17Cull));
-    ProceduralScene out;
-    out.scene.name = scene_name("city", p);
-    ColouredSoupBuilder mesh(out);
+// How big the city is: about 6k triangles per block of four buildings at any size.
+struct CityLayout {
+    int blocks;  // along each side of the grid
+    float block = 44.0f, street = 12.0f, pitch = 56.0f;
+    float half;           // half the grid's side
+    int palms_per_block;  // at the block's corners
+};
 
-    // About 6k triangles per block of four buildings at any size.
-    const int blocks = std::clamp(int(std::lround(std::sqrt(double(target) / 6000.0))), 2, 12);
-    const float block = 44.0f, street = 12.0f, pitch = block + street;
-    const float half = 0.5f * pitch * float(blocks);
-    const int palms_per_block = int(std::min<int64_t>(4, target / 20000));
+CityLayout city_layout(int64_t target) {
+    CityLayout city;
+    city.blocks = std::clamp(int(std::lround(std::sqrt(double(target) / 6000.0))), 2, 12);
+    city.pitch = city.block + city.street;
+    city.half = 0.5f * city.pitch * float(city.blocks);
+    city.palms_per_block = int(std::min<int64_t>(4, target / 20000));
+    return city;
+}
 
-    // Streets: one big asphalt quad reaching well beyond the grid, so no view shows its edge.
-    const float g = 3.0f * half + 2.0f * pitch;
-    mesh.quad({-g, 0, -g}, {-g, 0, g}, {g, 0, g}, {g, 0, -g}, kAsphalt);
-
+// The tiers of the city's buildings, and which of them have a roof for rooftop extras.
+struct Buildings {
     std::vector<Tier> tiers;
-    std::vector<size_t> roof_tiers;  // tiers whose roof can take rooftop extras
-    for (int bi = 0; bi < blocks; ++bi)
-        for (int bj = 0; bj < blocks; ++bj) {
-            const float bx = -half + pitch * float(bi) + 0.5f * street, bz = -half + pitch * float(bj) + 0.5f * street;
-            const float kerb = 0.2f;
-            mesh.box({{bx, 0, bz}, {bx + block, kerb, bz + block}}, kPavement, false);
-            for (int li = 0; li < 2; ++li)
-                for (int lj = 0; lj < 2; ++lj) {
-                    // A lot of 20 m x 20 m; the building's footprint is 12-18 m a side.
-                    const float lx = bx + 2.0f + 20.0f * float(li), lz = bz + 2.0f + 20.0f * float(lj);
-                    const float w = rng.uniform(12, 18), d = rng.uniform(12, 18);
-                    const float x0 = lx + (20.0f - w) * rng.uniform(0.2f, 0.8f);
-                    const float z0 = lz + (20.0f - d) * rng.uniform(0.2f, 0.8f);
-                    // Taller toward the centre: a skyline, not a carpet.
-                    const Vec3 centre{x0 + 0.5f * w, 0, z0 + 0.5f * d};
-                    const float falloff = std::exp(-dot(centre, centre) / (0.45f * half * half));
-                    const float height = 10.0f + 55.0f * falloff * rng.uniform(0.4f, 1.3f) + rng.uniform(0, 10);
-                    const int levels = height > 25 ? 1 + int(rng.below(3)) : 1 + int(rng.below(2));
-                    const Vec3 colour = vary(rng, kFacadeColours[rng.below(6)], 0.06f);
-                    Bounds3 fp{{x0, kerb, z0}, {x0 + w, kerb, z0 + d}};
-                    float y = kerb;
-                    for (int t = 0; t < levels; ++t) {
-                        const float share = t + 1 == levels ? 1.0f : rng.uniform(0.45f, 0.6f);
-                        const float top = t + 1 == levels ? kerb + height : y + share * (kerb + height - y);
-                        tiers.push_back({{{fp.lower.x, y, fp.lower.z}, {fp.upper.x, top, fp.upper.z}}, colour});
-                        // A cornice slab crowns each tier; its top is the roof.
-                        mesh.box({{fp.lower.x - 0.4f, top - 0.5f, fp.lower.z - 0.4f},
-                                  {fp.upper.x + 0.4f, top + 0.3f, fp.upper.z + 0.4f}},
-                                 colour * 0.9f);
-                        roof_tiers.push_back(tiers.size() - 1);
-                        // The next tier sets back 1.5-3 m a side (keeping at least 5 m).
-                        const float inset =
-                            std::min(rng.uniform(1.5f, 3.0f),
-                                     0.5f * (std::min(fp.upper.x - fp.lower.x, fp.upper.z - fp.lower.z) - 5.0f));
-                        fp = {{fp.lower.x + std::max(0.0f, inset), top, fp.lower.z + std::max(0.0f, inset)},
-                              {fp.upper.x - std::max(0.0f, inset), top, fp.upper.z - std::max(0.0f, inset)}};
-                        y = top;
-                    }
-                    // The top roof's machinery: air-conditioning boxes, a water tank, an antenna.
-                    const Bounds3& roof = tiers.back().box;
-                    const float ry = roof.upper.y + 0.3f;
-                    auto roof_point = [&](float margin) {
-                        return Vec3{rng.uniform(roof.lower.x + margin, roof.upper.x - margin), ry,
-                                    rng.uniform(roof.lower.z + margin, roof.upper.z - margin)};
-                    };
-                    const int units = 1 + int(rng.below(3));
-                    for (int u = 0; u < units; ++u) {
-                        const Vec3 c = roof_point(2.0f);
-                        const float sx = rng.uniform(0.8f, 1.8f), sz = rng.uniform(0.8f, 1.8f),
-                                    sy = rng.uniform(0.6f, 1.4f);
-                        mesh.box({{c.x - sx, ry, c.z - sz}, {c.x + sx, ry + sy, c.z + sz}}, kMetal, false);
-                    }
-                    const Vec3 tank = roof_point(2.0f);
-                    const float tank_h = rng.uniform(1.5f, 3.0f), tank_r = rng.uniform(0.8f, 1.3f);
-                    mesh.tube(tank, tank + Vec3{0, tank_h, 0}, tank_r, tank_r, 8, kRoofGrey);
-                    mesh.disc(tank + Vec3{0, tank_h, 0}, tank_r, 8, kRoofGrey);
-                    const Vec3 mast = roof_point(1.0f);
-                    const float mast_h = rng.uniform(3.0f, 9.0f);
-                    mesh.box({{mast.x - 0.1f, ry, mast.z - 0.1f}, {mast.x + 0.1f, ry + mast_h, mast.z + 0.1f}}, kMetal,
-                             false);
-                }
-            // Palms on the pavement, near the block's corners.
-            for (int k = 0; k < palms_per_block; ++k) {
-                const float px = k & 1 ? bx + block - 1.0f : bx + 1.0f, pz = k & 2 ? bz + block - 1.0f : bz + 1.0f;
-                build_palm(mesh, rng, {px + rng.uniform(-0.3f, 0.3f), kerb, pz + rng.uniform(-0.3f, 0.3f)});
-            }
-        }
+    std::vector<size_t> roof_tiers;
+};
 
-    // Window scale: the smallest (most windows) whose facades still fit in the budget.
+constexpr float kKerb = 0.2f;  // the pavement's height
+
+// A building's tiers on the footprint `fp` (at kerb height), up to `height` above the
+// kerb, each crowned by a cornice slab and the next set back.
+void build_tiers(ColouredSoupBuilder& mesh, SplitMix64& rng, Bounds3 fp, float height, int levels, Vec3 colour,
+                 Buildings& city) {
+    float y = kKerb;
+    for (int t = 0; t < levels; ++t) {
+        const float share = t + 1 == levels ? 1.0f : rng.uniform(0.45f, 0.6f);
+        const float top = t + 1 == levels ? kKerb + height : y + share * (kKerb + height - y);
+        city.tiers.push_back({{{fp.lower.x, y, fp.lower.z}, {fp.upper.x, top, fp.upper.z}}, colour});
+        // A cornice slab crowns each tier; its top is the roof.
+        mesh.box(
+            {{fp.lower.x - 0.4f, top - 0.5f, fp.lower.z - 0.4f}, {fp.upper.x + 0.4f, top + 0.3f, fp.upper.z + 0.4f}},
+            colour * 0.9f);
+        city.roof_tiers.push_back(city.tiers.size() - 1);
+        // The next tier sets back 1.5-3 m a side (keeping at least 5 m).
+        const float inset = std::min(rng.uniform(1.5f, 3.0f),
+                                     0.5f * (std::min(fp.upper.x - fp.lower.x, fp.upper.z - fp.lower.z) - 5.0f));
+        fp = {{fp.lower.x + std::max(0.0f, inset), top, fp.lower.z + std::max(0.0f, inset)},
+              {fp.upper.x - std::max(0.0f, inset), top, fp.upper.z - std::max(0.0f, inset)}};
+        y = top;
+    }
+}
+
+// The top roof's machinery: air-conditioning boxes, a water tank, an antenna.
+void build_roof_machinery(ColouredSoupBuilder& mesh, SplitMix64& rng, const Bounds3& roof) {
+    const float ry = roof.upper.y + 0.3f;
+    auto roof_point = [&](float margin) {
+        return Vec3{rng.uniform(roof.lower.x + margin, roof.upper.x - margin), ry,
+                    rng.uniform(roof.lower.z + margin, roof.upper.z - margin)};
+    };
+    const int units = 1 + int(rng.below(3));
+    for (int u = 0; u < units; ++u) {
+        const Vec3 c = roof_point(2.0f);
+        const float sx = rng.uniform(0.8f, 1.8f), sz = rng.uniform(0.8f, 1.8f), sy = rng.uniform(0.6f, 1.4f);
+        mesh.box({{c.x - sx, ry, c.z - sz}, {c.x + sx, ry + sy, c.z + sz}}, kMetal, false);
+    }
+    const Vec3 tank = roof_point(2.0f);
+    const float tank_h = rng.uniform(1.5f, 3.0f), tank_r = rng.uniform(0.8f, 1.3f);
+    mesh.tube(tank, tank + Vec3{0, tank_h, 0}, tank_r, tank_r, 8, kRoofGrey);
+    mesh.disc(tank + Vec3{0, tank_h, 0}, tank_r, 8, kRoofGrey);
+    const Vec3 mast = roof_point(1.0f);
+    const float mast_h = rng.uniform(3.0f, 9.0f);
+    mesh.box({{mast.x - 0.1f, ry, mast.z - 0.1f}, {mast.x + 0.1f, ry + mast_h, mast.z + 0.1f}}, kMetal, false);
+}
+
+// One building on the 20 m x 20 m lot at (lx, lz): a footprint of 12-18 m a side, tiers
+// taller toward the city's centre (a skyline, not a carpet), machinery on the top roof.
+void build_building(ColouredSoupBuilder& mesh, SplitMix64& rng, float lx, float lz, float half, Buildings& city) {
+    const float w = rng.uniform(12, 18), d = rng.uniform(12, 18);
+    const float x0 = lx + (20.0f - w) * rng.uniform(0.2f, 0.8f);
+    const float z0 = lz + (20.0f - d) * rng.uniform(0.2f, 0.8f);
+    const Vec3 centre{x0 + 0.5f * w, 0, z0 + 0.5f * d};
+    const float falloff = std::exp(-dot(centre, centre) / (0.45f * half * half));
+    const float height = 10.0f + 55.0f * falloff * rng.uniform(0.4f, 1.3f) + rng.uniform(0, 10);
+    const int levels = height > 25 ? 1 + int(rng.below(3)) : 1 + int(rng.below(2));
+    const Vec3 colour = vary(rng, kFacadeColours[rng.below(6)], 0.06f);
+    build_tiers(mesh, rng, {{x0, kKerb, z0}, {x0 + w, kKerb, z0 + d}}, height, levels, colour, city);
+    build_roof_machinery(mesh, rng, city.tiers.back().box);
+}
+
+// Block (bi, bj): its pavement, four buildings, palms near its corners.
+void build_block(ColouredSoupBuilder& mesh, SplitMix64& rng, const CityLayout& layout, int bi, int bj,
+                 Buildings& city) {
+    const float bx = -layout.half + layout.pitch * float(bi) + 0.5f * layout.street;
+    const float bz = -layout.half + layout.pitch * float(bj) + 0.5f * layout.street;
+    mesh.box({{bx, 0, bz}, {bx + layout.block, kKerb, bz + layout.block}}, kPavement, false);
+    for (int li = 0; li < 2; ++li)
+        for (int lj = 0; lj < 2; ++lj)
+            build_building(mesh, rng, bx + 2.0f + 20.0f * float(li), bz + 2.0f + 20.0f * float(lj), layout.half, city);
+    for (int k = 0; k < layout.palms_per_block; ++k) {
+        const float px = k & 1 ? bx + layout.block - 1.0f : bx + 1.0f;
+        const float pz = k & 2 ? bz + layout.block - 1.0f : bz + 1.0f;
+        build_palm(mesh, rng, {px + rng.uniform(-0.3f, 0.3f), kKerb, pz + rng.uniform(-0.3f, 0.3f)});
+    }
+}
+
+// The windows: the smallest window scale (most windows) whose facades still fit in what
+// the target leaves, found by bisection.
+void build_windows(ColouredSoupBuilder& mesh, const std::vector<Tier>& tiers, int64_t target) {
     std::vector<Facade> facades;
     for (const Tier& t : tiers)
         for (const Facade& f : facades_of(t)) facades.push_back(f);
@@ -521,14 +576,16 @@ ProceduralScene make_city(const ParamSet& p) {
         (window_triangles(mid) <= window_budget ? hi : lo) = mid;
     }
     for (const Facade& f : facades) build_facade(mesh, f, hi);
+}
 
-    // The rest of the budget becomes rooftop extras on random roofs: boxes (10 triangles),
-    // then tilted solar panels (2), then one fin (1) — so the count comes out exact. They
-    // draw from their own stream so the layout above does not depend on the budget.
+// The rest of the budget becomes rooftop extras on random roofs: boxes (10 triangles),
+// then tilted solar panels (2), then one fin (1) — so the count comes out exact. They
+// draw from their own stream so the layout does not depend on the budget.
+void build_rooftop_extras(ColouredSoupBuilder& mesh, uint64_t seed, const Buildings& city, int64_t target) {
     SplitMix64 extras(mix_seed(seed, 0xE7A5ull));
     size_t left = size_t(target) - mesh.triangles();
     while (left > 0) {
-        const Bounds3& roof = tiers[roof_tiers[extras.below(uint32_t(roof_tiers.size()))]].box;
+        const Bounds3& roof = city.tiers[city.roof_tiers[extras.below(uint32_t(city.roof_tiers.size()))]].box;
         const float ry = roof.upper.y + 0.3f;
         const Vec3 c{extras.uniform(roof.lower.x + 1.0f, roof.upper.x - 1.0f), ry,
                      extras.uniform(roof.lower.z + 1.0f, roof.upper.z - 1.0f)};
@@ -545,11 +602,33 @@ ProceduralScene make_city(const ParamSet& p) {
             left -= 1;
         }
     }
+}
+
+// The stages in the order they draw from the layout's random stream: streets, then block
+// by block (pavement, buildings, palms); then the windows, sized to the budget, and the
+// rooftop extras from a stream of their own.
+ProceduralScene make_city(const ParamSet& p) {
+    const int64_t target = p.get_int("triangles");
+    const uint64_t seed = uint64_t(p.get_int("seed"));
+    SplitMix64 rng(mix_seed(seed, 0xC17Cull));
+    ProceduralScene out;
+    out.scene.name = scene_name("city", p);
+    ColouredSoupBuilder mesh(out);
+
+    const CityLayout layout = city_layout(target);
+    // Streets: one big asphalt quad reaching well beyond the grid, so no view shows its edge.
+    const float g = 3.0f * layout.half + 2.0f * layout.pitch;
+    mesh.quad({-g, 0, -g}, {-g, 0, g}, {g, 0, g}, {g, 0, -g}, kAsphalt);
+    Buildings city;
+    for (int bi = 0; bi < layout.blocks; ++bi)
+        for (int bj = 0; bj < layout.blocks; ++bj) build_block(mesh, rng, layout, bi, bj, city);
+    build_windows(mesh, city.tiers, target);
+    build_rooftop_extras(mesh, seed, city, target);
 
     // The view: from above the south-east corner looking down across the grid, close
     // enough that buildings fill the frame; the sun high to the right.
-    out.camera = orbit_camera({0, 8.0f, 0}, 35.0f, 38.0f, 1.35f * half + 40.0f);
-    out.light = Light{normalize(Vec3{1.0f, 2.2f, -0.4f}) * (3.0f * half + 100.0f)};
+    out.camera = orbit_camera({0, 8.0f, 0}, 35.0f, 38.0f, 1.35f * layout.half + 40.0f);
+    out.light = Light{normalize(Vec3{1.0f, 2.2f, -0.4f}) * (3.0f * layout.half + 100.0f)};
     out.scene.finalize();
     return out;
 }

@@ -8,7 +8,9 @@
 // checking code. Every expectation is unambiguous for the exact geometry (the rays are
 // built so that margins dwarf float rounding, or exact so that the answer is decided by
 // a rule, e.g. "a ray through the edge shared by two triangles hits one of them"); the
-// reference structure passes every case, which the tests check.
+// reference structure passes every case, which the tests check. The generators are
+// robustness_generators.cpp (their building blocks robustness_helpers.h), the catalogue
+// robustness_cases.cpp, the judge robustness_judge.cpp.
 //
 // Cases (ids are numbers, a letter for variants; configs name them as `{case: ID}`):
 //   1  closed meshes, rays from inside at vertices and edge points   (leaks)
@@ -104,8 +106,8 @@ struct JudgeOptions {
 };
 
 // Watertight as the structure's info says for these parameters (every structure of ours
-// uses triangle.h's watertight test; Embree only with robust=true). The depth limit is
-// the structure's own `max_depth` parameter when it has a numeric one.
+// uses triangle.h's watertight test; Embree only with robust=true), and its depth limit
+// (AcceleratorInfo::depth_limit) where it declares one.
 JudgeOptions judge_options(const AcceleratorInfo& accelerator, const ParamSet& params);
 
 // BuildStats.memory_bytes must stay below this for a case's scene: 4 KiB per triangle

@@ -2,25 +2,34 @@
 
 #include <stdexcept>
 
+#include "accelbench/base/param_table.h"
 #include "accelbench/base/triangle.h"
 
 namespace accelbench {
+
+namespace {
+
+// The parameters, each once: its row and its Config member, whose initializer is the default.
+const ParamTable<BruteForce::Config>& brute_force_params() {
+    using C = BruteForce::Config;
+    static const ParamTable<C> rows = {
+        int_param("max_triangles", &C::max_triangles, 0, 1e12, "largest scene it builds without force"),
+        bool_param("force", &C::force, "build even above max_triangles"),
+    };
+    return rows;
+}
+
+}  // namespace
 
 AcceleratorInfo BruteForce::info() {
     return {
         "brute_force",
         "tests every triangle for every ray (report section 1.2); refuses scenes above max_triangles unless force=true",
-        {
-            {"max_triangles", ParamType::Int, "20000", {}, 0, 1e12, "largest scene it builds without force"},
-            {"force", ParamType::Bool, "false", {}, 0, 1, "build even above max_triangles"},
-        },
-        [](const ParamSet& p) { return std::make_unique<BruteForce>(Config::from(p)); },
+        brute_force_params().specs(), [](const ParamSet& p) { return std::make_unique<BruteForce>(Config::from(p)); },
         fixed_label("brute force")};
 }
 
-BruteForce::Config BruteForce::Config::from(const ParamSet& p) {
-    return {.max_triangles = p.get_int("max_triangles"), .force = p.get_bool("force")};
-}
+BruteForce::Config BruteForce::Config::from(const ParamSet& p) { return brute_force_params().from(p); }
 
 void BruteForce::build(const Scene& scene) {
     if (!config_.force && int64_t(scene.triangle_count()) > config_.max_triangles)

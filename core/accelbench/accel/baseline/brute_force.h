@@ -10,10 +10,11 @@ namespace accelbench {
 
 class BruteForce final : public AcceleratorBase<BruteForce> {
 public:
-    // The parameters, each as declared in info() (the defaults live there only).
+    // The parameters: each member's initializer is its default; brute_force.cpp's table
+    // declares them.
     struct Config {
-        int64_t max_triangles = 0;  // largest scene it builds without `force`
-        bool force = false;         // build even above max_triangles
+        int64_t max_triangles = 20000;  // largest scene it builds without `force`
+        bool force = false;             // build even above max_triangles
         static Config from(const ParamSet& params);
     };
 

@@ -3,24 +3,33 @@
 #include <stdexcept>
 #include <string>
 
+#include "accelbench/base/param_table.h"
+
 namespace accelbench {
+
+namespace {
+
+// The parameters, each once: its row and its Config member, whose initializer is the default.
+const ParamTable<EmbreeAccel::Config>& embree_params() {
+    using C = EmbreeAccel::Config;
+    static const ParamTable<C> rows = {
+        int_param("threads", &C::threads, 0, 1024,
+                  "device build threads (0 = all cores); 1 for single-thread comparisons"),
+        choice_param("quality", &C::quality, std::array<std::string_view, 3>{"low", "medium", "high"},
+                     std::array{RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_HIGH},
+                     "RTC_BUILD_QUALITY_*"),
+        bool_param("robust", &C::robust, "RTC_SCENE_FLAG_ROBUST (watertight, slower)"),
+        bool_param("compact", &C::compact, "RTC_SCENE_FLAG_COMPACT (less memory)"),
+    };
+    return rows;
+}
+
+}  // namespace
 
 AcceleratorInfo EmbreeAccel::info() {
     return {.name = "embree",
             .description = "Intel Embree 3 (rtcIntersect1/rtcOccluded1), the production baseline",
-            .params =
-                {
-                    {"threads",
-                     ParamType::Int,
-                     "1",
-                     {},
-                     0,
-                     1024,
-                     "device build threads (0 = all cores); 1 for single-thread comparisons"},
-                    {"quality", ParamType::Enum, "medium", {"low", "medium", "high"}, 0, 0, "RTC_BUILD_QUALITY_*"},
-                    {"robust", ParamType::Bool, "false", {}, 0, 1, "RTC_SCENE_FLAG_ROBUST (watertight, slower)"},
-                    {"compact", ParamType::Bool, "false", {}, 0, 1, "RTC_SCENE_FLAG_COMPACT (less memory)"},
-                },
+            .params = embree_params().specs(),
             .create = [](const ParamSet& p) { return std::make_unique<EmbreeAccel>(Config::from(p)); },
             .label = fixed_label("Embree"),
             // Embree's kernels keep their traversal to themselves: no per-ray counts.
@@ -31,15 +40,7 @@ AcceleratorInfo EmbreeAccel::info() {
             .third_party = true};
 }
 
-EmbreeAccel::Config EmbreeAccel::Config::from(const ParamSet& p) {
-    const std::string& q = p.get_enum("quality");
-    return {.threads = int(p.get_int("threads")),
-            .quality = q == "low" ? RTC_BUILD_QUALITY_LOW
-                : q == "high"     ? RTC_BUILD_QUALITY_HIGH
-                                  : RTC_BUILD_QUALITY_MEDIUM,
-            .robust = p.get_bool("robust"),
-            .compact = p.get_bool("compact")};
-}
+EmbreeAccel::Config EmbreeAccel::Config::from(const ParamSet& p) { return embree_params().from(p); }
 
 namespace {
 

@@ -10,9 +10,10 @@ namespace accelbench {
 
 class EmbreeAccel final : public Accelerator {
 public:
-    // The parameters, each as declared in info() (the defaults live there only).
+    // The parameters: each member's initializer is its default; embree_accel.cpp's table
+    // declares them.
     struct Config {
-        int threads = 0;                                     // device build threads (0: all cores)
+        int threads = 1;                                     // device build threads (0: Embree's all cores)
         RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;  // RTC_BUILD_QUALITY_*
         bool robust = false;                                 // RTC_SCENE_FLAG_ROBUST: watertight, slower
         bool compact = false;                                // RTC_SCENE_FLAG_COMPACT: less memory

@@ -7,24 +7,35 @@
 #include <stdexcept>
 #include <string>
 
+#include "accelbench/accel/tree_tally.h"
 #include "accelbench/base/exact_predicates.h"
+#include "accelbench/base/param_table.h"
 
 namespace accelbench {
+
+namespace {
+
+// The parameters, each once: its row and its Config member, whose initializer is the default.
+const ParamTable<ReferenceAccel::Config>& reference_params() {
+    using C = ReferenceAccel::Config;
+    static const ParamTable<C> rows = {
+        int_param("leaf_size", &C::leaf_size, 1, 64, "largest number of triangles in a leaf"),
+    };
+    return rows;
+}
+
+}  // namespace
 
 AcceleratorInfo ReferenceAccel::info() {
     return {"reference",
             "ground truth for the error columns: object-median BVH, double precision, exact hit/miss decision, "
             "conservative box tests; never timed",
-            {
-                {"leaf_size", ParamType::Int, "4", {}, 1, 64, "largest number of triangles in a leaf"},
-            },
+            reference_params().specs(),
             [](const ParamSet& p) { return std::make_unique<ReferenceAccel>(Config::from(p)); },
             fixed_label("reference")};
 }
 
-ReferenceAccel::Config ReferenceAccel::Config::from(const ParamSet& p) {
-    return {.leaf_size = uint32_t(p.get_int("leaf_size"))};
-}
+ReferenceAccel::Config ReferenceAccel::Config::from(const ParamSet& p) { return reference_params().from(p); }
 
 namespace {
 
@@ -138,7 +149,6 @@ void ReferenceAccel::build(const Scene& scene) {
     scene_ = &scene;
     nodes_.clear();
     depth_ = 0;
-    leaves_ = 0;
     prim_ids_.resize(n);
     std::iota(prim_ids_.begin(), prim_ids_.end(), 0u);
     if (n == 0) return;
@@ -171,7 +181,6 @@ uint32_t ReferenceAccel::build_node(uint32_t begin, uint32_t end, uint32_t depth
     }
     if (end - begin <= config_.leaf_size) {
         nodes_[index] = {bounds, begin, end - begin};
-        ++leaves_;
         return index;
     }
     // Split at the median along the widest extent of the centroids. When all centroids
@@ -192,14 +201,18 @@ uint32_t ReferenceAccel::build_node(uint32_t begin, uint32_t end, uint32_t depth
     return index;
 }
 
+// The tree's statistics as every tree's (tree_tally.h).
 BuildStats ReferenceAccel::build_stats() const {
-    BuildStats s;
-    s.nodes = nodes_.size();
-    s.leaves = leaves_;
-    s.max_depth = depth_;
-    s.memory_bytes = nodes_.size() * sizeof(Node) + prim_ids_.size() * sizeof(uint32_t);
-    if (leaves_) s.avg_leaf_size = double(prim_ids_.size()) / double(leaves_);
-    return s;
+    TreeTally t;
+    t.nodes = nodes_.size();
+    t.max_depth = depth_;
+    t.memory_bytes = nodes_.size() * sizeof(Node) + prim_ids_.size() * sizeof(uint32_t);
+    t.root_area = nodes_.empty() ? 0.0 : double(nodes_[0].bounds.area());
+    for (const Node& n : nodes_) {
+        if (n.count > 0) t.leaf(n.bounds.area(), n.count);
+        else t.inner(n.bounds.area());
+    }
+    return t.stats();
 }
 
 template <class C>

@@ -55,9 +55,10 @@ bool reference_intersect_triangle(const Ray& ray, Vec3 p0, Vec3 p1, Vec3 p2, Ref
 
 class ReferenceAccel final : public AcceleratorBase<ReferenceAccel> {
 public:
-    // The parameters, each as declared in info() (the defaults live there only).
+    // The parameters: each member's initializer is its default; reference.cpp's table
+    // declares them.
     struct Config {
-        uint32_t leaf_size = 0;  // largest number of triangles in a leaf
+        uint32_t leaf_size = 4;  // largest number of triangles in a leaf
         static Config from(const ParamSet& params);
     };
 
@@ -95,7 +96,6 @@ private:
     std::vector<Node> nodes_;
     std::vector<uint32_t> prim_ids_;
     uint32_t depth_ = 0;
-    uint64_t leaves_ = 0;
 };
 
 }  // namespace accelbench

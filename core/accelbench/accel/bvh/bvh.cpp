@@ -10,12 +10,14 @@
 #include <vector>
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
+#include "accelbench/base/param_table.h"
 
 namespace accelbench {
 
 namespace {
 
-constexpr std::array<std::string_view, 2> kAxisNames = {"longest", "round_robin"};  // BvhAxisRule's order
+constexpr std::array<std::string_view, 2> kAxisNames = {"longest", "round_robin"};        // BvhAxisRule's order
+constexpr std::array<std::string_view, 3> kLeafTestNames = {"auto", "scalar", "packet"};  // LeafTest's order
 
 // How tables and figures name a split (the report's words where it has them).
 std::string split_label(Bvh::Split split) {
@@ -29,108 +31,53 @@ std::string split_label(Bvh::Split split) {
     return "?";
 }
 
+// The parameters, each once: its row and its Config member, whose initializer is the default.
+const ParamTable<Bvh::Config>& bvh_params() {
+    using C = Bvh::Config;
+    static const ParamTable<C> rows = {
+        enum_param("split", &C::split, Bvh::kSplitNames,
+                   "where a node splits: object median (report default), centre of the centroid box (report's "
+                   "centroid method), centroid mean, equal triangle area (spatial median), binned SAH (Wald 2007)"),
+        enum_param("axis", &C::axis, kAxisNames,
+                   "split axis: longest axis of the node's centroid box (report, Figure 6) or x, y, z by depth"),
+        auto_int_param("max_prims", &C::max_prims, 1, BvhNode::kMaxLeafPrims,
+                       "largest leaf; auto = " + std::to_string(C::default_max_prims(Bvh::Split::median)) +
+                           " for the report's splits, " + std::to_string(C::default_max_prims(Bvh::Split::sah)) +
+                           " for sah, which makes a leaf wherever its SAH cost is not above the best split's"),
+        int_param("max_depth", &C::max_depth, 0, 1000,
+                  "nodes at this depth become leaves whatever their size (report Table 3: 50)"),
+        int_param("bins", &C::bins, 2, 1024, "SAH bins along the split axis (split=sah only)"),
+        int_param("all_axes_min", &C::all_axes_min, 0, BvhNode::kMaxLeafPrims,
+                  "split=sah only: a range of at least this many triangles takes the cheapest plane over all three "
+                  "axes (Embree, bvh v2), a smaller one bins along `axis` only; 1 = every range, 0 = none"),
+        float_param("traversal_cost", &C::traversal_cost, 0, 1e6, "SAH cost of visiting a node (split=sah only)"),
+        float_param("isect_cost", &C::isect_cost, 1e-6, 1e6, "SAH cost of one triangle test (split=sah only)"),
+        bvh_traversal_param(&C::traversal),
+        enum_param("leaf_test", &C::leaf_test, kLeafTestNames,
+                   "scalar: a leaf's triangles one watertight test at a time; packet: four per SSE test (the wide "
+                   "BVH's), the same answers; auto: packet where a leaf may hold more than one triangle (max_prims > "
+                   "1, as split=sah's default), scalar for one-triangle leaves"),
+        int_param("reinsertion", &C::reinsertion, 0, 100,
+                  "passes of the reinsertion optimizer after the build (Meister & Bittner 2018; 0 = off, bvh v2 "
+                  "uses 3): lower SAH cost for a longer build, the same answers"),
+    };
+    return rows;
+}
+
 }  // namespace
 
 AcceleratorInfo Bvh::info() {
-    const Config d;  // the defaults
-    return {"bvh",
-            "top-down BVH (report section 2): fit & split with median/midpoint/mean/spatial-median or binned SAH "
-            "splits, flattened depth-first; optional reinsertion optimizer",
-            {
-                {"split", ParamType::Enum, std::string(kSplitNames[size_t(d.split)]), enum_choices(kSplitNames), 0, 0,
-                 "where a node splits: object median (report default), centre of the centroid box (report's "
-                 "centroid method), centroid mean, equal triangle area (spatial median), binned SAH (Wald 2007)"},
-                {"axis", ParamType::Enum, std::string(kAxisNames[size_t(d.axis)]), enum_choices(kAxisNames), 0, 0,
-                 "split axis: longest axis of the node's centroid box (report, Figure 6) or x, y, z by depth"},
-                {"max_prims",
-                 ParamType::Int,
-                 "auto",
-                 {},
-                 1,
-                 BvhNode::kMaxLeafPrims,
-                 "largest leaf; auto = " + std::to_string(Config::default_max_prims(Split::median)) +
-                     " for the report's splits, " + std::to_string(Config::default_max_prims(Split::sah)) +
-                     " for sah, which makes a leaf wherever its SAH cost is not above the best split's",
-                 true},
-                {"max_depth",
-                 ParamType::Int,
-                 format_param(int64_t(d.max_depth)),
-                 {},
-                 0,
-                 1000,
-                 "nodes at this depth become leaves whatever their size (report Table 3: 50)"},
-                {"bins",
-                 ParamType::Int,
-                 format_param(int64_t(d.bins)),
-                 {},
-                 2,
-                 1024,
-                 "SAH bins along the split axis (split=sah only)"},
-                {"all_axes_min",
-                 ParamType::Int,
-                 format_param(int64_t(d.all_axes_min)),
-                 {},
-                 0,
-                 int64_t(BvhNode::kMaxLeafPrims),
-                 "split=sah only: a range of at least this many triangles takes the cheapest plane over all three "
-                 "axes (Embree, bvh v2), a smaller one bins along `axis` only; 1 = every range, 0 = none"},
-                {"traversal_cost",
-                 ParamType::Float,
-                 format_param(double(d.traversal_cost)),
-                 {},
-                 0,
-                 1e6,
-                 "SAH cost of visiting a node (split=sah only)"},
-                {"isect_cost",
-                 ParamType::Float,
-                 format_param(double(d.isect_cost)),
-                 {},
-                 1e-6,
-                 1e6,
-                 "SAH cost of one triangle test (split=sah only)"},
-                bvh_traversal_param(),
-                {"leaf_test",
-                 ParamType::Enum,
-                 "auto",
-                 {"auto", "scalar", "packet"},
-                 0,
-                 0,
-                 "scalar: a leaf's triangles one watertight test at a time; packet: four per SSE test (the wide "
-                 "BVH's), the same answers; auto: packet where a leaf may hold more than one triangle (max_prims > 1, "
-                 "as split=sah's default), scalar for one-triangle leaves"},
-                {"reinsertion",
-                 ParamType::Int,
-                 format_param(int64_t(d.reinsertion)),
-                 {},
-                 0,
-                 100,
-                 "passes of the reinsertion optimizer after the build (Meister & Bittner 2018; 0 = off, bvh v2 "
-                 "uses 3): lower SAH cost for a longer build, the same answers"},
-            },
-            [](const ParamSet& p) { return std::make_unique<Bvh>(p); },
-            [](const ParamSet& p) {
-                return "BVH (" + split_label(Split(enum_index(kSplitNames, p.get_enum("split")))) + ")";
-            }};
+    return {.name = "bvh",
+            .description =
+                "top-down BVH (report section 2): fit & split with median/midpoint/mean/spatial-median or "
+                "binned SAH splits, flattened depth-first; optional reinsertion optimizer",
+            .params = bvh_params().specs(),
+            .create = [](const ParamSet& p) { return std::make_unique<Bvh>(p); },
+            .label = [](const ParamSet& p) { return "BVH (" + split_label(Config::from(p).split) + ")"; },
+            .depth_limit = [](const ParamSet& p) -> std::optional<uint64_t> { return Config::from(p).max_depth; }};
 }
 
-Bvh::Config Bvh::Config::from(const ParamSet& p) {
-    Config c;
-    c.split = Split(enum_index(kSplitNames, p.get_enum("split")));
-    c.axis = BvhAxisRule(enum_index(kAxisNames, p.get_enum("axis")));
-    if (p.given("max_prims")) c.max_prims = uint32_t(p.get_int("max_prims"));
-    c.max_depth = uint32_t(p.get_int("max_depth"));
-    c.bins = uint32_t(p.get_int("bins"));
-    c.all_axes_min = uint32_t(p.get_int("all_axes_min"));
-    c.traversal_cost = float(p.get_float("traversal_cost"));
-    c.isect_cost = float(p.get_float("isect_cost"));
-    c.traversal = bvh_traversal_from(p);
-    c.reinsertion = uint32_t(p.get_int("reinsertion"));
-    const std::string& leaf_test = p.get_enum("leaf_test");
-    c.leaf_test = leaf_test == "scalar" ? Config::LeafTest::scalar
-        : leaf_test == "packet"         ? Config::LeafTest::packet
-                                        : Config::LeafTest::automatic;
-    return c;
-}
+Bvh::Config Bvh::Config::from(const ParamSet& p) { return bvh_params().from(p); }
 
 namespace {
 
@@ -468,7 +415,7 @@ void Bvh::build(const Scene& scene) {
 }
 
 BuildStats Bvh::build_stats() const {
-    BuildStats s = bvh_build_stats(bvh_);
+    BuildStats s = measure_bvh(bvh_);
     if (s.memory_bytes) *s.memory_bytes += packets_.memory_bytes();
     s.extra["degenerate_splits"] = double(counts_.degenerate_splits);
     s.extra["forced_leaves"] = double(counts_.forced_leaves);

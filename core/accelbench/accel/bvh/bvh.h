@@ -45,7 +45,7 @@ public:
     static constexpr std::array<std::string_view, 5> kSplitNames = {"median", "midpoint", "mean", "spatial_median",
                                                                     "sah"};
 
-    // The parameters with their defaults (info() declares them from these values).
+    // The parameters: each member's initializer is its default; bvh.cpp's table declares them.
     struct Config {
         Split split = Split::median;              // where a node splits (report 2.2.1: median)
         BvhAxisRule axis = BvhAxisRule::longest;  // split axis (report, Figure 6)

@@ -15,7 +15,7 @@
 // of its ancestors' siblings: the area removed from the old position minus the area added
 // at the new one, pruned where even the node's own area can no longer be paid for — and
 // applies the best ones that do not touch each other. The cost it lowers is the SAH's
-// inner-node term (bvh_metrics.h); leaves keep their primitives, so the leaf term changes
+// inner-node term (tree_tally.h); leaves keep their primitives, so the leaf term changes
 // only through the leaves' positions.
 #pragma once
 

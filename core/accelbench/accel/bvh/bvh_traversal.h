@@ -31,16 +31,18 @@
 // distances) are in docs/decisions.md, "Binary BVH traversal".
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <utility>
 
 #include "accelbench/accel/bvh/bvh_packet_leaves.h"
 #include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/accel/bvh/wbvh_simd.h"
 #include "accelbench/base/geometry.h"
-#include "accelbench/base/params.h"
+#include "accelbench/base/param_table.h"
 #include "accelbench/base/triangle.h"
 
 namespace accelbench {
@@ -55,20 +57,14 @@ namespace accelbench {
 #endif
 
 enum class BvhTraversal { ordered, report };
+inline constexpr std::array<std::string_view, 2> kBvhTraversalNames = {"ordered", "report"};  // the enum's order
 
-// The `traversal` parameter as both BVH structures declare it, and its value.
-inline ParamSpec bvh_traversal_param() {
-    return {"traversal",
-            ParamType::Enum,
-            "ordered",
-            {"ordered", "report"},
-            0,
-            0,
-            "ordered: near child first, clipped to the closest hit (pbrt/Embree); "
-            "report: the report's Algorithm 1 (every hit box, nearest of the collected hits)"};
-}
-inline BvhTraversal bvh_traversal_from(const ParamSet& params) {
-    return params.get_enum("traversal") == "report" ? BvhTraversal::report : BvhTraversal::ordered;
+// The `traversal` parameter as both BVH structures declare it.
+template <class Config>
+ParamRow<Config> bvh_traversal_param(BvhTraversal Config::*member) {
+    return enum_param("traversal", member, kBvhTraversalNames,
+                      "ordered: near child first, clipped to the closest hit (pbrt/Embree); "
+                      "report: the report's Algorithm 1 (every hit box, nearest of the collected hits)");
 }
 
 // The stack of nodes still to visit. Both traversals push at most one node per level

@@ -11,82 +11,54 @@
 #include "accelbench/accel/bvh/bvh_metrics.h"
 #include "accelbench/accel/bvh/bvh_top_down.h"
 #include "accelbench/accel/bvh/morton_code.h"
+#include "accelbench/base/param_table.h"
 #include "accelbench/base/radix_sort.h"
 
 namespace accelbench {
 
-AcceleratorInfo Lbvh::info() {
-    const Config d;  // the defaults
-    return {"lbvh",
-            "linear BVH (report section 3): Morton codes of the centroids, one radix sort, split at the highest "
-            "differing code bit (Karras 2012 or the report's Algorithm 2, the same tree); optional subtree threads",
-            {
-                {"build", ParamType::Enum, std::string(kBuildNames[size_t(d.build)]), enum_choices(kBuildNames), 0, 0,
-                 "karras: split by binary search, boxes bottom-up, O(N) after the sort (Karras 2012); report: the "
-                 "report's Algorithm 2, each node's box fitted from its primitives and the split by a linear scan "
-                 "(both give the same tree); median: the codes and the sort, then the median BVH's build and tree, "
-                 "the LBVH the report's section 5.2 measured (one thread)"},
-                {"bits",
-                 ParamType::Int,
-                 format_param(int64_t(d.bits)),
-                 {},
-                 kMortonMinBits,
-                 kMortonMaxBits<uint64_t>,
-                 "Morton grid bits per axis (2^bits cells); up to 10 sorts 32-bit codes, 11..21 64-bit codes"},
-                {"max_prims",
-                 ParamType::Int,
-                 format_param(int64_t(d.max_prims)),
-                 {},
-                 1,
-                 BvhNode::kMaxLeafPrims,
-                 "a range of at most this many primitives becomes a leaf (the report: 1)"},
-                {"max_depth",
-                 ParamType::Int,
-                 format_param(int64_t(d.max_depth)),
-                 {},
-                 0,
-                 1000,
-                 "a node at this depth becomes a leaf whatever its size (root: depth 0; the report: 50)"},
-                {"threads",
-                 ParamType::Int,
-                 format_param(int64_t(d.threads)),
-                 {},
-                 0,
-                 256,
-                 "build threads (0 = all cores); the tree is the same for every value"},
-                {"task_threshold",
-                 ParamType::Int,
-                 format_param(int64_t(d.task_threshold)),
-                 {},
-                 1,
-                 1e9,
-                 "a subtree goes to another thread only above this many primitives (the report: 100)"},
-                {"sort_digit_bits",
-                 ParamType::Int,
-                 format_param(int64_t(d.sort_digit_bits)),
-                 {},
-                 kRadixMinDigitBits,
-                 kRadixMaxDigitBits,
-                 "radix sort digit width: bits per counting pass"},
-                bvh_traversal_param(),
-            },
-            [](const ParamSet& p) { return std::make_unique<Lbvh>(p); },
-            fixed_label("LBVH")};
+namespace {
+
+// The parameters, each once: its row and its Config member, whose initializer is the default.
+const ParamTable<Lbvh::Config>& lbvh_params() {
+    using C = Lbvh::Config;
+    static const ParamTable<C> rows = {
+        enum_param("build", &C::build, Lbvh::kBuildNames,
+                   "karras: split by binary search, boxes bottom-up, O(N) after the sort (Karras 2012); report: the "
+                   "report's Algorithm 2, each node's box fitted from its primitives and the split by a linear scan "
+                   "(both give the same tree); median: the codes and the sort, then the median BVH's build and tree, "
+                   "the LBVH the report's section 5.2 measured (one thread)"),
+        int_param("bits", &C::bits, kMortonMinBits, kMortonMaxBits<uint64_t>,
+                  "Morton grid bits per axis (2^bits cells); up to 10 sorts 32-bit codes, 11..21 64-bit codes"),
+        int_param("max_prims", &C::max_prims, 1, BvhNode::kMaxLeafPrims,
+                  "a range of at most this many primitives becomes a leaf (the report: 1)"),
+        int_param("max_depth", &C::max_depth, 0, 1000,
+                  "a node at this depth becomes a leaf whatever its size (root: depth 0; the report: 50)"),
+        threads_param("threads", &C::threads, 256,
+                      "build threads (0 = all cores); the tree is the same for every value"),
+        int_param("task_threshold", &C::task_threshold, 1, 1e9,
+                  "a subtree goes to another thread only above this many primitives (the report: 100)"),
+        int_param("sort_digit_bits", &C::sort_digit_bits, kRadixMinDigitBits, kRadixMaxDigitBits,
+                  "radix sort digit width: bits per counting pass"),
+        bvh_traversal_param(&C::traversal),
+    };
+    return rows;
 }
 
-Lbvh::Config Lbvh::Config::from(const ParamSet& p) {
-    Config c;
-    c.build = Build(enum_index(kBuildNames, p.get_enum("build")));
-    c.bits = int(p.get_int("bits"));
-    c.max_prims = uint32_t(p.get_int("max_prims"));
-    c.max_depth = uint32_t(p.get_int("max_depth"));
-    const int64_t threads = p.get_int("threads");
-    c.threads = threads > 0 ? int(threads) : int(std::max(1u, std::thread::hardware_concurrency()));
-    c.task_threshold = uint32_t(p.get_int("task_threshold"));
-    c.sort_digit_bits = int(p.get_int("sort_digit_bits"));
-    c.traversal = bvh_traversal_from(p);
-    return c;
+}  // namespace
+
+AcceleratorInfo Lbvh::info() {
+    return {.name = "lbvh",
+            .description =
+                "linear BVH (report section 3): Morton codes of the centroids, one radix sort, split at the "
+                "highest differing code bit (Karras 2012 or the report's Algorithm 2, the same tree); "
+                "optional subtree threads",
+            .params = lbvh_params().specs(),
+            .create = [](const ParamSet& p) { return std::make_unique<Lbvh>(p); },
+            .label = fixed_label("LBVH"),
+            .depth_limit = [](const ParamSet& p) -> std::optional<uint64_t> { return Config::from(p).max_depth; }};
 }
+
+Lbvh::Config Lbvh::Config::from(const ParamSet& p) { return lbvh_params().from(p); }
 
 Lbvh::Lbvh(const ParamSet& params) : Lbvh(Config::from(params)) {}
 
@@ -329,7 +301,7 @@ uint64_t Lbvh::reserved_bytes() const {
 }
 
 BuildStats Lbvh::build_stats() const {
-    BuildStats s = bvh_build_stats(bvh_);
+    BuildStats s = measure_bvh(bvh_);
     s.extra["morton_bits"] = config_.bits;
     s.extra["equal_code_splits"] = double(counts_.equal_code_splits);
     s.extra["forced_leaves"] = double(counts_.forced_leaves);

@@ -63,7 +63,7 @@ public:
     // this list.
     static constexpr std::array<std::string_view, 3> kBuildNames = {"karras", "report", "median"};
 
-    // The parameters with their defaults (info() declares them from these values).
+    // The parameters: each member's initializer is its default; lbvh.cpp's table declares them.
     struct Config {
         Build build = Build::karras;  // how the tree is built (karras and report: the same tree)
         // 10: on every model we have (bunny to the 871k dragon) 21 bits give the same tree
@@ -72,7 +72,7 @@ public:
         int bits = 10;                  // Morton grid bits per axis
         uint32_t max_prims = 1;         // a range of at most this many primitives is a leaf (report: 1)
         uint32_t max_depth = 50;        // a node at this depth is a leaf (report: 50)
-        int threads = 1;                // build threads; 0 in the parameter = all cores
+        int threads = 1;                // build threads (the parameter's 0, all cores, is stored as their number)
         uint32_t task_threshold = 100;  // a subtree goes to another thread only above this size (report: 100)
         // 10: a 30-bit code is exactly three digits, and three 1024-entry histograms
         // (12 KB) stay in L1 while counting. 8 needs a 4th pass.

@@ -9,186 +9,94 @@
 #include <stdexcept>
 #include <string>
 
-#include "accelbench/accel/bvh/bvh_metrics.h"
 #include "accelbench/accel/bvh/bvh_packet_leaves.h"
+#include "accelbench/accel/tree_tally.h"
+#include "accelbench/base/param_table.h"
 
 namespace accelbench {
 
-AcceleratorInfo Wbvh::info() {
-    return {"wbvh",
-            "wide BVH (Embree BVH4/BVH8): the binned-SAH binary BVH collapsed to 4 or 8 children per node, child "
-            "boxes structure-of-arrays in one SIMD slab test, leaves of 4-triangle packets in one SIMD watertight test",
-            {
-                {"width",
-                 ParamType::Enum,
-                 "8",
-                 {"4", "8"},
-                 0,
-                 0,
-                 "children per node: 4 (one SSE slab test) or 8 (one AVX slab test)"},
-                // 8: two packets. With collapse=sah the binary build's leaves are small
-                // (traversal_cost 2) and the collapse merges a subtree into one leaf only where
-                // its packets are cheaper than a node, so the cap only bounds what it may merge.
-                // Measured (width 8, traversal_cost 1, callgrind instructions of closest-hit
-                // plus any-hit traversal, the 640x480 primary + shadow rays): max_prims 4 ->
-                // 8 -> 16: conference 701.8M -> 684.8M -> 684.8M, bunny 209.2M all three (before
-                // the slots were put in area order).
-                {"max_prims",
-                 ParamType::Int,
-                 "8",
-                 {},
-                 1,
-                 BvhNode::kMaxLeafPrims,
-                 "largest leaf of the binary build (SAH may stop below it); a leaf is ceil(n/4) packets"},
-                {"max_depth",
-                 ParamType::Int,
-                 "64",
-                 {},
-                 0,
-                 1000,
-                 "binary build: nodes at this depth become leaves whatever their size"},
-                // 32, as Embree's binned builder (and `bvh split=sah`'s own
-                // default, bvh.h): finer planes near the root. Measured against 16 (width 8,
-                // accel_bench, 3 reps, idle machine): the
-                // conference's primary rays 2.85M -> 2.24M node visits, 22.0M -> 17.3M box
-                // tests, trace / Embree 1.44 -> 1.22 (width 4: 1.84 -> 1.68); bunny, igea, dragon
-                // within 1% of the counts and of the time; build / Embree +0.08-0.16 (dragon
-                // 1.05 -> 1.13, conference 0.90 -> 1.06, bunny 0.80 -> 0.96). 64: no better.
-                {"bins", ParamType::Int, "32", {}, 2, 1024, "binned SAH bins along the split axis"},
-                // 0 (none), unlike bvh split=sah's 1024 (bvh.h): all three axes in the top
-                // ranges. Measured (width 8, accel_bench, two rounds, 1024 against
-                // 0): trace / Embree conference 0.91-0.98 -> 0.84-0.92, bunny and dragon level;
-                // build / Embree conference 0.83-0.84 -> 0.91-0.96, bunny and dragon level, the
-                // dragon's already at 0.99-1.18 of the goal's 1.2. An option, not the default.
-                {"all_axes_min",
-                 ParamType::Int,
-                 "0",
-                 {},
-                 0,
-                 BvhNode::kMaxLeafPrims,
-                 "binary build: a range of at least this many triangles takes the cheapest SAH plane over all three "
-                 "axes, a smaller one the longest axis's; 1 = every range, 0 = none"},
-                // 2 with collapse=sah: a finer binary tree, whose leaves the SAH collapse
-                // merges into packets as the wide cost model says (the binary SAH charges per
-                // triangle, not per packet). Measured (width 8, max_prims 8, packet_cost 2,
-                // traversal instructions as above): traversal_cost 1 / 2 / 3: conference
-                // 677.5M / 685.0M / 711.5M, bunny 206.7M / 207.1M / 217.5M, dragon 228.9M /
-                // 231.6M / -; 2, not 1, for the build: igea 615M (1) / 540M (2) instructions,
-                // greedy's 472M (the finer binary tree is most of the difference).
-                // collapse=greedy keeps each binary leaf, and there 3 pays (a slab test covers
-                // several binary nodes and a packet 4 triangles, so fuller leaves pay; the
-                // bunny, trace / Embree, width 8: 1 -> 1.52x, 2 -> 1.44x, 3 -> 1.36x; build
-                // 1.00x -> 0.80x Embree, leaves of 3.4 triangles, not 1.8): set it with greedy.
-                {"traversal_cost",
-                 ParamType::Float,
-                 "2",
-                 {},
-                 0,
-                 1e6,
-                 "SAH cost of visiting a binary node, relative to isect_cost (binary build)"},
-                {"isect_cost", ParamType::Float, "1", {}, 1e-6, 1e6, "SAH cost of one triangle test"},
-                // Off by default for the build goal (<= 1.2x Embree): 3 passes cost the binary
-                // bvh 0.5-1.2x Embree's build time more (bvh_sah_reinsert in make bench).
-                {"reinsertion",
-                 ParamType::Int,
-                 "0",
-                 {},
-                 0,
-                 100,
-                 "passes of the reinsertion optimizer on the binary tree before the collapse (Meister & Bittner "
-                 "2018; 0 = off): lower SAH cost for a longer build, the same answers"},
-                // sah, not greedy: measured (callgrind instructions of closest-hit plus any-hit
-                // traversal over the 640x480 primary + shadow rays; greedy with its own best
-                // binary leaves, max_prims 4 and traversal_cost 3, against sah with max_prims 8,
-                // traversal_cost 2, packet_cost 2; both with slots in area order), width 8:
-                // bunny 207.9M -> 207.1M, igea 220.2M -> 219.7M, conference 709.1M -> 685.0M,
-                // dragon 232.1M -> 231.6M; width 4: 216.6M -> 214.8M, 230.1M -> 231.8M,
-                // 832.4M -> 799.7M, 246.3M -> 246.6M. Wide nodes 16-51% fewer (igea width 8:
-                // 30,918 -> 15,249; greedy leaves the nodes near the leaves part-empty, as it
-                // cannot open a leaf), node visits per ray 1-5% fewer (conference 6.40 ->
-                // 6.11). Timed (accel_bench, 3 repetitions, load 6-9), trace / Embree width 8,
-                // greedy -> sah: dragon 1.53 -> 1.42 and 1.63 -> 1.41 (a smaller tree: 22.8 ->
-                // 14.1 MB of nodes), igea 1.29 -> 1.26, bunny 1.21 -> 1.22, conference 1.20 ->
-                // 1.22 (noise). The price is the build: igea width 8 472M -> 540M instructions;
-                // build / Embree dragon 1.10 (width 8) and 0.97 (width 4), igea 0.91 / 0.86.
-                {"collapse",
-                 ParamType::Enum,
-                 "sah",
-                 {"greedy", "sah"},
-                 0,
-                 0,
-                 "how the binary tree becomes wide nodes: greedy (Embree: open the largest child until W; each binary "
-                 "leaf a leaf; best with max_prims=4 traversal_cost=3) or sah (Ylitie et al. 2017: the least wide SAH "
-                 "cost by dynamic programming, which also merges binary subtrees into leaves of up to max_prims)"},
-                // 2, the middle of the flat range: measured (width 8,
-                // max_prims 8, traversal_cost 1, traversal instructions as above) 0.5 / 1.5 / 2
-                // / 3 / 4: conference 689.9M / 685.0M / 684.8M / 684.9M / 684.9M, bunny 214.0M /
-                // 209.3M / 209.2M / 209.1M / 209.2M — flat from 1.5 on.
-                {"packet_cost",
-                 ParamType::Float,
-                 "2",
-                 {},
-                 1e-6,
-                 1e6,
-                 "collapse=sah: cost of one 4-triangle packet test relative to one wide node (one slab test of all "
-                 "its children)"},
-                {"kernel",
-                 ParamType::Enum,
-                 "simd",
-                 {"simd", "scalar"},
-                 0,
-                 0,
-                 "simd: the vector slab and triangle tests compiled in (scalar on a target without SSE2); "
-                 "scalar: the scalar forms, identical answers (for testing and measuring the vector gain)"},
-            },
-            [](const ParamSet& p) { return std::make_unique<Wbvh>(p); },
-            [](const ParamSet& p) {
-                return "wide BVH (" + p.get_enum("width") + ", " +
-                    (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") + ")";
-            }};
-}
-
-Wbvh::Config Wbvh::Config::from(const ParamSet& params) {
-    Config c;
-    c.width = params.get_enum("width") == "4" ? 4 : 8;
-    c.max_prims = uint32_t(params.get_int("max_prims"));
-    c.max_depth = uint32_t(params.get_int("max_depth"));
-    c.bins = uint32_t(params.get_int("bins"));
-    c.all_axes_min = uint32_t(params.get_int("all_axes_min"));
-    c.traversal_cost = params.get_float("traversal_cost");
-    c.isect_cost = params.get_float("isect_cost");
-    c.reinsertion = uint32_t(params.get_int("reinsertion"));
-    c.collapse = params.get_enum("collapse") == "greedy" ? Collapse::greedy : Collapse::sah;
-    c.packet_cost = params.get_float("packet_cost");
-    c.kernel = params.get_enum("kernel") == "scalar" ? Kernel::scalar : Kernel::simd;
-    return c;
-}
-
 namespace {
 
-// The binary BVH's parameters: split=sah and the build parameters wbvh shares with it
+// The parameters, each once: its row and its Config member, whose initializer is the default.
+const ParamTable<Wbvh::Config>& wbvh_params() {
+    using C = Wbvh::Config;
+    static const ParamTable<C> rows = {
+        choice_param("width", &C::width, std::array<std::string_view, 2>{"4", "8"}, std::array{4u, 8u},
+                     "children per node: 4 (one SSE slab test) or 8 (one AVX slab test)"),
+        int_param("max_prims", &C::max_prims, 1, BvhNode::kMaxLeafPrims,
+                  "largest leaf of the binary build (SAH may stop below it); a leaf is ceil(n/4) packets"),
+        int_param("max_depth", &C::max_depth, 0, 1000,
+                  "binary build: nodes at this depth become leaves whatever their size"),
+        int_param("bins", &C::bins, 2, 1024, "binned SAH bins along the split axis"),
+        int_param("all_axes_min", &C::all_axes_min, 0, BvhNode::kMaxLeafPrims,
+                  "binary build: a range of at least this many triangles takes the cheapest SAH plane over all "
+                  "three axes, a smaller one the longest axis's; 1 = every range, 0 = none"),
+        float_param("traversal_cost", &C::traversal_cost, 0, 1e6,
+                    "SAH cost of visiting a binary node, relative to isect_cost (binary build)"),
+        float_param("isect_cost", &C::isect_cost, 1e-6, 1e6, "SAH cost of one triangle test"),
+        int_param("reinsertion", &C::reinsertion, 0, 100,
+                  "passes of the reinsertion optimizer on the binary tree before the collapse (Meister & Bittner "
+                  "2018; 0 = off): lower SAH cost for a longer build, the same answers"),
+        enum_param("collapse", &C::collapse, Wbvh::kCollapseNames,
+                   "how the binary tree becomes wide nodes: greedy (Embree: open the largest child until W; each "
+                   "binary leaf a leaf; best with max_prims=4 traversal_cost=3) or sah (Ylitie et al. 2017: the "
+                   "least wide SAH cost by dynamic programming, which also merges binary subtrees into leaves of up "
+                   "to max_prims)"),
+        float_param("packet_cost", &C::packet_cost, 1e-6, 1e6,
+                    "collapse=sah: cost of one 4-triangle packet test relative to one wide node (one slab test of "
+                    "all its children)"),
+        enum_param("kernel", &C::kernel, Wbvh::kKernelNames,
+                   "simd: the vector slab and triangle tests compiled in (scalar on a target without SSE2); "
+                   "scalar: the scalar forms, identical answers (for testing and measuring the vector gain)"),
+    };
+    return rows;
+}
+
+// The binary BVH's configuration: split=sah and the build parameters wbvh shares with it
 // (reinsertion included: the optimizer runs on the binary tree, which the collapse then
 // reads as it reads any binary tree — same leaves, boxes refitted).
-ParamSet binary_params(const Wbvh::Config& c) {
-    const std::map<std::string, std::string> given = {
-        {"split", "sah"},
-        {"max_prims", std::to_string(c.max_prims)},
-        {"max_depth", std::to_string(c.max_depth)},
-        {"bins", std::to_string(c.bins)},
-        {"all_axes_min", std::to_string(c.all_axes_min)},
-        {"traversal_cost", format_param(c.traversal_cost)},
-        {"isect_cost", format_param(c.isect_cost)},
-        {"reinsertion", std::to_string(c.reinsertion)},
-        // The collapse reads the binary tree's triangle copies, and the binary tree is never
-        // traced: no packet leaves (which would release the copies, bvh.cpp).
-        {"leaf_test", "scalar"},
-    };
-    return resolve_params("bvh", Bvh::info().params, given);
+Bvh::Config binary_config(const Wbvh::Config& c) {
+    Bvh::Config b;
+    b.split = Bvh::Split::sah;
+    b.max_prims = c.max_prims;
+    b.max_depth = c.max_depth;
+    b.bins = c.bins;
+    b.all_axes_min = c.all_axes_min;
+    b.traversal_cost = float(c.traversal_cost);
+    b.isect_cost = float(c.isect_cost);
+    b.reinsertion = c.reinsertion;
+    // The collapse reads the binary tree's triangle copies, and the binary tree is never
+    // traced: no packet leaves (which would release the copies, bvh.cpp).
+    b.leaf_test = Bvh::Config::LeafTest::scalar;
+    return b;
 }
 
 }  // namespace
 
-Wbvh::Wbvh(const ParamSet& params) : config_(Config::from(params)), binary_(binary_params(config_)) {}
+AcceleratorInfo Wbvh::info() {
+    return {.name = "wbvh",
+            .description =
+                "wide BVH (Embree BVH4/BVH8): the binned-SAH binary BVH collapsed to 4 or 8 children per "
+                "node, child boxes structure-of-arrays in one SIMD slab test, leaves of 4-triangle packets "
+                "in one SIMD watertight test",
+            .params = wbvh_params().specs(),
+            .create = [](const ParamSet& p) { return std::make_unique<Wbvh>(p); },
+            .label =
+                [](const ParamSet& p) {
+                    return "wide BVH (" + p.get_enum("width") + ", " +
+                        (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") + ")";
+                },
+            // Every wide child lies at least one binary level below its node, so the wide
+            // tree is no deeper than the binary one, except that the wide root is an inner
+            // node even over a single binary leaf (max_depth=0): a leaf child at depth 1.
+            .depth_limit = [](const ParamSet& p) -> std::optional<uint64_t> {
+                return std::max<uint64_t>(1, Config::from(p).max_depth);
+            }};
+}
+
+Wbvh::Config Wbvh::Config::from(const ParamSet& params) { return wbvh_params().from(params); }
+
+Wbvh::Wbvh(const ParamSet& params) : config_(Config::from(params)), binary_(binary_config(config_)) {}
 
 namespace {
 
@@ -456,15 +364,12 @@ void Wbvh::build(const Scene& scene) {
 }
 
 template <int W>
-WbvhMetrics measure_wbvh(const WbvhTree<W>& tree) {
-    WbvhMetrics m;
-    m.nodes = tree.nodes.size();
-    m.leaves = tree.leaves;
-    m.packets = tree.packets.size();
-    m.max_depth = tree.empty() ? 0 : tree.depth + 1;  // edges down to the deepest leaf child
-    m.memory_bytes = tree.nodes.size() * sizeof(WbvhNode<W>) + tree.packets.size() * sizeof(WbvhTriPacket);
-    double inner_area = 0, leaf_area = 0, root_area = 0;
-    uint64_t prims = 0, children = 0;
+BuildStats measure_wbvh(const WbvhTree<W>& tree) {
+    TreeTally t;
+    t.nodes = tree.nodes.size();
+    t.max_depth = tree.empty() ? 0 : tree.depth + 1;  // edges down to the deepest leaf child
+    t.memory_bytes = tree.nodes.size() * sizeof(WbvhNode<W>) + tree.packets.size() * sizeof(WbvhTriPacket);
+    uint64_t children = 0;
     for (size_t i = 0; i < tree.nodes.size(); ++i) {
         const WbvhNode<W>& node = tree.nodes[i];
         Bounds3 box;
@@ -473,36 +378,24 @@ WbvhMetrics measure_wbvh(const WbvhTree<W>& tree) {
         for (uint32_t k = 0; k < n; ++k) {
             const Bounds3 b = node.child_bounds(int(k));
             box.extend(b);
-            if (node.count[k]) {
-                prims += node.count[k];
-                leaf_area += double(b.area()) * node.count[k];
-            }
+            if (node.count[k]) t.leaf(b.area(), node.count[k]);
         }
-        inner_area += box.area();
-        if (i == 0) root_area = box.area();
+        t.inner(box.area());
+        if (i == 0) t.root_area = box.area();
     }
-    if (m.leaves) m.avg_leaf_size = double(prims) / double(m.leaves);
-    if (m.nodes) m.avg_children = double(children) / double(m.nodes);
-    if (m.packets) m.packet_fill = double(prims) / double(m.packets * WbvhTriPacket::kLanes);
-    if (root_area > 0) m.sah_cost = (kSahCostTraversal * inner_area + kSahCostIntersection * leaf_area) / root_area;
-    return m;
+    BuildStats s = t.stats();
+    const uint64_t packets = tree.packets.size();
+    s.extra["packets"] = double(packets);
+    s.extra["packet_fill"] = packets ? double(t.prim_refs) / double(packets * WbvhTriPacket::kLanes) : 0.0;
+    s.extra["avg_children"] = t.nodes ? double(children) / double(t.nodes) : 0.0;
+    return s;
 }
 
-template WbvhMetrics measure_wbvh(const WbvhTree<4>&);
-template WbvhMetrics measure_wbvh(const WbvhTree<8>&);
+template BuildStats measure_wbvh(const WbvhTree<4>&);
+template BuildStats measure_wbvh(const WbvhTree<8>&);
 
 BuildStats Wbvh::build_stats() const {
-    const WbvhMetrics m = config_.width == 8 ? measure_wbvh(tree8_) : measure_wbvh(tree4_);
-    BuildStats s;
-    s.nodes = m.nodes;
-    s.leaves = m.leaves;
-    s.max_depth = m.max_depth;
-    s.memory_bytes = m.memory_bytes;
-    if (m.leaves) s.avg_leaf_size = m.avg_leaf_size;
-    s.sah_cost = m.sah_cost;
-    s.extra["packets"] = double(m.packets);
-    s.extra["packet_fill"] = m.packet_fill;
-    s.extra["avg_children"] = m.avg_children;
+    BuildStats s = config_.width == 8 ? measure_wbvh(tree8_) : measure_wbvh(tree4_);
     const BuildStats binary = binary_.build_stats();
     s.extra["binary_nodes"] = double(binary.nodes.value_or(0));
     if (binary.sah_cost) s.extra["binary_sah_cost"] = *binary.sah_cost;

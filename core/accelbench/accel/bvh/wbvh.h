@@ -41,9 +41,11 @@
 // (is_valid_ray) are answered "miss" before any count.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
@@ -67,35 +69,43 @@ struct WbvhTree {
     bool empty() const { return nodes.empty(); }
 };
 
-// Statistics of a finished wide tree (measure_wbvh), reported as BuildStats.
-struct WbvhMetrics {
-    uint64_t nodes = 0, leaves = 0, max_depth = 0, memory_bytes = 0, packets = 0;
-    double avg_leaf_size = 0;        // triangles per leaf child
-    double avg_children = 0;         // used child slots per node
-    double packet_fill = 0;          // used lanes / lanes of all packets
-    std::optional<double> sah_cost;  // C_trav = C_isect = 1 (bvh_metrics.h), wide nodes' areas
-};
-
+// Statistics of a finished wide tree (tree_tally.h): nodes = wide nodes, leaves = leaf
+// children, max_depth = edges down to the deepest leaf child, sah_cost over the wide nodes'
+// boxes; extras packets, packet_fill (used lanes / lanes of all packets) and avg_children
+// (used child slots per node).
 template <int W>
-WbvhMetrics measure_wbvh(const WbvhTree<W>& tree);
+BuildStats measure_wbvh(const WbvhTree<W>& tree);
 
 class Wbvh final : public AcceleratorBase<Wbvh> {
 public:
     enum class Kernel { simd, scalar };
     enum class Collapse { greedy, sah };
+    // The names, in the enums' order: the declared choices and the parser both read them.
+    static constexpr std::array<std::string_view, 2> kKernelNames = {"simd", "scalar"};
+    static constexpr std::array<std::string_view, 2> kCollapseNames = {"greedy", "sah"};
 
-    // The parameters, as declared in info() (defaults there only).
+    // The parameters: each member's initializer is its default; wbvh.cpp's table declares
+    // them. What the defaults were measured against: docs/decisions.md, "Wide BVH".
     struct Config {
-        uint32_t width = 0;         // children per node: 4 or 8
-        uint32_t max_prims = 0;     // leaf cap of the binary build (SAH may stop earlier)
-        uint32_t max_depth = 0;     // binary build's depth limit
-        uint32_t bins = 0;          // binned SAH bins
-        uint32_t all_axes_min = 0;  // ranges that bin all three axes (bvh.h)
-        double traversal_cost = 0;  // SAH constants of the binary build
-        double isect_cost = 0;
-        uint32_t reinsertion = 0;           // reinsertion passes on the binary tree before the collapse
+        uint32_t width = 8;  // children per node: 4 or 8
+        // Leaf cap of the binary build. With collapse=sah the binary leaves are small and
+        // the collapse merges a subtree into one leaf only where its packets are cheaper
+        // than a node, so the cap only bounds what it may merge: 8, two packets.
+        uint32_t max_prims = 8;
+        uint32_t max_depth = 64;  // binary build's depth limit
+        uint32_t bins = 32;       // binned SAH bins: Embree's, and `bvh split=sah`'s
+        // Ranges that bin all three axes (bvh.h): none, unlike bvh's 1024, for the build goal.
+        uint32_t all_axes_min = 0;
+        // SAH constants of the binary build. 2 with collapse=sah: a finer binary tree whose
+        // leaves the collapse merges as the wide cost model says (set 3 with greedy, which
+        // keeps each binary leaf, so fuller leaves pay there).
+        double traversal_cost = 2;
+        double isect_cost = 1;
+        // Reinsertion passes on the binary tree before the collapse; off for the build goal
+        // (<= 1.2x Embree).
+        uint32_t reinsertion = 0;
         Collapse collapse = Collapse::sah;  // how binary nodes are grouped into wide nodes and leaves
-        double packet_cost = 0;             // collapse=sah: cost of one packet test, a wide node's = 1
+        double packet_cost = 2;             // collapse=sah: cost of one packet test, a wide node's = 1
         Kernel kernel = Kernel::simd;       // vector tests, or the scalar ones they must equal
 
         static Config from(const ParamSet& params);

@@ -10,7 +10,8 @@
 //                the recursion by splitting them in linear time (Wald & Havran 2006, "On
 //                building fast kd-trees for ray tracing, and on doing that in O(N log N)").
 // They differ only in where a node's sorted events come from; the SAH sweep, the
-// classification and the leaf contents are one code path (kdtree.cpp).
+// classification and the leaf contents are one code path (kdtree_build.cpp). The
+// traversal is kdtree_traversal.cpp, the statistics kdtree_metrics.h.
 #pragma once
 
 #include <array>
@@ -18,6 +19,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
@@ -65,7 +67,10 @@ static_assert(sizeof(KdNode) == 8, "the kd-tree node must stay 8 bytes (report 4
 
 class KdTree final : public AcceleratorBase<KdTree> {
 public:
-    enum class BuildAlgorithm { Pbrt, NLogN };
+    enum class BuildAlgorithm { NLogN, Pbrt };
+    // The build names, in the enum's order: the declared choices and the parser both read
+    // this list.
+    static constexpr std::array<std::string_view, 2> kBuildNames = {"nlogn", "pbrt"};
 
     // The largest max_depth accepted. It sizes the traversal's fixed stack (one entry
     // per level at most), so no ray can overflow it.
@@ -81,7 +86,7 @@ public:
     static constexpr uint64_t kMaxRefsPerPrim = 256;
     static constexpr uint64_t kMinRefBudget = 1u << 22;
 
-    // The parameters with their defaults (info() declares them from these values).
+    // The parameters: each member's initializer is its default; kdtree.cpp's table declares them.
     struct Config {
         float isect_cost = 80.0f;     // C_I, pbrt-v3's default
         float traversal_cost = 1.0f;  // C_T
@@ -147,15 +152,5 @@ private:
     uint64_t bad_refines_ = 0;  // splits made although dearer than a leaf
     int deepest_leaf_ = 0;
 };
-
-// Statistics of a built kd-tree: nodes, leaves (empty ones included), max_depth
-// (deepest leaf; root = 0), avg_leaf_size (primitive references per leaf), memory_bytes
-// (nodes, the shared primitive-index array and the triangle copy; inline single
-// primitives cost nothing extra) and sah_cost with the constants every structure uses
-// (kSahCostTraversal, kSahCostIntersection: comparable with the BVHs'); extra:
-// sah_cost_build (pbrt's model with THIS build's C_T and C_I and no empty bonus, what its
-// SAH minimised), prim_refs (references over all leaves), empty_leaves, bad_refines,
-// max_depth_limit (the max_depth applied).
-BuildStats measure_kdtree(const KdTree& tree);
 
 }  // namespace accelbench
