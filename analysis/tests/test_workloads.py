@@ -134,6 +134,39 @@ def test_ratio_to_embree_only_within_one_workload(tmp_path):
     assert one["bvh"] == pytest.approx(0.5) and one["embree quality=medium"] == pytest.approx(1.0)
 
 
+def test_ray_sets_at_several_thread_counts_are_said_to_be_in_the_ray_set_table(tmp_path):
+    """Ray-set rows of a config with several render thread counts are left out of the
+    report's tables as thread-scaling rows, and the note says where they are: the ray-set
+    table (a section per thread count), not the thread-scaling table, which takes camera
+    rows only and has none of them."""
+    rows = [
+        row(
+            "stanford-bunny",
+            accel,
+            params,
+            build=0.1,
+            render=0.5 / threads,
+            config="ray-sets",
+            rays=1_000_000,
+            shadow_rays=0,
+            render_threads=str(threads),
+            extra={"ray_set": rs, "ray_set_hash": f"{rs:0>16}"},
+        )
+        for threads in (1, 2)
+        for rs in ("primary", "shadow")
+        for accel, params in (("bvh", BVH), ("embree", dict(EMBREE, threads=str(threads))))
+    ]
+    path = write_csv(tmp_path / "rs.csv", rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
+    results = load_results([path])
+    assert thread_scaling_rows(results).empty
+    _, notes = without_thread_scaling(results)
+    assert len(notes) == 1 and "8 rows of ray sets in tables/ray_sets.md" in notes[0]
+    assert "thread_scaling.md" not in notes[0]
+    # Camera rows of a thread-scaling run are where the note says, too.
+    _, notes = without_thread_scaling(load_results([thread_csv(tmp_path / "ts.csv")]))
+    assert "4 rows of camera rays in tables/thread_scaling.md" in notes[0]
+
+
 def test_ranking_marks_where_the_order_changes(tmp_path):
     rows = ray_set_rows(load_results([ray_set_csv(tmp_path / "rs.csv")]))
     r = ranking(rows).set_index(["structure", "ray_set"])

@@ -49,9 +49,17 @@ def without_thread_scaling(results: Results) -> tuple[Results, list[str]]:
     if not mask.any():
         return results, []
     configs = ", ".join(sorted(set(results.rows.loc[mask, "config"])))
+    # Camera rows go to the thread-scaling table, ray-set rows to the ray-set table (a
+    # section per thread count): say where each kind is, not where it is not.
+    camera = mask & (results.rows["ray_set"] == CAMERA_SET)
+    counts = {
+        "camera rays in tables/thread_scaling.md": int(camera.sum()),
+        "ray sets in tables/ray_sets.md": int((mask & ~camera).sum()),
+    }
+    where = ", ".join(f"{n} rows of {what}" for what, n in counts.items() if n)
     note = (
         f"left out of the report's tables, claims and figures: {int(mask.sum())} rows of "
-        f"thread-scaling runs ({configs}; tables/thread_scaling.md has them)"
+        f"thread-scaling runs ({configs}; {where})"
     )
     return replace(results, rows=results.rows[~mask]), [note]
 
