@@ -426,7 +426,7 @@ def start(job: Job, provenance: dict[str, str], inputs: dict, now: datetime) -> 
 def output_problems(job: Job) -> list[str]:
     """What would stop the job after measuring: two configs writing one CSV, a directory or
     file where the other belongs among the outputs, a directory where results/latest's link
-    belongs. Checked before anything is measured."""
+    or results/index.html belongs. Checked before anything is measured."""
     problems = []
     stems: dict[str, Path] = {}
     for c in job.configs:
@@ -441,7 +441,7 @@ def output_problems(job: Job) -> list[str]:
             break
     if job.into is not None and job.into.is_dir():
         d = job.into
-        files = [RUN_JSON, "REPORT.md"] + [
+        files = [RUN_JSON, "REPORT.md", "index.html"] + [
             f"csv/{c.stem}{ext}" for c in job.configs for ext in (".csv", ".reps.csv", ".inputs.csv")
         ]
         for rel in files:
@@ -450,6 +450,10 @@ def output_problems(job: Job) -> list[str]:
         for rel in ("csv", "tables", "figures", "report"):
             if (d / rel).exists() and not (d / rel).is_dir():
                 problems.append(f"{d / rel} is not a directory")
+    # The page listing every run, rewritten when the job ends (write_runs_page).
+    runs_page = job.runs.parent / "index.html"
+    if runs_page.is_dir():
+        problems.append(f"{runs_page} is a directory, not the page listing the runs the driver keeps there")
     if job.latest is not None and job.into is None:
         if job.latest.exists() and not job.latest.is_symlink():
             problems.append(
@@ -528,7 +532,9 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
     if job.require_clean_tree and provenance.get("git_dirty") != "false":
         print(
             f"reproduce: refusing: {job.accelbench} reports git_dirty="
-            f"{provenance.get('git_dirty')} for the tree it was built from",
+            f"{provenance.get('git_dirty')} for the tree it was built from (when it was built, a "
+            f"tracked file outside results/ differed from the commit, or a file git does not track "
+            f"lay under core/ or harness/): commit or remove them and build again",
             file=sys.stderr,
         )
         return 2, Path()
@@ -600,7 +606,8 @@ def add_reproduce(sub) -> None:
         description="Measures every CONFIG with the harness into RUNS/<UTC time>-<sha>[-TAG]/"
         "csv/ and analyses them there (tables/, figures/, REPORT.md); LATEST then "
         "points at it. Continues the newest run of the same configs only when it "
-        "is unfinished and `accelbench provenance` matches what it recorded.",
+        "is unfinished, `accelbench provenance` matches what it recorded and so do the "
+        "contents of its configs, model and ray files (sha256).",
     )
     s.add_argument("configs", nargs="+", type=Path, help="configs/NAME.yaml, in order")
     s.add_argument("--accelbench", type=Path, default=Path("build/accelbench"))
@@ -611,7 +618,11 @@ def add_reproduce(sub) -> None:
     s.add_argument("--runs", type=Path, default=Path("results/runs"))
     s.add_argument("--latest", type=Path, default=Path("results/latest"))
     s.add_argument(
-        "--into", type=Path, help="write this directory from scratch instead (the committed reference run)"
+        "--into",
+        type=Path,
+        help="measure from scratch into this directory instead (the committed reference run): a new or "
+        "empty one, or one an earlier run wrote (its run.json lists the files it wrote, the only ones "
+        "removed)",
     )
     s.add_argument(
         "--reference-run",

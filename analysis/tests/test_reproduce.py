@@ -366,6 +366,30 @@ def test_a_directory_where_latest_belongs_is_refused_before_measuring(tmp_path, 
     assert (tmp_path / "latest" / "mine.txt").read_text() == "keep" and not (tmp_path / "runs").exists()
 
 
+def test_a_directory_where_a_page_belongs_is_refused_before_measuring(tmp_path, capsys):
+    """results/index.html (the runs page, written when the job ends) and a run's own
+    index.html: a directory there ended the job in a traceback after measuring."""
+    config = tmp_path / "tiny.yaml"
+    config.write_text("name: tiny\n")
+    (tmp_path / "results" / "index.html").mkdir(parents=True)
+    (tmp_path / "ref" / "index.html").mkdir(parents=True)
+    for into in (None, tmp_path / "ref"):
+        job = Job(
+            accelbench=tmp_path / "no-such-binary",
+            configs=[config],
+            runs=tmp_path / "results" / "runs",
+            latest=tmp_path / "results" / "latest",
+            into=into,
+        )
+        rc, _ = reproduce(job, NOW)
+        err = capsys.readouterr().err
+        assert rc == 2 and "nothing measured" in err
+        assert f"{tmp_path / 'results' / 'index.html'} is a directory" in err
+        if into is not None:
+            assert f"{into / 'index.html'} is not a file" in err
+    assert not (tmp_path / "results" / "runs").exists()
+
+
 def test_into_removes_only_what_the_driver_wrote(tmp_path):
     into = tmp_path / "results"
     (into / "runs" / "20261201T100000Z-aaaaaaa").mkdir(parents=True)
