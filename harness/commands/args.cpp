@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cstdio>
+#include <utility>
 
 #include "accelbench/base/params.h"
 
@@ -18,15 +19,21 @@ bool Args::flag(std::string_view name) {
 
 bool Args::value(std::string_view name, std::string& out) {
     const std::string& a = current();
+    std::string given;
     if (a.size() > name.size() && a.compare(0, name.size(), name) == 0 && a[name.size()] == '=') {
-        out = a.substr(name.size() + 1);
+        given = a.substr(name.size() + 1);
         ++at_;
-        return true;
+    } else if (a == name) {
+        if (at_ + 1 >= argv_.size()) throw ArgError(a + " needs a value");
+        given = argv_[at_ + 1];
+        at_ += 2;
+    } else {
+        return false;
     }
-    if (a != name) return false;
-    if (at_ + 1 >= argv_.size()) throw ArgError(a + " needs a value");
-    out = argv_[at_ + 1];
-    at_ += 2;
+    // An empty value (`--out=` or --benchmark_out="$UNSET") would read as the option not
+    // given: the results would go to the default file, the JSON nowhere, silently.
+    if (given.empty()) throw ArgError(std::string(name) + " needs a value, got an empty one");
+    out = std::move(given);
     return true;
 }
 

@@ -277,6 +277,15 @@ accelerators: [{name: bvh}]
         EXPECT_NE(o.err.find("'" + target + "' for --benchmark_out"), std::string::npos) << o.err;
         EXPECT_FALSE(fs::exists(out)) << target;
     }
+    // An empty file name (--benchmark_out="$UNSET") wrote no JSON and no word about it; an
+    // empty --out put the results in the default file instead.
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{cfg, "--out", out, "--benchmark_out="}, std::vector<std::string>{cfg, "--out="}}) {
+        const Outcome o = run(args);
+        EXPECT_EQ(o.code, 2) << o.err;
+        EXPECT_NE(o.err.find("needs a value, got an empty one"), std::string::npos) << o.err;
+        EXPECT_FALSE(fs::exists(out));
+    }
 }
 
 // yaml-cpp 0.7.0's LoadAll never returns on these (its parser stuck on a token, an empty
