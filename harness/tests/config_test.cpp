@@ -157,7 +157,14 @@ accelerators:
     EXPECT_TRUE(has_issue(e, 4, 12, "accelerators[1].name", "unknown accelerator 'octree'"));
     EXPECT_TRUE(has_issue(e, 5, 34, "accelerators[2].brute_force.max_triangle", "did you mean 'max_triangles'"));
     EXPECT_TRUE(has_issue(e, 6, 44, "accelerators[3].embree.quality[1]", "'best' is not one of {low, medium, high}"));
-    EXPECT_TRUE(has_issue(e, 6, 59, "accelerators[3].embree.robust", "quoted string"));
+    EXPECT_TRUE(has_issue(e, 6, 59, "accelerators[3].embree.robust", "expected a bool value, got the quoted string"));
+    // `!!str 4` is a string, not the integer 4, and the message says which type was expected.
+    const ConfigError tagged = load_error(write("b.yaml", R"(models: [stanford-bunny]
+accelerators: [{name: bvh, params: {max_prims: !!str 4}}]
+)"));
+    EXPECT_TRUE(
+        has_issue(tagged, 2, 48, "accelerators[0].bvh.max_prims", "expected an int value, got the quoted string '4'"))
+        << all_issues(tagged);
 }
 
 // `{name: all, except, params}`: every registered structure but those excepted, in registry
