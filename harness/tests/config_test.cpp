@@ -461,11 +461,15 @@ accelerators:
     EXPECT_EQ(c.accelerators[1].name, "kdtree");
     EXPECT_EQ(c.accelerators[1].repetitions, 4);
     // A merged key that is not allowed is named as merged; a merge of a scalar is named.
-    const ConfigError e = load_error(write("n.yaml", R"(models: [igea]
+    // Only these: a mapping whose merge failed is not also said to lack `name`, or to need
+    // exactly one of name/path/procedural/case.
+    const ConfigError e = load_error(write("n.yaml", R"(models: [igea, {<<: 3, seed: 2}]
 accelerators:
   - &x {name: kdtree, colour: red}
   - {<<: 3}
 )"));
+    EXPECT_EQ(e.issues().size(), 3u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 1, 21, "models[1].<<", "a merge key ('<<') takes a mapping")) << all_issues(e);
     EXPECT_TRUE(has_issue(e, 3, 23, "accelerators[0].colour", "unknown key 'colour'")) << all_issues(e);
     EXPECT_TRUE(has_issue(e, 4, 10, "accelerators[1].<<", "a merge key ('<<') takes a mapping")) << all_issues(e);
 }

@@ -180,6 +180,7 @@ Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::v
             for (const auto& item : merged) sources.push_back(item);
         for (const YAML::Node& source : sources) {
             if (!source.IsMap()) {
+                ok_ = false;  // its keys are unknown: "missing key" would name the wrong cause
                 c.error(source, child("<<"),
                         std::string("a merge key ('<<') takes a mapping (an alias such as *defaults) or a list of "
                                     "them, got ") +
@@ -200,11 +201,13 @@ Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::v
                 entries_.push_back({key, k, entry.second});
             }
         }
-        if (sources.empty())
+        if (sources.empty()) {
+            ok_ = false;
             c.error(merged, child("<<"),
                     std::string("a merge key ('<<') takes a mapping (an alias such as *defaults) or a list of them, "
                                 "got ") +
                         kind_of(merged));
+        }
     }
 }
 
