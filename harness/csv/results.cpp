@@ -453,6 +453,7 @@ void check_no_orphans(const CsvData& results, const std::string& results_path, c
 void write_output(const std::string& out, const std::vector<CsvData>& results, const std::vector<CsvData>* reps,
                   const std::optional<RunInputs>& inputs) {
     const std::string reps_out = repetitions_path(out);
+    require_inputs_path_free(out);  // before the locks make OUT
     OutputLock lock({out, reps_out});
     remove_inputs(out);
     if (reps) write_parts(reps_out, *reps);

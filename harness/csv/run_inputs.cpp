@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "csv/csv.h"
+#include "util/output_lock.h"
 #include "util/text.h"
 
 namespace fs = std::filesystem;
@@ -38,7 +39,12 @@ std::optional<RunInputs> read_inputs(const std::string& results_path) {
     return inputs;
 }
 
+void require_inputs_path_free(const std::string& results_path) {
+    require_regular_file_or_absent(inputs_path(results_path), "the record of inputs beside '" + results_path + "'");
+}
+
 void write_inputs(const std::string& results_path, const RunInputs& inputs) {
+    require_inputs_path_free(results_path);
     const std::string path = inputs_path(results_path), tmp = path + ".tmp";
     if (!fs::path(path).parent_path().empty()) fs::create_directories(fs::path(path).parent_path());
     {
@@ -50,7 +56,10 @@ void write_inputs(const std::string& results_path, const RunInputs& inputs) {
     fs::rename(tmp, path);
 }
 
-void remove_inputs(const std::string& results_path) { fs::remove(inputs_path(results_path)); }
+void remove_inputs(const std::string& results_path) {
+    require_inputs_path_free(results_path);
+    fs::remove(inputs_path(results_path));
+}
 
 std::string inputs_differences(const RunInputs& a, const std::string& a_name, const RunInputs& b,
                                const std::string& b_name) {

@@ -25,6 +25,9 @@ std::string inputs_path(const std::string& results_path);
 // The record of `results_path`'s inputs; nullopt when there is none (a file written before
 // records existed, or not by a run). Throws std::runtime_error for a malformed record.
 std::optional<RunInputs> read_inputs(const std::string& results_path);
+// Throws std::runtime_error naming it when the record's path is taken by something that is
+// not a regular file (a directory, a FIFO): checked before anything is written or measured.
+void require_inputs_path_free(const std::string& results_path);
 // Writes the record through a temporary file.
 void write_inputs(const std::string& results_path, const RunInputs& inputs);
 void remove_inputs(const std::string& results_path);

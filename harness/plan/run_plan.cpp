@@ -261,6 +261,7 @@ void choose_output(RunPlan& plan, const RunOptions& options) {
     const std::string reps = repetitions_path(plan.out);
     require_regular_file_or_absent(plan.out, "--out (the results CSV)");
     require_regular_file_or_absent(reps, "the repetitions file beside --out");
+    require_inputs_path_free(plan.out);
     const auto has_rows = [](const std::string& p) { return fs::exists(p) && fs::file_size(p) > 0; };
     if (!options.resume && has_rows(plan.out))
         throw UsageError("'" + plan.out + "' exists: pass --resume to continue it, or choose another --out");

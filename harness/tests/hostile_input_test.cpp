@@ -80,11 +80,28 @@ TEST_F(HostileInputTest, AnOutputThatIsNotARegularFileIsRefused) {
     const Outcome o = run({config, "--out", path("r.csv")});
     EXPECT_EQ(o.code, 2);
     EXPECT_NE(o.err.find("r.reps.csv' is a directory"), std::string::npos) << o.err;
+    // And the record of inputs: refused before any file is made (before: the run made
+    // i.csv, i.reps.csv and i.inputs.csv.tmp, then failed to rename it, naming no output).
+    fs::create_directories(path("i.inputs.csv"));
+    const Outcome in = run({config, "--out", path("i.csv")});
+    EXPECT_EQ(in.code, 2);
+    EXPECT_NE(in.err.find("i.inputs.csv' is a directory: the record of inputs beside"), std::string::npos) << in.err;
+    for (const char* made : {"i.csv", "i.reps.csv", "i.inputs.csv.tmp"}) EXPECT_FALSE(fs::exists(path(made))) << made;
+    // A file where the output's directory belongs is named as such.
+    write_file(dir.path(), "plain", "x");
+    const Outcome under = run({config, "--out", path("plain/sub/u.csv")});
+    EXPECT_EQ(under.code, 2);
+    EXPECT_NE(under.err.find("'" + path("plain") + "' is not a directory: it would hold the output"), std::string::npos)
+        << under.err;
     // merge's output likewise.
     ASSERT_EQ(run({config, "--out", out}).code, 0);
     const Outcome m = run({"/dev/null", out}, true);
     EXPECT_EQ(m.code, 2);
     EXPECT_NE(m.err.find("'/dev/null' is a device"), std::string::npos) << m.err;
+    const Outcome mi = run({path("i.csv"), out}, true);
+    EXPECT_EQ(mi.code, 2);
+    EXPECT_NE(mi.err.find("i.inputs.csv' is a directory"), std::string::npos) << mi.err;
+    EXPECT_FALSE(fs::exists(path("i.csv")));
 }
 
 TEST_F(HostileInputTest, ASecondWriterOfOneOutputIsRefused) {

@@ -55,7 +55,21 @@ void OutputLock::release() {
 
 void OutputLock::add(const std::string& path) {
     require_regular_file_or_absent(path, "an output");
-    if (!fs::path(path).parent_path().empty()) fs::create_directories(fs::path(path).parent_path());
+    if (const fs::path dir = fs::path(path).parent_path(); !dir.empty()) {
+        // The first existing ancestor must be a directory ("filesystem error: cannot create
+        // directories" named neither the output nor what was in its way).
+        for (fs::path p = dir; !p.empty(); p = p.parent_path()) {
+            std::error_code ec;
+            if (fs::exists(p, ec)) {
+                if (!fs::is_directory(p, ec))
+                    throw std::runtime_error("'" + p.string() + "' is not a directory: it would hold the output '" +
+                                             path + "'");
+                break;
+            }
+            if (p == p.parent_path()) break;
+        }
+        fs::create_directories(dir);
+    }
     const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0) throw std::runtime_error("cannot open '" + path + "' for writing: " + std::strerror(errno));
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
