@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 
 #include "accelbench/accel/registry.h"
+#include "accelbench/base/param_table.h"
 #include "accelbench/verify/robustness_cases.h"
 #include "config/config.h"
 #include "harness_test_util.h"
@@ -496,24 +497,26 @@ accelerators: [{name: kdtree, params: {max_prims: 0x8, traversal_cost: 007.5}}]
         << all_issues(e);
 }
 
-// render.threads reaches a structure's own `threads` parameter: a count outside its range
-// is named at render.threads, with file and line.
-TEST_F(ConfigTest, ThreadCountsOutsideAStructuresThreadsParameterAreNamedAtRenderThreads) {
-    const ConfigError e = load_error(write("t.yaml", R"(render: {threads: 1024}
+// render.threads reaches a structure's own `threads` parameter when its entry gives none:
+// every count render.threads takes is one each structure builds with (lbvh took at most 256
+// of the 1024, and a config of 1024 render threads was refused through lbvh's parameter).
+TEST_F(ConfigTest, EveryRenderThreadCountIsOneEveryStructureBuildsWith) {
+    for (const AcceleratorInfo& info : accelerator_registry())
+        for (const ParamSpec& spec : info.params)
+            if (spec.name == "threads") {
+                EXPECT_LE(spec.min, 1) << info.name;
+                EXPECT_GE(spec.max, kMaxThreads) << info.name;
+            }
+    const Config c = load_config(write("t.yaml", R"(render: {threads: [1, 1024]}
 models: [igea]
 accelerators: [{name: embree}, {name: lbvh}]
-)"));
-    EXPECT_EQ(e.issues().size(), 1u) << all_issues(e);
-    EXPECT_TRUE(has_issue(e, 1, 19, "render.threads",
-                          "thread count 1024 is outside the range of accelerators[1] ('lbvh')'s own `threads` "
-                          "parameter, [0, 256]"))
-        << all_issues(e);
-    // Given on the entry, the render thread count does not reach it.
-    EXPECT_NO_THROW(load_config(write("u.yaml", R"(render: {threads: [1, 1024]}
-models: [igea]
-accelerators: [{name: lbvh, params: {threads: 0}}]
 )"),
-                                registry()));
+                                 registry());
+    EXPECT_EQ(c.thread_counts, (std::vector<int>{1, 1024}));
+    EXPECT_TRUE(has_issue(load_error(write("u.yaml",
+                                           "render: {threads: 1025}\nmodels: [igea]\naccelerators: "
+                                           "[{name: lbvh}]\n")),
+                          1, 19, "render.threads", "out of range [1, 1024]"));
 }
 
 // A ray CSV saved by a spreadsheet starts with a UTF-8 byte-order mark: read; UTF-16 is
