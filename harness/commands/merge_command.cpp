@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "accelbench/base/params.h"
 #include "commands/args.h"
 #include "commands/cli.h"
 #include "csv/results.h"
@@ -63,7 +64,9 @@ int merge_command(int argc, char** argv) {
         try {
             shards = parse_shard("0/" + shards_text).count;
         } catch (const std::invalid_argument&) {
-            return args.error("--shards expects a count > 0, got '" + shards_text + "'");
+            const std::string form = number_form_problem(shards_text);  // "02": the number rule's words
+            return args.error("--shards expects a count > 0, got '" + shards_text + "'" +
+                              (form.empty() ? "" : ": " + form));
         }
     }
     if (files.size() < 2) return args.error("give OUT.csv and at least one IN.csv");
