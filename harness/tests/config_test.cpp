@@ -421,6 +421,26 @@ TEST_F(ConfigTest, BadRayFileLinesNameTheRayFile) {
     EXPECT_TRUE(has_issue(e, 4, 9, "models[0].rays.file", "field 5 is not a number: 'x'"));
 }
 
+// A value is read as written, inf and nan included; one that is no float (1e-50 became a
+// zero direction, 1e999 an infinite origin: every row's answer far from the cause) or a
+// hexadecimal float (strtof's 0x1) is named at its line and column.
+TEST_F(ConfigTest, RayFileValuesThatAreNoFloatAreNamed) {
+    write_triangle_case(dir.path());
+    write("f.rays.csv",
+          "ox,oy,oz,dx,dy,dz\n0,0,1,0,0,-1e-50\n1e999,0,1,0,0,-1\n0,0,0x1,0,0,-1\n0,0,1,-inf,nan,-1\n"
+          "0,0,1,0,-0,-1.5e-3\n");
+    const ConfigError e = load_error(write("a.yaml",
+                                           "models: [{path: tri.obj, rays: {file: f.rays.csv}}]\n"
+                                           "accelerators: [{name: embree}]\n"));
+    EXPECT_EQ(e.issues().size(), 3u) << all_issues(e);
+    EXPECT_TRUE(
+        has_issue(e, 2, 11, "models[0].rays.file", "field 6: value -1e-50 does not survive conversion to float"))
+        << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 3, 1, "models[0].rays.file", "field 1: value 1e999 is beyond the float range"))
+        << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 4, 5, "models[0].rays.file", "field 3: '0x1' is hexadecimal")) << all_issues(e);
+}
+
 TEST_F(ConfigTest, RayFileNeedsItsHeader) {
     write_triangle_case(dir.path());
     write("nohead.rays.csv", "0,0,1,0,0,-1\n");
