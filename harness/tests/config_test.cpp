@@ -358,6 +358,11 @@ accelerators: [{name: embree}]
     EXPECT_TRUE(has_issue(e, 1, 28, "render.height", "expected an integer"));
     EXPECT_TRUE(has_issue(e, 1, 41, "render.light", "expected true or false, got 'maybe'"));
     EXPECT_TRUE(has_issue(e, 1, 57, "render.shading", "expected true or false, got a list"));
+    // Quoted, a word read as a bool unquoted is named as the string it is.
+    EXPECT_TRUE(has_issue(load_error(write("q.yaml",
+                                           "render: {light: \"yes\"}\nmodels: [stanford-bunny]\n"
+                                           "accelerators: [{name: embree}]\n")),
+                          1, 17, "render.light", "expected true or false, got the string 'yes'"));
 }
 
 TEST_F(ConfigTest, CameraErrors) {

@@ -301,9 +301,10 @@ std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::st
 
 std::optional<bool> read_bool(Checker& c, const YAML::Node& n, const std::string& path) {
     if (bool v = false; n.IsScalar() && !quoted(n) && parse_bool_text(n.Scalar(), v)) return v;
+    // A quoted "true" is a string: said so, or the message would refuse what it reads as a bool.
     c.error(n, path,
             std::string("expected true or false, got ") +
-                (n.IsScalar() ? "'" + n.Scalar() + "'" : std::string(kind_of(n))));
+                (!n.IsScalar() ? std::string(kind_of(n)) : (quoted(n) ? "the string '" : "'") + n.Scalar() + "'"));
     return std::nullopt;
 }
 
