@@ -105,7 +105,8 @@ test-sanitize: deps
 # own, results/runs/<UTC time>-<short sha>[-quick]/ (csv/, tables/, figures/, REPORT.md,
 # run.json), then points results/latest at it. It continues a run only when the newest run
 # of the same configs is unfinished and was measured by a build with the same provenance
-# (`accelbench provenance`); otherwise it starts afresh and says why; FRESH=1 never
+# (`accelbench provenance`) from the same contents (sha256 of the configs, model and ray
+# files); otherwise it starts afresh and says why; FRESH=1 never
 # continues. The driver: analysis/accelbench_analysis/reproduce.py. REPORT.md compares
 # the run with the report and the committed reference run (results/reference/).
 # The configs of the job, in order (add one here):
@@ -224,7 +225,7 @@ ROBUSTNESS_DIR ?= results/robustness
 
 robustness: build models venv
 	mkdir -p $(ROBUSTNESS_DIR)
-	rm -f $(ROBUSTNESS_DIR)/robustness.csv $(ROBUSTNESS_DIR)/robustness.reps.csv
+	rm -f $(ROBUSTNESS_DIR)/robustness.csv $(ROBUSTNESS_DIR)/robustness.reps.csv $(ROBUSTNESS_DIR)/robustness.inputs.csv
 	set -o pipefail; $(ACCELBENCH) run --out $(ROBUSTNESS_DIR)/robustness.csv configs/robustness.yaml \
 	  | tee $(ROBUSTNESS_DIR)/robustness.log | sed -n '/^Robustness verdicts/,$$p'
 	$(ANALYSIS) robustness --csv $(ROBUSTNESS_DIR)/robustness.csv --out $(ROBUSTNESS_DIR)

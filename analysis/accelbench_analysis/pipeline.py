@@ -267,11 +267,15 @@ def add_scaling(sub) -> None:
 
 
 def run_scaling(args: argparse.Namespace) -> int:
+    from .mapping.selection import report_rows
     from .outputs.scaling import write_scaling
 
-    results = load_results(args.csv)
+    # The report's workload: camera rays on one thread, one image per model.
+    results, notes = report_rows(load_results(args.csv), what="the scaling fit")
     for w in results.warnings:
         print(f"warning: {w}", file=sys.stderr)
+    for note in notes:
+        print(f"note: {note}", file=sys.stderr)
     for path in write_scaling(results, args.out):
         print(path)
     return 0
@@ -339,25 +343,24 @@ def run(args: argparse.Namespace) -> list[Path]:
     out: Path = args.out
     written: list[Path] = []
     claims = figures = comparison = None
-    # Ray-set and thread-scaling rows have outputs of their own; the report's
-    # tables, claims and figures see only the other rows.
-    from dataclasses import replace
+    # Ray-set and thread-scaling rows have outputs of their own; the report's tables,
+    # claims and figures see only the rows of the report's workload (report_rows), and say
+    # what they left out.
+    from .mapping.selection import report_rows
+    from .outputs.claims import is_ablation, without_ablations
+    from .outputs.workloads import without_thread_scaling, write_workloads
 
-    from .outputs.workloads import workload_mask, write_workloads
-
-    beyond = workload_mask(results.rows)
-    if args.command == "all" and beyond.any():
+    if args.command == "all":
         written += write_workloads(results, out)
-    if beyond.any() and not beyond.all():
-        results = replace(results, rows=results.rows[~beyond])
-    if reference is not None:  # like with like: the reference run's report rows only
-        ref_beyond = workload_mask(reference.rows)
-        if ref_beyond.any() and not ref_beyond.all():
-            reference = replace(reference, rows=reference.rows[~ref_beyond])
+    results, left_out = without_thread_scaling(results)
+    results, notes = report_rows(results, own_image=is_ablation(results.rows))
+    for note in left_out + notes:
+        print(f"note: {note}", file=sys.stderr)
+    if reference is not None:  # compared like with like: the same workload
+        reference, _ = without_thread_scaling(reference)
+        reference, _ = report_rows(reference, own_image=is_ablation(reference.rows))
     # Ablation rows (configs/ablations.yaml) are judged by the claims only: the tables and
     # figures show the run at the report's settings.
-    from .outputs.claims import is_ablation, without_ablations
-
     with_ablations, results = results, without_ablations(results)
     if args.command in ("tables", "all"):
         ablation_rows = with_ablations.rows[is_ablation(with_ablations.rows)]

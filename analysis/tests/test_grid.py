@@ -212,6 +212,16 @@ def test_config_errors_name_the_key(tmp_path):
         load_grid_config(nogrid)
 
 
+@pytest.mark.parametrize("written", ["010", "0x10", "0b11", "1_000", "1:30"])
+def test_integers_yaml_readers_disagree_on_are_refused(tmp_path, written):
+    path = grid_config(tmp_path)
+    path.write_text(path.read_text().replace("frames: 3", f"frames: {written}"))
+    with pytest.raises(
+        GridConfigError, match=rf"line \d+: '{written}' is written in a form YAML readers read differently"
+    ):
+        load_grid_config(path)
+
+
 @needs_binary
 def test_example_config_loads_and_counts(tmp_path):
     cfg = load_grid_config(REPO / "configs" / "grid-kdtree-bunny.yaml")
@@ -283,6 +293,23 @@ def test_a_second_measurement_with_more_repetitions_wins(tmp_path):
     a = analyse(load_results([first, second]), cfg)
     assert key(a.best("stanford-bunny")) == (4, 10, 0)  # B: 1 + 3 * 3 = 10 < 5 + 3 * 4
     assert any("set aside" in n for n in a.notes)
+
+
+def test_rows_of_several_workloads_are_refused_not_ranked_together(tmp_path):
+    """A grid measured on 1 and on 4 render threads: a candidate would be ranked by its
+    4-thread time against another's 1-thread time (the dedupe kept one row per candidate)."""
+    one = grid_rows()
+    four = [dict(r, prov=dict(r["prov"], render_threads="4")) for r in grid_rows()]
+    path = write_csv(tmp_path / "mixed.csv", one + four, with_errors=True)
+    cfg = load_grid_config(grid_config(tmp_path))
+    with pytest.raises(
+        GridConfigError, match=r"holds rows of 2 workloads .*render_threads=1.0.*render_threads=4.0"
+    ):
+        analyse(load_results([path]), cfg)
+    cheap = write_csv(tmp_path / "cheap.csv", four, with_errors=True)
+    final = write_csv(tmp_path / "final.csv", one, with_errors=True)
+    with pytest.raises(GridConfigError, match="the cheap pass measured another workload"):
+        analyse(load_results([final]), cfg, load_results([cheap]))
 
 
 def test_marker_positions():

@@ -165,10 +165,18 @@ def bvh_and_embree(sha: str, stamp: str, nodes: int, render: float, config: str 
     ]
 
 
+def write_inputs(results_csv: Path) -> None:
+    """The record of inputs a run writes beside its results (NAME.inputs.csv): not a results file."""
+    results_csv.with_name(results_csv.name[:-4] + ".inputs.csv").write_text(
+        "kind,sha256,name\nconfig," + "0" * 64 + ",x\n"
+    )
+
+
 def main_run(results: Path, name: str, rows: list[dict], started: str) -> Path:
     d = results / "runs" / name
     (d / "csv").mkdir(parents=True)
     write_csv(d / "csv" / "table4.csv", rows)
+    write_inputs(d / "csv" / "table4.csv")
     meta = {
         "job": {"configs": ["table4.yaml"], "tag": ""},
         "started": started,
@@ -205,6 +213,7 @@ def machine(tmp_path):
     regress = results / "runs" / "regress"
     regress.mkdir()
     write_csv(regress / "run-1.csv", bvh_and_embree(second, "2024-01-04T00:00:00Z", 120, 1.5, config="ci"))
+    write_inputs(regress / "run-1.csv")
     (regress / "report-1.md").write_text("# Regression check: FAIL\n\n- tier 1 failed\n")
     return repo, results, first, second
 
@@ -276,3 +285,16 @@ def test_runs_page_lists_runs_newest_first_with_commits(machine):
     order = [text.index(n) for n in ("runs/regress", "20240102T000000Z-first", "20240101T000000Z-second")]
     assert order == sorted(order)
     assert first[:7] in text and second[:7] in text and "history/index.html" in text
+
+
+def test_the_files_beside_a_results_file_are_not_results_of_their_own(machine):
+    """NAME.inputs.csv beside a run's and the regression check's results: neither collected
+    (nor "left out" as a file that is no harness CSV) nor listed as the check's results."""
+    repo, results, first, second = machine
+    run_history(repo, results)
+    collected = pd.read_csv(results / "history" / "sources.csv", dtype=str)["file"]
+    assert not collected.str.endswith(".inputs.csv").any()
+    assert collected.str.endswith("run-1.csv").any()
+    assert "left out" not in (results / "history" / "index.html").read_text()
+    runs = (results / "index.html").read_text()
+    assert "run-1.csv" in runs and "run-1.inputs.csv" not in runs

@@ -83,6 +83,25 @@ def test_reps_file_is_not_a_summary(tmp_path):
     p.write_text("config,model,accel,params,repetition,build_s,render_s\n")
     with pytest.raises(ContractError, match="per-repetition"):
         read_csv(p)
+    p = tmp_path / "x.inputs.csv"
+    p.write_text("kind,sha256,name\nconfig," + "0" * 64 + ",x\n")
+    with pytest.raises(ContractError, match="record of its inputs"):
+        read_csv(p)
+
+
+def test_unknown_ray_set_and_thread_counts_that_are_no_count_rejected(tmp_path):
+    rows = [
+        row("stanford-bunny", "bvh", BUNNY_BVH, build=1, render=1, extra={"ray_set": "sunbeams"}),
+        row("igea", "bvh", BUNNY_BVH, build=1, render=1, render_threads="0.5"),
+        row("stanford-dragon", "bvh", BUNNY_BVH, build=1, render=1, render_threads="0"),
+    ]
+    path = write_csv(tmp_path / "r.csv", rows, extra_columns=("ray_set",))
+    with pytest.raises(ContractError) as e:
+        read_csv(path)
+    msg = str(e.value)
+    assert "column 'ray_set' must be one of camera, primary, shadow, ao, diffuse, random" in msg
+    assert "['sunbeams'] on line 2 (row 1)" in msg
+    assert "column 'render_threads' must be a whole number of at least 1; found ['0', '0.5']" in msg
 
 
 def test_malformed_params_rejected():

@@ -21,8 +21,11 @@ from accelbench_analysis.reproduce import (
     RUN_JSON,
     Job,
     Progress,
+    ReproduceError,
     csv_rows,
     decide,
+    inputs_differences,
+    prepare_into,
     provenance_differences,
     reproduce,
     tree_changes,
@@ -103,6 +106,38 @@ def test_decide_resumes_only_an_unfinished_run_of_the_same_build_and_job(tmp_pat
     # The newest run of the job decides: a finished one after the unfinished one wins.
     make_run(runs, "20261201T160000Z-aaaaaaa", complete=True)
     assert not decide(runs, JOB, PROV, False, NOW).resume
+
+
+INPUTS = {"tiny.yaml": [["config", "1" * 64, "tiny"], ["model", "2" * 64, "mesh.obj"]]}
+
+
+def test_decide_continues_only_a_run_of_the_same_contents(tmp_path):
+    runs = tmp_path / "runs"
+    d = make_run(runs, "20261201T100000Z-aaaaaaa", complete=False)
+    meta = json.loads((d / RUN_JSON).read_text())
+    (d / RUN_JSON).write_text(json.dumps(dict(meta, inputs=INPUTS)))
+    # No rows yet: nothing can mix, the run is continued whatever the contents.
+    other = {"tiny.yaml": [["config", "1" * 64, "tiny"], ["model", "3" * 64, "mesh.obj"]]}
+    assert decide(runs, JOB, PROV, False, NOW, other).resume
+    (d / "csv" / "tiny.csv").write_text("config,combo_id\ntiny,1\n")
+    assert decide(runs, JOB, PROV, False, NOW, INPUTS).resume
+    # The same config name, a model file of other contents: a new run, saying which.
+    new = decide(runs, JOB, PROV, False, NOW, other)
+    assert not new.resume and new.run_dir != d
+    assert "tiny.yaml: model mesh.obj: sha256 222222222222 then, 333333333333 now" in new.reason
+    edited = {"tiny.yaml": [["config", "4" * 64, "tiny"], *INPUTS["tiny.yaml"][1:]]}
+    assert (
+        "config tiny: sha256 111111111111 then, 444444444444 now"
+        in decide(runs, JOB, PROV, False, NOW, edited).reason
+    )
+    # A run that recorded no inputs (an older driver) with rows: its contents are unknown.
+    (d / RUN_JSON).write_text(json.dumps(meta))
+    assert not decide(runs, JOB, PROV, False, NOW, INPUTS).resume
+    assert inputs_differences(INPUTS, INPUTS) == []
+    assert inputs_differences(INPUTS, {}) == [
+        "tiny.yaml: config tiny: only then",
+        "tiny.yaml: model mesh.obj: only then",
+    ]
 
 
 def test_progress_line_counts_over_all_configs():
@@ -215,6 +250,188 @@ def test_an_interrupted_run_continues_with_the_same_build_only(tmp_path, capfd):
     assert rc == 0 and fresh not in (run, other)
     assert "git_sha: " + "0" * 40 in capfd.readouterr().err
     assert csv_rows(fresh / "csv" / "tiny.csv") == 2
+
+
+@needs_binary
+def test_a_run_of_other_contents_under_the_same_names_is_not_continued(tmp_path, capfd):
+    rc, run = reproduce(tiny_job(tmp_path, broken=True), NOW)
+    assert rc == 2 and csv_rows(run / "csv" / "tiny.csv") == 2
+    assert [k for k, _, _ in run_json(run)["inputs"]["second.yaml"]] == ["config", "model"]
+    # tiny.yaml has rows; the same file name with another structure in it starts afresh.
+    config = tmp_path / "tiny.yaml"
+    config.write_text(config.read_text().replace("{name: lbvh}", "{name: kdtree}"))
+    (tmp_path / "mesh.obj").write_text(MESH_GOOD)
+    capfd.readouterr()
+    rc, fresh = reproduce(tiny_job_configs(tmp_path), NOW + timedelta(minutes=1))
+    assert rc == 0 and fresh != run
+    assert (
+        "measured from other contents under the same names (tiny.yaml: config tiny: sha256"
+        in capfd.readouterr().err
+    )
+    accels = sorted(load_results([fresh / "csv" / "tiny.csv"]).rows["accel"])
+    assert accels == ["bvh", "kdtree"]  # not the earlier run's lbvh row beside them
+
+    # A mesh file given by path and changed after its rows were measured.
+    rc, done = reproduce(tiny_job_configs(tmp_path), NOW + timedelta(minutes=2))
+    meta = run_json(done)
+    meta["complete"] = False
+    (done / RUN_JSON).write_text(json.dumps(meta))
+    (tmp_path / "mesh.obj").write_text(MESH_GOOD + "v 2 2 0\nf 2 5 4\n")
+    capfd.readouterr()
+    rc, after = reproduce(tiny_job_configs(tmp_path), NOW + timedelta(minutes=3))
+    assert rc == 0 and after != done
+    assert "second.yaml: model " in capfd.readouterr().err
+    assert set(load_results([after / "csv" / "second.csv"]).rows["triangles"]) == {3}
+
+
+def tiny_job_configs(tmp_path: Path) -> Job:
+    """tiny_job's configs as they are now in tmp_path (not rewritten)."""
+    return Job(
+        accelbench=ACCELBENCH,
+        configs=[tmp_path / "tiny.yaml", tmp_path / "second.yaml"],
+        runs=tmp_path / "runs",
+        latest=tmp_path / "latest",
+        analyse=False,
+    )
+
+
+@needs_binary
+def test_a_config_the_harness_refuses_is_its_message_before_anything_is_written(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: bad\nmodels: [stanford-bunny]\naccelerators: [{name: nope}]\n")
+    good = tmp_path / "tiny.yaml"
+    good.write_text(TINY.format(name="tiny", model="{procedural: soup, triangles: 200, seed: 1}"))
+    rc = main(
+        [
+            "reproduce",
+            str(good),
+            str(bad),
+            "--accelbench",
+            str(ACCELBENCH),
+            "--runs",
+            str(tmp_path / "runs"),
+            "--latest",
+            str(tmp_path / "latest"),
+        ]
+    )
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert "unknown accelerator 'nope'" in err and "Traceback" not in err and "CalledProcessError" not in err
+    assert not (tmp_path / "runs").exists()  # nothing measured, no run directory
+
+
+@needs_binary
+def test_a_tag_with_a_dash_continues_and_a_tag_that_is_no_name_is_refused(tmp_path, capfd):
+    job = tiny_job(tmp_path, broken=True)
+    job.tag = "my-tag.2"
+    rc, run = reproduce(job, NOW)
+    assert rc == 2 and run.name.endswith("-my-tag.2")
+    job = tiny_job(tmp_path)
+    job.tag = "my-tag.2"
+    capfd.readouterr()
+    rc, again = reproduce(job, NOW + timedelta(minutes=1))
+    assert rc == 0 and again == run and "continuing" in capfd.readouterr().err
+    for bad in ("a/b", "..", "-x"):
+        job.tag = bad
+        assert reproduce(job, NOW)[0] == 2
+        assert "--tag" in capfd.readouterr().err
+
+
+@needs_binary
+def test_a_cost_images_command_that_does_not_exist_is_named(tmp_path):
+    job = tiny_job(tmp_path)
+    job.analyse, job.cost_images = True, [str(tmp_path / "no-such-script.sh")]
+    with pytest.raises(ReproduceError, match="cannot run the cost images command .*no-such-script.sh"):
+        reproduce(job, NOW)
+
+
+def test_a_directory_where_latest_belongs_is_refused_before_measuring(tmp_path, capsys):
+    (tmp_path / "latest").mkdir()
+    (tmp_path / "latest" / "mine.txt").write_text("keep")
+    config = tmp_path / "tiny.yaml"
+    config.write_text("name: tiny\n")
+    job = Job(
+        accelbench=tmp_path / "no-such-binary",
+        configs=[config, tmp_path / "other" / "tiny.yaml"],
+        runs=tmp_path / "runs",
+        latest=tmp_path / "latest",
+    )
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "tiny.yaml").write_text("name: tiny\n")
+    rc, _ = reproduce(job, NOW)
+    err = capsys.readouterr().err
+    assert rc == 2 and "nothing measured" in err
+    assert f"{tmp_path / 'latest'} is a directory, not the link" in err
+    assert "would both write csv/tiny.csv" in err
+    assert (tmp_path / "latest" / "mine.txt").read_text() == "keep" and not (tmp_path / "runs").exists()
+
+
+def test_a_directory_where_a_page_belongs_is_refused_before_measuring(tmp_path, capsys):
+    """results/index.html (the runs page, written when the job ends) and a run's own
+    index.html: a directory there ended the job in a traceback after measuring."""
+    config = tmp_path / "tiny.yaml"
+    config.write_text("name: tiny\n")
+    (tmp_path / "results" / "index.html").mkdir(parents=True)
+    (tmp_path / "ref" / "index.html").mkdir(parents=True)
+    for into in (None, tmp_path / "ref"):
+        job = Job(
+            accelbench=tmp_path / "no-such-binary",
+            configs=[config],
+            runs=tmp_path / "results" / "runs",
+            latest=tmp_path / "results" / "latest",
+            into=into,
+        )
+        rc, _ = reproduce(job, NOW)
+        err = capsys.readouterr().err
+        assert rc == 2 and "nothing measured" in err
+        assert f"{tmp_path / 'results' / 'index.html'} is a directory" in err
+        if into is not None:
+            assert f"{into / 'index.html'} is not a file" in err
+    assert not (tmp_path / "results" / "runs").exists()
+
+
+def test_into_removes_only_what_the_driver_wrote(tmp_path):
+    into = tmp_path / "results"
+    (into / "runs" / "20261201T100000Z-aaaaaaa").mkdir(parents=True)
+    (into / "runs" / "20261201T100000Z-aaaaaaa" / "table4.csv").write_text("a run")
+    (into / "csv").mkdir()
+    (into / "csv" / "mine.csv").write_text("mine")
+    with pytest.raises(ReproduceError, match="holds files this driver did not write"):
+        prepare_into(into)
+    assert (into / "runs" / "20261201T100000Z-aaaaaaa" / "table4.csv").read_text() == "a run"
+
+    # A directory an earlier run wrote: its run.json lists what; everything else stays.
+    ref = tmp_path / "reference"
+    for rel in ("csv/table4.csv", "tables/table4.md", "figures/a.png", "README.md", "tables/notes.md"):
+        (ref / rel).parent.mkdir(parents=True, exist_ok=True)
+        (ref / rel).write_text(rel)
+    written = ["csv/table4.csv", "figures/a.png", RUN_JSON, "tables/table4.md"]
+    (ref / RUN_JSON).write_text(json.dumps({"job": JOB, "written": written}))
+    assert prepare_into(ref) == {"README.md", "tables/notes.md"}
+    assert sorted(str(p.relative_to(ref)) for p in ref.rglob("*")) == [
+        "README.md",
+        "tables",
+        "tables/notes.md",
+    ]
+    assert prepare_into(tmp_path / "new" / "dir") == set() and (tmp_path / "new" / "dir").is_dir()
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(ReproduceError, match="not a directory"):
+        prepare_into(tmp_path / "file")
+
+
+@needs_binary
+def test_into_records_what_it_wrote_and_keeps_the_rest(tmp_path):
+    job = tiny_job(tmp_path)
+    job.into = tmp_path / "ref"
+    job.into.mkdir()
+    rc, run = reproduce(job, NOW)
+    assert rc == 0 and run == job.into
+    written = run_json(run)["written"]
+    assert "csv/tiny.csv" in written and "csv/tiny.inputs.csv" in written and RUN_JSON in written
+    (run / "README.md").write_text("by hand")
+    rc, again = reproduce(job, NOW + timedelta(minutes=1))
+    assert rc == 0 and (run / "README.md").read_text() == "by hand"
+    assert "README.md" not in run_json(run)["written"]
 
 
 # ---- the reference run's clean-tree rule ------------------------------------------------------

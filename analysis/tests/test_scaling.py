@@ -91,6 +91,24 @@ def test_scaling_command_writes_figure_and_table(scaling_csv, tmp_path):
         assert im.size[0] > 1000
 
 
+def test_the_fit_takes_one_row_per_size_of_the_reports_workload(tmp_path, capsys):
+    rows = scaling_rows()
+    # The same structure on one size on 4 threads (a faster render): left out, said.
+    extra = row("stanford-bunny", "bvh", BVH, build=1.0, render=1e-6, config="scaling", render_threads="4")
+    extra["triangles"] = SIZES["stanford-bunny"]
+    path = write_csv(tmp_path / "s.csv", rows + [extra])
+    out = tmp_path / "out"
+    assert main(["scaling", str(path), "--out", str(out)]) == 0
+    assert "| BVH (median) | 1.20 | 0.30 | 1.20 | 0.30 |" in (out / "tables" / "scaling.md").read_text()
+    assert "left out of the scaling fit: 1 rows rendered on more than one thread" in capsys.readouterr().err
+    # Two rows of one structure on one size (other parameters): refused, naming them.
+    other = row("stanford-bunny", "bvh", dict(BVH, max_prims="4"), build=1.0, render=1.0, config="scaling")
+    other["triangles"] = SIZES["stanford-bunny"]
+    path = write_csv(tmp_path / "d.csv", rows + [other])
+    assert main(["scaling", str(path), "--out", str(out)]) == 2
+    assert "more than one row of a structure on one model size" in capsys.readouterr().err
+
+
 def write_cost(path, w, h, nodes, prims):
     with path.open("w") as fh:
         fh.write("x,y,node_visits,prim_tests\n")

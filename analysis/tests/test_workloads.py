@@ -16,7 +16,7 @@ from accelbench_analysis.outputs.workloads import (
     ray_set_rows,
     ray_set_table,
     thread_scaling_rows,
-    workload_mask,
+    without_thread_scaling,
 )
 
 # Render seconds per (structure, set) for 1e6 rays: Mrays/s = 1 / seconds. The kd-tree
@@ -77,7 +77,7 @@ def thread_csv(path):
 
 def test_old_csvs_load_as_camera_rows(realistic):
     assert set(realistic.rows["ray_set"]) == {"camera"}
-    assert not workload_mask(realistic.rows).any()
+    assert without_thread_scaling(realistic) == (realistic, [])
 
 
 def test_ratio_to_embree_per_set(tmp_path):
@@ -89,6 +89,87 @@ def test_ratio_to_embree_per_set(tmp_path):
     assert t.loc[("kdtree", "ao"), "ratio_to_embree"] == pytest.approx(0.5)
     assert t.loc[("bvh", "ao"), "ratio_to_embree"] == pytest.approx(0.25)
     assert t.loc[("embree", "ao"), "ratio_to_embree"] == pytest.approx(1.0)
+
+
+def test_ratio_to_embree_only_within_one_workload(tmp_path):
+    """Embree at 1 and 2 render threads: each row is divided by Embree's row of its own
+    thread count, never by the median of both (which made Embree 1.43x of itself)."""
+    rows = []
+    for threads, seconds in ((1, 0.5), (2, 0.25)):
+        for accel, params, s in (
+            ("bvh", BVH, 2 * seconds),
+            ("embree", dict(EMBREE, threads=str(threads)), seconds),
+        ):
+            rows.append(
+                row(
+                    "stanford-bunny",
+                    accel,
+                    params,
+                    build=0.1,
+                    render=s,
+                    config="ray-sets",
+                    rays=1_000_000,
+                    shadow_rays=0,
+                    render_threads=str(threads),
+                    extra={"ray_set": "primary", "ray_set_hash": "0" * 16},
+                )
+            )
+    path = write_csv(tmp_path / "rs.csv", rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
+    t = ray_set_table(ray_set_rows(load_results([path])))
+    assert set(t["panel"]) == {"stanford-bunny (render_threads=1)", "stanford-bunny (render_threads=2)"}
+    assert list(t.loc[t["structure"] == "embree", "ratio_to_embree"]) == [1.0, 1.0]
+    assert list(t.loc[t["structure"] == "bvh", "ratio_to_embree"]) == [0.5, 0.5]
+    # Two Embree rows of one workload: the one at Embree's defaults divides.
+    rows.append(
+        row(
+            "stanford-bunny",
+            "embree",
+            dict(EMBREE, quality="high"),
+            build=0.1,
+            render=0.1,
+            config="ray-sets",
+            rays=1_000_000,
+            shadow_rays=0,
+            extra={"ray_set": "primary", "ray_set_hash": "0" * 16},
+        )
+    )
+    path = write_csv(tmp_path / "rs2.csv", rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
+    t = ray_set_table(ray_set_rows(load_results([path])))
+    one = t[t["workload"] == "render_threads=1"].set_index("structure")["ratio_to_embree"]
+    assert one["bvh"] == pytest.approx(0.5) and one["embree quality=medium"] == pytest.approx(1.0)
+
+
+def test_ray_sets_at_several_thread_counts_are_said_to_be_in_the_ray_set_table(tmp_path):
+    """Ray-set rows of a config with several render thread counts are left out of the
+    report's tables as thread-scaling rows, and the note says where they are: the ray-set
+    table (a section per thread count), not the thread-scaling table, which takes camera
+    rows only and has none of them."""
+    rows = [
+        row(
+            "stanford-bunny",
+            accel,
+            params,
+            build=0.1,
+            render=0.5 / threads,
+            config="ray-sets",
+            rays=1_000_000,
+            shadow_rays=0,
+            render_threads=str(threads),
+            extra={"ray_set": rs, "ray_set_hash": f"{rs:0>16}"},
+        )
+        for threads in (1, 2)
+        for rs in ("primary", "shadow")
+        for accel, params in (("bvh", BVH), ("embree", dict(EMBREE, threads=str(threads))))
+    ]
+    path = write_csv(tmp_path / "rs.csv", rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
+    results = load_results([path])
+    assert thread_scaling_rows(results).empty
+    _, notes = without_thread_scaling(results)
+    assert len(notes) == 1 and "8 rows of ray sets in tables/ray_sets.md" in notes[0]
+    assert "thread_scaling.md" not in notes[0]
+    # Camera rows of a thread-scaling run are where the note says, too.
+    _, notes = without_thread_scaling(load_results([thread_csv(tmp_path / "ts.csv")]))
+    assert "4 rows of camera rays in tables/thread_scaling.md" in notes[0]
 
 
 def test_ranking_marks_where_the_order_changes(tmp_path):

@@ -142,7 +142,7 @@ const ParamTable<ToyConfig>& toy_params() {
     static const ParamTable<ToyConfig> rows = {
         int_param("depth", &ToyConfig::depth, 0, 100, "depth"),
         auto_int_param("leaf", &ToyConfig::leaf, 1, 16, "leaf; auto = by scene"),
-        threads_param("threads", &ToyConfig::threads, 64, "threads"),
+        threads_param("threads", &ToyConfig::threads, "threads"),
         float_param("cost", &ToyConfig::cost, 0, 10, "cost"),
         bool_param("fast", &ToyConfig::fast, "fast"),
         enum_param("shape", &ToyConfig::shape, kShapeNames, "shape"),

@@ -2,6 +2,9 @@
 
 #include <charconv>
 #include <cstdio>
+#include <utility>
+
+#include "accelbench/base/params.h"
 
 namespace accelbench {
 
@@ -16,21 +19,30 @@ bool Args::flag(std::string_view name) {
 
 bool Args::value(std::string_view name, std::string& out) {
     const std::string& a = current();
+    std::string given;
     if (a.size() > name.size() && a.compare(0, name.size(), name) == 0 && a[name.size()] == '=') {
-        out = a.substr(name.size() + 1);
+        given = a.substr(name.size() + 1);
         ++at_;
-        return true;
+    } else if (a == name) {
+        if (at_ + 1 >= argv_.size()) throw ArgError(a + " needs a value");
+        given = argv_[at_ + 1];
+        at_ += 2;
+    } else {
+        return false;
     }
-    if (a != name) return false;
-    if (at_ + 1 >= argv_.size()) throw ArgError(a + " needs a value");
-    out = argv_[at_ + 1];
-    at_ += 2;
+    // An empty value (`--out=` or --benchmark_out="$UNSET") would read as the option not
+    // given: the results would go to the default file, the JSON nowhere, silently.
+    if (given.empty()) throw ArgError(std::string(name) + " needs a value, got an empty one");
+    out = std::move(given);
     return true;
 }
 
 bool Args::value(std::string_view name, int& out, int lo, int hi) {
     std::string text;
     if (!value(name, text)) return false;
+    // The one rule for how a number is written (configs and k=v parameters alike): 010 is
+    // refused naming the form, not read as 10.
+    if (const std::string why = number_form_problem(text); !why.empty()) throw ArgError(std::string(name) + ": " + why);
     int v = 0;
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
     if (ec != std::errc() || end != text.data() + text.size() || v < lo || v > hi)

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "accelbench/base/params.h"
 #include "commands/args.h"
 #include "commands/cli.h"
 #include "csv/results.h"
@@ -19,11 +20,13 @@ const char* kMergeUsage =
     "usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
     "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
     "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
-    "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa) differs\n"
-    "  unless --allow-mixed, and a combination present in two inputs.\n"
+    "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa), config\n"
+    "  or record of inputs (NAME.inputs.csv: sha256 of the config, mesh and ray files) differs,\n"
+    "  or that have no such record, unless --allow-mixed; a combination present in two inputs;\n"
+    "  and an input a run is still writing (it holds the file's lock).\n"
     "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
     "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"
-    "  and refuses rows that are not of CONFIG\n"
+    "  and refuses rows that are not of CONFIG or measured from other contents than it has now\n"
     "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
     "  instructions of a callgrind run added to a timed run of the same config)\n";
 
@@ -61,13 +64,16 @@ int merge_command(int argc, char** argv) {
         try {
             shards = parse_shard("0/" + shards_text).count;
         } catch (const std::invalid_argument&) {
-            return args.error("--shards expects a count > 0, got '" + shards_text + "'");
+            const std::string form = number_form_problem(shards_text);  // "02": the number rule's words
+            return args.error("--shards expects a count > 0, got '" + shards_text + "'" +
+                              (form.empty() ? "" : ": " + form));
         }
     }
     if (files.size() < 2) return args.error("give OUT.csv and at least one IN.csv");
     if (!take.empty()) return take_one_column(files, take, allow_mixed);
     if (!config_path.empty())
-        if (int rc = check_shards_complete(config_path, shards, {files.begin() + 1, files.end()}); rc != 0) return rc;
+        if (int rc = check_shards_complete(config_path, shards, {files.begin() + 1, files.end()}, allow_mixed); rc != 0)
+            return rc;
     try {
         const size_t rows = merge_results(files[0], {files.begin() + 1, files.end()}, allow_mixed);
         std::fprintf(stderr, "accelbench merge: %zu rows from %zu files written to %s\n", rows, files.size() - 1,

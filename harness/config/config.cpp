@@ -68,34 +68,6 @@ void read_run_settings(ConfigReader& r, const Fields& top) {
         if (auto v = read_bool(r.c, e->value, "errors")) r.cfg.errors = *v;
 }
 
-// A structure with a `threads` parameter of its own builds with the render thread
-// count unless its entry gives one: a count outside that parameter's range is named
-// here, at render.threads, not later as the structure's parameter without a place.
-void check_thread_counts(ConfigReader& r) {
-    if (!r.threads_node) return;
-    for (const AcceleratorSpec& a : r.cfg.accelerators) {
-        const AcceleratorInfo* info = find_accelerator(a.name);
-        if (!info) continue;
-        bool given = false;
-        for (const ParamAxis& axis : a.axes)
-            for (const std::string& name : axis.names) given |= name == "threads";
-        if (given) continue;
-        for (const ParamSpec& spec : info->params) {
-            if (spec.name != "threads") continue;
-            for (int t : r.cfg.thread_counts)
-                if (double(t) < spec.min || double(t) > spec.max) {
-                    r.c.error(*r.threads_node, r.threads_path,
-                              "thread count " + std::to_string(t) + " is outside the range of " + a.key_path + " ('" +
-                                  a.name + "')'s own `threads` parameter, [" + format_float(spec.min) + ", " +
-                                  format_float(spec.max) +
-                                  "], which takes the render thread count: fewer threads, or give that entry "
-                                  "params: {threads: N}");
-                    break;
-                }
-        }
-    }
-}
-
 // The number of combinations (models x the sum over accelerator entries of the product
 // of their axes x thread counts x ray sets) is bounded before anything is expanded: three ranges of 10,000 values
 // each would otherwise allocate 10^12 combinations, with --dry-run too.
@@ -170,7 +142,6 @@ Config load_config(const std::string& path, const ModelRegistry& models) {
     if (auto* e = top.find("ray_sets")) read_ray_sets(r, e->value);
     if (auto* e = top.require("models")) read_models(r, e->value);
     if (auto* e = top.require("accelerators")) read_accelerators(r, e->value);
-    check_thread_counts(r);
     check_combination_count(r, top);
     check_reference_size(r);
     if (auto* e = top.find("skip")) read_skip_rules(r, e->value);

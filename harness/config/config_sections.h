@@ -31,8 +31,6 @@ struct ConfigReader {
     const ModelRegistry& registry;
     std::shared_ptr<const RaySet> default_rays;                      // the top-level `rays`
     std::map<std::string, std::shared_ptr<const RaySet>> ray_files;  // by resolved path: read once
-    std::optional<YAML::Node> threads_node;                          // render.threads, when given
-    std::string threads_path;
 
     // A path of the config, relative to its directory unless absolute.
     std::string resolve(const std::string& p) const;

@@ -240,6 +240,7 @@ void read_model(ConfigReader& r, const YAML::Node& n, const std::string& path) {
         return;
     }
     Fields f(r.c, n, path, {});  // keys depend on the form: checked below
+    if (!f.ok()) return;         // a merge key that merged nothing: named already
     const bool has_name = f.has("name"), has_path = f.has("path"), has_proc = f.has("procedural"),
                has_case = f.has("case");
     if (int(has_name) + int(has_path) + int(has_proc) + int(has_case) != 1) {

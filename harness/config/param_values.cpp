@@ -24,18 +24,22 @@ std::string strip_param_prefix(const std::string& msg) {
     return end == std::string::npos ? msg : msg.substr(end + 3);
 }
 
+// "an int value", "a float value", ...
+std::string a_value_of(ParamType t) {
+    const std::string type = to_string(t);
+    return (type.front() == 'i' || type.front() == 'e' ? "an " : "a ") + type + " value";
+}
+
 }  // namespace
 
 std::optional<std::string> read_param_value(Checker& c, const YAML::Node& n, const std::string& path,
                                             const std::string& owner, const ParamSpec& spec) {
     if (!n.IsScalar()) {
-        c.error(n, path, std::string("expected a ") + to_string(spec.type) + " value, got " + kind_of(n));
+        c.error(n, path, "expected " + a_value_of(spec.type) + ", got " + kind_of(n));
         return std::nullopt;
     }
     if (quoted(n) && spec.type != ParamType::Enum) {
-        c.error(
-            n, path,
-            std::string("expected a ") + to_string(spec.type) + " value, got the quoted string '" + n.Scalar() + "'");
+        c.error(n, path, "expected " + a_value_of(spec.type) + ", got the quoted string '" + n.Scalar() + "'");
         return std::nullopt;
     }
     // A default that depends on the scene (the kd-tree's max_depth "auto") can be named, so

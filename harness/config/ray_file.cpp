@@ -1,8 +1,11 @@
 #include "config/ray_file.h"
 
+#include <cctype>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+
+#include "accelbench/base/params.h"
 
 namespace accelbench {
 
@@ -96,12 +99,24 @@ RayFileContents read_ray_file(const std::string& path, const std::string& displa
         for (size_t i = 0; i < fields; ++i) {
             const std::string& f = parts[i].first;
             char* end = nullptr;
-            v[i] = std::strtof(f.c_str(), &end);
+            const double d = std::strtod(f.c_str(), &end);
             if (f.empty() || end != f.c_str() + f.size()) {
                 issue(line_no, parts[i].second, "field " + std::to_string(i + 1) + " is not a number: '" + f + "'");
                 ok = false;
                 break;
             }
+            // inf and nan are taken as written; a number that is none as a float (1e-50 read
+            // as 0, 1e999 as inf) or a hexadecimal float (the number rule of configs) is not.
+            const size_t sign = f[0] == '-' || f[0] == '+' ? 1 : 0;
+            const bool literal = f.size() > sign && std::isalpha(static_cast<unsigned char>(f[sign]));
+            std::string why = !literal && f.find_first_of("xX") != std::string::npos ? number_form_problem(f) : "";
+            if (why.empty() && !literal) why = float_conversion_problem(d, f);
+            if (!why.empty()) {
+                issue(line_no, parts[i].second, "field " + std::to_string(i + 1) + ": " + why);
+                ok = false;
+                break;
+            }
+            v[i] = float(d);
         }
         if (!ok) continue;
         Ray r;

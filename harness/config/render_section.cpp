@@ -7,6 +7,7 @@
 #include <limits>
 #include <thread>
 
+#include "accelbench/base/param_table.h"
 #include "accelbench/base/unknown_name.h"
 #include "config/config_sections.h"
 #include "config/ray_file.h"
@@ -26,18 +27,16 @@ void read_threads(ConfigReader& r, const YAML::Node& n, const std::string& path)
         for (int t = 1; t <= nproc; ++t) counts.push_back(t);
     } else if (n.IsSequence()) {
         read_list(r.c, n, path, [&](const YAML::Node& item, const std::string& p) {
-            if (auto v = read_int(r.c, item, p, 1, 1024)) {
+            if (auto v = read_int(r.c, item, p, 1, kMaxThreads)) {
                 if (std::find(counts.begin(), counts.end(), int(*v)) != counts.end())
                     r.c.error(item, p, "thread count " + std::to_string(*v) + " is listed twice");
                 else counts.push_back(int(*v));
             }
         });
-    } else if (auto v = read_int(r.c, n, path, 1, 1024)) {
+    } else if (auto v = read_int(r.c, n, path, 1, kMaxThreads)) {
         counts.push_back(int(*v));
     }
     if (counts.empty()) return;
-    r.threads_node = n;
-    r.threads_path = path;
     r.cfg.thread_counts = counts;
     r.cfg.render.threads = counts.front();
 }

@@ -1,33 +1,22 @@
 #include "csv/provenance.h"
 
-#include <array>
-#include <cstdio>
 #include <fstream>
-#include <memory>
 #include <string>
 
 #include "accelbench/accel/baseline/embree_accel.h"
 
-#ifndef ACCELBENCH_SOURCE_DIR
-#define ACCELBENCH_SOURCE_DIR "."
-#endif
 #ifndef ACCELBENCH_BUILD_TYPE
 #define ACCELBENCH_BUILD_TYPE "unknown"
 #endif
 
 namespace accelbench {
 
-namespace {
+// The commit and dirty flag of the sources this binary was compiled from: written at build
+// time into the generated provenance_stamp.cpp (harness/scripts/provenance_stamp.cmake).
+extern const char* const kBuildGitSha;
+extern const bool kBuildGitDirty;
 
-std::string run(const std::string& cmd) {
-    std::string out;
-    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-    if (!pipe) return out;
-    std::array<char, 256> buf;
-    while (fgets(buf.data(), int(buf.size()), pipe.get())) out += buf.data();
-    while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-    return out;
-}
+namespace {
 
 std::string cpu_model() {
     std::ifstream in("/proc/cpuinfo");
@@ -88,13 +77,8 @@ std::vector<std::pair<std::string, std::string>> provenance_values() {
 const Provenance& provenance() {
     static const Provenance p = [] {
         Provenance p;
-        const std::string git = std::string("git -C '") + ACCELBENCH_SOURCE_DIR + "' ";
-        p.git_sha = run(git + "rev-parse HEAD 2>/dev/null");
-        if (p.git_sha.empty()) p.git_sha = "unknown";
-        // Dirty = the code differs from the commit. results/ is left out: it holds outputs
-        // (a reference run rewrites results/reference/ while it measures), not code.
-        p.git_dirty =
-            !run(git + "status --porcelain --untracked-files=no -- . ':(exclude)results' 2>/dev/null").empty();
+        p.git_sha = kBuildGitSha;
+        p.git_dirty = kBuildGitDirty;
 #if defined(__clang__)
         p.compiler = "clang " __clang_version__;
 #elif defined(__GNUC__)

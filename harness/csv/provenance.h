@@ -21,8 +21,10 @@ struct Provenance {
     std::string isa;
 };
 
-// Gathered once per process (git is asked at run time in the source tree the binary
-// was built from; "unknown" when that is not a git checkout).
+// Gathered once per process. git_sha and git_dirty are those of the sources compiled,
+// stamped at build time (harness/scripts/provenance_stamp.cmake; "unknown" when they were
+// not a git checkout): a checkout, stash, GIT_DIR or another git after the build does not
+// change them.
 const Provenance& provenance();
 
 // The provenance columns of every results CSV row (results.h's provenance_columns(), in

@@ -10,6 +10,7 @@
 
 #include "accelbench/accel/registry.h"
 #include "csv/csv.h"
+#include "csv/run_inputs.h"
 #include "util/output_lock.h"
 
 namespace fs = std::filesystem;
@@ -446,14 +447,64 @@ void check_no_orphans(const CsvData& results, const std::string& results_path, c
 }
 
 // What merge and take_column write: OUT.reps.csv first, then OUT (as a run writes a
-// combination's repetitions before its row), both under OUT's locks; without repetitions
-// an OUT.reps.csv left from an earlier file is removed, never left beside the new OUT.
-void write_output(const std::string& out, const std::vector<CsvData>& results, const std::vector<CsvData>* reps) {
+// combination's repetitions before its row), both under OUT's locks, and the record of
+// their inputs; without repetitions (or a known record) an OUT.reps.csv (OUT.inputs.csv)
+// left from an earlier file is removed, never left beside the new OUT.
+void write_output(const std::string& out, const std::vector<CsvData>& results, const std::vector<CsvData>* reps,
+                  const std::optional<RunInputs>& inputs) {
     const std::string reps_out = repetitions_path(out);
+    require_inputs_path_free(out);  // before the locks make OUT
     OutputLock lock({out, reps_out});
+    remove_inputs(out);
     if (reps) write_parts(reps_out, *reps);
     else fs::remove(reps_out);
     write_parts(out, results);
+    if (inputs) write_inputs(out, *inputs);
+}
+
+// Every file a merge reads, under shared locks: a run still writing one holds its lock.
+InputLock lock_inputs(const std::vector<std::string>& inputs) {
+    std::vector<std::string> files;
+    for (const auto& in : inputs) files.insert(files.end(), {in, repetitions_path(in), inputs_path(in)});
+    return InputLock(files);
+}
+
+// The record of inputs that every file shares. Files measured from other contents (a config
+// edited between shards, a mesh file replaced) or without a record to compare are refused
+// unless allow_mixed, which gives nullopt: the output's inputs are then unknown.
+std::optional<RunInputs> common_inputs(const std::vector<std::string>& files, bool allow_mixed) {
+    std::vector<std::optional<RunInputs>> records;
+    for (const auto& f : files) records.push_back(read_inputs(f));
+    if (files.size() == 1) return records.front();
+    for (size_t i = 0; i < files.size(); ++i) {
+        std::string why;
+        if (!records[i])
+            why = files[i] + " has no record of the inputs it was measured from (" + inputs_path(files[i]) +
+                "; written by an older build?), so its contents cannot be compared with the others'";
+        else if (records[0] && i > 0)
+            if (const std::string d = inputs_differences(*records[0], files[0], *records[i], files[i]); !d.empty())
+                why = files[0] + " and " + files[i] + " were measured from different inputs (" + d +
+                    "): their rows are of different contents under the same names";
+        if (why.empty()) continue;
+        if (allow_mixed) return std::nullopt;
+        throw std::runtime_error(why + "; pass --allow-mixed to merge them anyway");
+    }
+    return records.front();
+}
+
+// Refuses rows of different configs (the `config` column): shards of one run share it.
+void check_same_config(const std::vector<CsvData>& data, const std::vector<std::string>& paths) {
+    std::map<std::string, std::string> seen;  // config -> the first file with it
+    for (size_t f = 0; f < data.size(); ++f) {
+        const auto col = std::find(data[f].header.begin(), data[f].header.end(), "config");
+        if (col == data[f].header.end()) continue;
+        for (const auto& r : data[f].rows) seen.emplace(r[size_t(col - data[f].header.begin())], paths[f]);
+    }
+    if (seen.size() < 2) return;
+    std::string values;
+    for (const auto& [config, file] : seen) values += "\n  '" + config + "' (" + file + ")";
+    throw std::runtime_error("the inputs hold rows of different configs:" + values +
+                             "\nshards of one run share their config; pass --allow-mixed to merge them anyway");
 }
 
 }  // namespace
@@ -463,6 +514,8 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
     for (const auto& in : inputs)
         if (fs::exists(out) && fs::exists(in) && fs::equivalent(out, in))
             throw std::runtime_error("the output '" + out + "' is also an input");
+    const InputLock locked = lock_inputs(inputs);
+    const std::optional<RunInputs> shared = common_inputs(inputs, allow_mixed);
     std::vector<CsvData> data;
     for (const auto& in : inputs) {
         data.push_back(read_csv(in));
@@ -475,7 +528,10 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
     }
     const CsvData& first = data.front();
     const size_t id = column_index(first, "combo_id", inputs.front());
-    if (!allow_mixed) check_same_provenance(data, inputs);
+    if (!allow_mixed) {
+        check_same_provenance(data, inputs);
+        check_same_config(data, inputs);
+    }
     std::map<std::string, std::string> owner;  // combo_id -> file
     for (size_t f = 0; f < data.size(); ++f)
         for (const auto& r : data[f].rows)
@@ -494,7 +550,7 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
             check_no_orphans(data[reps.size() - 1], in, reps.back(), repetitions_path(in));
         }
 
-    write_output(out, data, all_reps ? &reps : nullptr);
+    write_output(out, data, all_reps ? &reps : nullptr, shared);
     return owner.size();
 }
 
@@ -502,12 +558,17 @@ size_t take_column(const std::string& out, const std::string& in, const std::str
                    bool allow_mixed) {
     if (fs::exists(out) && fs::exists(in) && fs::equivalent(out, in))
         throw std::runtime_error("the output '" + out + "' is also an input");
+    const InputLock locked = lock_inputs({in, from});
+    const std::optional<RunInputs> shared = common_inputs({in, from}, allow_mixed);
     std::vector<CsvData> data = {read_csv(in), read_csv(from)};
     for (size_t f = 0; f < 2; ++f)
         if (auto m = old_header_message(f == 0 ? in : from, data[f].header); !m.empty()) throw std::runtime_error(m);
     if (auto m = header_mismatch(from, data[1].header, data[0].header); !m.empty())
         throw std::runtime_error(m + " (compared with " + in + ")");
-    if (!allow_mixed) check_same_provenance(data, {in, from});
+    if (!allow_mixed) {
+        check_same_provenance(data, {in, from});
+        check_same_config(data, {in, from});
+    }
     const size_t id = column_index(data[0], "combo_id", in), col = column_index(data[0], column, in);
     std::map<std::string, std::string> value;  // combo_id -> the column's value in `from`
     for (const auto& r : data[1].rows)
@@ -521,7 +582,7 @@ size_t take_column(const std::string& out, const std::string& in, const std::str
         }
     std::vector<CsvData> reps;
     if (fs::exists(repetitions_path(in))) reps.push_back(read_csv(repetitions_path(in)));
-    write_output(out, {data[0]}, reps.empty() ? nullptr : &reps);
+    write_output(out, {data[0]}, reps.empty() ? nullptr : &reps, shared);
     return taken;
 }
 
@@ -573,6 +634,8 @@ size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
             fs::remove(new_reps);
         }
         write_parts(new_csv, {CsvData{header, rows, 0, false}});
+        if (const auto inputs = read_inputs(old_csv)) write_inputs(new_csv, *inputs);
+        else remove_inputs(new_csv);
     }
 
     // The check: the file as a reader sees it, against the old one cell by cell.

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "accelbench/accel/registry.h"
+#include "accelbench/base/params.h"
 #include "util/text.h"
 
 namespace accelbench {
@@ -161,7 +162,10 @@ std::optional<std::string> skip_reason(const Config& config, const Combination& 
 
 namespace {
 
+// Counts follow the number rule of configs and parameters: "01/4" was read as shard 1
+// and "0x1/4" refused as no integer, where a config names both forms.
 uint64_t parse_count(const std::string& text, const std::string& what) {
+    if (const std::string why = number_form_problem(text); !why.empty()) throw std::invalid_argument(what + ": " + why);
     if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 12)
         throw std::invalid_argument(what + ": expected a non-negative integer, got '" + text + "'");
     return std::stoull(text);

@@ -6,9 +6,12 @@
 #include <filesystem>
 #include <map>
 #include <regex>
+#include <set>
 
+#include "csv/csv.h"
 #include "csv/results.h"
 #include "plan/loaded_model.h"
+#include "util/sha256.h"
 #include "util/text.h"
 
 namespace fs = std::filesystem;
@@ -49,7 +52,44 @@ std::optional<std::string> newest_run(const std::string& dir, const std::string&
     return best;
 }
 
+std::string vec3_text(const Vec3& v) { return number_text(v.x) + "," + number_text(v.y) + "," + number_text(v.z); }
+
+// A registry model is its file (the registry checks it against the checksum when loading)
+// seen from its camera under its light.
+std::string registry_entry_sha256(const ModelEntry& entry) {
+    std::string text = "file " + entry.sha256;
+    if (entry.camera)
+        text += ";camera " + vec3_text(entry.camera->eye) + " " + vec3_text(entry.camera->look_at) + " " +
+            vec3_text(entry.camera->up) + " " + number_text(entry.camera->fov_deg);
+    if (entry.light) text += ";light " + vec3_text(entry.light->position);
+    return sha256_hex(text);
+}
+
 }  // namespace
+
+RunInputs inputs_of(const Config& config, const ModelRegistry& registry) {
+    RunInputs inputs = {{"config", sha256_file(config.path), config.name}};
+    std::set<std::string> ray_files;
+    for (const ModelSpec& m : config.models) {
+        if (m.kind == ModelSpec::Kind::Path) inputs.push_back({"model", sha256_file(m.resolved_path), m.label});
+        if (m.kind == ModelSpec::Kind::Registry)
+            if (const ModelEntry* entry = registry.find(m.name))
+                inputs.push_back({"model", registry_entry_sha256(*entry), m.label});
+        if (m.rays && ray_files.insert(m.rays->path).second)
+            inputs.push_back({"rays", sha256_file(m.rays->path), m.rays->display});
+    }
+    return inputs;
+}
+
+std::string model_file_changed(const RunPlan& plan, const ModelSpec& model) {
+    if (model.kind != ModelSpec::Kind::Path) return "";
+    const std::string now = sha256_file(model.resolved_path);
+    for (const RunInput& i : plan.inputs)
+        if (i.kind == "model" && i.name == model.label && i.sha256 != now)
+            return model.resolved_path + " changed since the run started (sha256 " + i.sha256.substr(0, 12) +
+                " then, " + now.substr(0, 12) + " now): its rows would not be of the file the run records";
+    return "";
+}
 
 RunPlan plan_run(const RunOptions& options) {
     RunPlan plan;
@@ -64,6 +104,7 @@ RunPlan plan_run(const RunOptions& options) {
     }
     for (const auto& c : plan.all)
         if (!plan.shard || plan.shard->contains(c)) plan.selected.push_back(&c);
+    plan.inputs = inputs_of(plan.config, plan.registry);
     return plan;
 }
 
@@ -128,6 +169,11 @@ void print_dry_run_text(const RunPlan& plan, const std::vector<DryRunRow>& rows)
         ": %zu to measure, %zu skipped by rules; %d repetitions and warm-up %d unless shown, timeout %s s each\n",
         plan.selected.size() - skipped, skipped, config.repetitions, config.warmup,
         number_text(config.timeout_s, 6).c_str());
+    // The inputs, as the record beside a results file holds them (a driver compares them
+    // before continuing a run).
+    std::printf("inputs (compared by --resume and merge):\n");
+    for (const RunInput& i : plan.inputs)
+        std::printf("  %-6s %s %s\n", i.kind.c_str(), i.sha256.c_str(), i.name.c_str());
 }
 
 std::string json_list(const std::vector<std::string>& items) {
@@ -215,6 +261,7 @@ void choose_output(RunPlan& plan, const RunOptions& options) {
     const std::string reps = repetitions_path(plan.out);
     require_regular_file_or_absent(plan.out, "--out (the results CSV)");
     require_regular_file_or_absent(reps, "the repetitions file beside --out");
+    require_inputs_path_free(plan.out);
     const auto has_rows = [](const std::string& p) { return fs::exists(p) && fs::file_size(p) > 0; };
     if (!options.resume && has_rows(plan.out))
         throw UsageError("'" + plan.out + "' exists: pass --resume to continue it, or choose another --out");
@@ -226,7 +273,24 @@ void choose_output(RunPlan& plan, const RunOptions& options) {
             "': its samples are another run's; "
             "remove it, pass --resume (which drops repetitions without a results row), or choose another --out");
     plan.lock = OutputLock({plan.out, reps});
+    // Rows measured from other inputs would mix; a file of a header only holds none.
+    if (options.resume && has_rows(plan.out) && !read_csv(plan.out).rows.empty()) {
+        const auto recorded = read_inputs(plan.out);
+        if (!recorded)
+            throw std::runtime_error("'" + plan.out +
+                                     "' has rows but no record of the inputs they were measured from (" +
+                                     inputs_path(plan.out) +
+                                     "; written by an older build?): continuing it could mix rows of other "
+                                     "contents; choose another --out");
+        if (const std::string d = inputs_differences(*recorded, "its rows", plan.inputs, options.config_path);
+            !d.empty())
+            throw std::runtime_error("'" + plan.out + "' was measured from other inputs than " + options.config_path +
+                                     " has now (" + d +
+                                     "): continuing it would mix rows of different contents under the same "
+                                     "names; choose another --out");
+    }
     if (options.resume) plan.done = prepare_resume(plan.out, result_columns(), repetition_columns());
+    write_inputs(plan.out, plan.inputs);
     for (const Combination* c : plan.selected)
         if (!plan.done.count(c->id)) plan.to_do.push_back(c);
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "config/config.h"
+#include "csv/run_inputs.h"
 #include "models/model_registry.h"
 #include "plan/combinations.h"
 #include "util/output_lock.h"
@@ -35,13 +36,26 @@ struct RunPlan {
     std::vector<Combination> all;              // the config's, in expansion order
     std::optional<Shard> shard;                // --shard, else SLURM's array task
     std::vector<const Combination*> selected;  // this shard's
+    RunInputs inputs;                          // what the rows are measured from (inputs_of)
     std::string out;                           // the results CSV (its repetitions beside it)
     std::set<std::string> done;                // combo_ids already in `out` (--resume)
     std::vector<const Combination*> to_do;     // selected minus done
     OutputLock lock;                           // `out` and its repetitions, for the whole run
 };
 
-// The config (ConfigError lists its issues), its combinations and this shard's. Throws
+// The inputs a config's rows are measured from, besides the code: the config file's
+// sha256 (named by the config's name), each model's (a mesh file's, or for a registry
+// model its entry's: the file's checksum, camera and light; procedural scenes and
+// robustness cases are made by the code) and each ray file's. Throws std::runtime_error
+// for a file that cannot be read.
+RunInputs inputs_of(const Config& config, const ModelRegistry& registry);
+
+// Why a model given by path cannot be measured as the run recorded it: its file's sha256
+// is no longer the one in plan.inputs (it was replaced while the run went on); "" when it
+// is, and for every other kind of model (the registry checks its own files).
+std::string model_file_changed(const RunPlan& plan, const ModelSpec& model);
+
+// The config (ConfigError lists its issues), its combinations, this shard's and the inputs. Throws
 // UsageError for a malformed SLURM shard, std::runtime_error for the model registry.
 RunPlan plan_run(const RunOptions& options);
 
@@ -56,9 +70,10 @@ void print_dry_run(const RunPlan& plan, bool json = false);
 // an existing non-empty file, or repetitions without their results file, without
 // --resume; refuses (std::runtime_error) a path that is not a regular file and an output
 // that another process is writing (OutputLock, held until the plan is destroyed). With
-// --resume, prepares the file
-// (prepare_resume: a cut last line removed, orphan repetitions dropped) and fills `done`;
-// then `to_do`.
+// --resume, refuses (std::runtime_error) a file with rows whose record of inputs is
+// missing or differs from `inputs`, then prepares the file (prepare_resume: a cut last
+// line removed, orphan repetitions dropped) and fills `done`; then `to_do`. Writes the
+// record of `inputs` beside the results file.
 void choose_output(RunPlan& plan, const RunOptions& options);
 
 // "YYYY-mm-ddTHH:MM:SSZ"-like text of the current UTC time in strftime's `format`.

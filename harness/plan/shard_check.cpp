@@ -8,6 +8,8 @@
 #include "csv/csv.h"
 #include "models/model_registry.h"
 #include "plan/combinations.h"
+#include "plan/run_plan.h"
+#include "util/output_lock.h"
 #include "util/text.h"
 
 namespace accelbench {
@@ -21,14 +23,26 @@ std::map<uint64_t, std::vector<const Combination*>> missing_by_shard(const std::
     return missing;
 }
 
-int check_shards_complete(const std::string& config_path, uint64_t shards, const std::vector<std::string>& inputs) {
+int check_shards_complete(const std::string& config_path, uint64_t shards, const std::vector<std::string>& inputs,
+                          bool allow_mixed) {
     std::vector<Combination> all;
     std::set<std::string> present;
     try {
-        all = expand(load_config(config_path, ModelRegistry::load_default()));
+        const ModelRegistry registry = ModelRegistry::load_default();
+        const Config config = load_config(config_path, registry);
+        all = expand(config);
+        if (!allow_mixed) {
+            const RunInputs now = inputs_of(config, registry);
+            for (const auto& in : inputs)
+                if (const auto recorded = read_inputs(in))
+                    if (const std::string d = inputs_differences(*recorded, in, now, config_path); !d.empty())
+                        throw std::runtime_error(in + " was measured from other contents than " + config_path +
+                                                 " has now (" + d + "); pass --allow-mixed to merge it anyway");
+        }
         std::set<std::string> expected;
         for (const auto& c : all) expected.insert(c.id);
         for (const auto& in : inputs) {
+            const InputLock locked({in});  // a shard still running is not missing its rows
             const CsvData d = read_csv(in);
             const auto col = std::find(d.header.begin(), d.header.end(), "combo_id");
             if (col == d.header.end()) throw std::runtime_error(in + ": no combo_id column");

@@ -22,7 +22,10 @@ std::map<uint64_t, std::vector<const Combination*>> missing_by_shard(const std::
 // Checks that the result files `inputs` hold every combination of the config, naming on
 // stderr the missing ones by shard and the shards to run again (sbatch --array=<shards>).
 // Returns 0 when complete, 3 when combinations are missing, 2 for bad input (a config
-// that does not load, an unreadable CSV, a row whose combo_id is not of this config).
-int check_shards_complete(const std::string& config_path, uint64_t shards, const std::vector<std::string>& inputs);
+// that does not load, an unreadable CSV, a row whose combo_id is not of this config, an
+// input a run is still writing, and unless allow_mixed an input whose record of inputs
+// differs from what the config has now: another version of the config or its models).
+int check_shards_complete(const std::string& config_path, uint64_t shards, const std::vector<std::string>& inputs,
+                          bool allow_mixed = false);
 
 }  // namespace accelbench

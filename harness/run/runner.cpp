@@ -91,6 +91,10 @@ private:
         if (stage) stage(loading_stage());
         const auto t0 = Clock::now();
         try {
+            if (std::string changed = model_file_changed(plan_, spec_); !changed.empty()) {
+                p.load_error = std::move(changed);
+                return p;
+            }
             p.model = load_model(spec_, plan_.registry, plan_.config.render);
         } catch (const std::exception& e) {
             p.load_error = e.what();

@@ -59,6 +59,9 @@ TEST(Args, RefusesWhatItCannotFollowNamingIt) {
     const std::pair<std::vector<std::string>, std::string> cases[] = {
         {{"--flg"}, "accelbench demo: unknown option '--flg'\nusage: accelbench demo"},
         {{"--name"}, "accelbench demo: --name needs a value\n"},
+        {{"--name="}, "accelbench demo: --name needs a value, got an empty one\n"},
+        {{"--name", ""}, "accelbench demo: --name needs a value, got an empty one\n"},
+        {{"--count="}, "--count needs a value, got an empty one"},
         {{"--count", "10"}, "accelbench demo: --count expects an integer in [1, 9], got '10'\n"},
         {{"--count", "2x"}, "--count expects an integer in [1, 9], got '2x'"},
         {{"--flag=1"}, "unknown option '--flag=1'"},

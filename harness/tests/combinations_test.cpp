@@ -222,6 +222,18 @@ TEST(ShardTest, ParsesAndRejects) {
     EXPECT_THROW(parse_shard("1"), std::invalid_argument);
     EXPECT_THROW(parse_shard("-1/3"), std::invalid_argument);
     EXPECT_THROW(parse_shard("a/3"), std::invalid_argument);
+    // The number rule of configs: a leading zero and hexadecimal are named, not read.
+    for (const char* text : {"01/4", "0/04", "0x1/4"}) {
+        try {
+            parse_shard(text);
+            ADD_FAILURE() << text << " was read";
+        } catch (const std::invalid_argument& e) {
+            const std::string what = e.what();
+            EXPECT_TRUE(what.find("leading zero") != std::string::npos || what.find("hexadecimal") != std::string::npos)
+                << what;
+        }
+    }
+    EXPECT_EQ(parse_shard("0/4").count, 4u);
 }
 
 TEST(ShardTest, FromSlurmArrayVariables) {

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 
 #include "accelbench/accel/registry.h"
+#include "accelbench/base/param_table.h"
 #include "accelbench/verify/robustness_cases.h"
 #include "config/config.h"
 #include "harness_test_util.h"
@@ -157,7 +158,14 @@ accelerators:
     EXPECT_TRUE(has_issue(e, 4, 12, "accelerators[1].name", "unknown accelerator 'octree'"));
     EXPECT_TRUE(has_issue(e, 5, 34, "accelerators[2].brute_force.max_triangle", "did you mean 'max_triangles'"));
     EXPECT_TRUE(has_issue(e, 6, 44, "accelerators[3].embree.quality[1]", "'best' is not one of {low, medium, high}"));
-    EXPECT_TRUE(has_issue(e, 6, 59, "accelerators[3].embree.robust", "quoted string"));
+    EXPECT_TRUE(has_issue(e, 6, 59, "accelerators[3].embree.robust", "expected a bool value, got the quoted string"));
+    // `!!str 4` is a string, not the integer 4, and the message says which type was expected.
+    const ConfigError tagged = load_error(write("b.yaml", R"(models: [stanford-bunny]
+accelerators: [{name: bvh, params: {max_prims: !!str 4}}]
+)"));
+    EXPECT_TRUE(
+        has_issue(tagged, 2, 48, "accelerators[0].bvh.max_prims", "expected an int value, got the quoted string '4'"))
+        << all_issues(tagged);
 }
 
 // `{name: all, except, params}`: every registered structure but those excepted, in registry
@@ -350,6 +358,11 @@ accelerators: [{name: embree}]
     EXPECT_TRUE(has_issue(e, 1, 28, "render.height", "expected an integer"));
     EXPECT_TRUE(has_issue(e, 1, 41, "render.light", "expected true or false, got 'maybe'"));
     EXPECT_TRUE(has_issue(e, 1, 57, "render.shading", "expected true or false, got a list"));
+    // Quoted, a word read as a bool unquoted is named as the string it is.
+    EXPECT_TRUE(has_issue(load_error(write("q.yaml",
+                                           "render: {light: \"yes\"}\nmodels: [stanford-bunny]\n"
+                                           "accelerators: [{name: embree}]\n")),
+                          1, 17, "render.light", "expected true or false, got the string 'yes'"));
 }
 
 TEST_F(ConfigTest, CameraErrors) {
@@ -413,6 +426,26 @@ TEST_F(ConfigTest, BadRayFileLinesNameTheRayFile) {
     EXPECT_TRUE(has_issue(e, 4, 9, "models[0].rays.file", "field 5 is not a number: 'x'"));
 }
 
+// A value is read as written, inf and nan included; one that is no float (1e-50 became a
+// zero direction, 1e999 an infinite origin: every row's answer far from the cause) or a
+// hexadecimal float (strtof's 0x1) is named at its line and column.
+TEST_F(ConfigTest, RayFileValuesThatAreNoFloatAreNamed) {
+    write_triangle_case(dir.path());
+    write("f.rays.csv",
+          "ox,oy,oz,dx,dy,dz\n0,0,1,0,0,-1e-50\n1e999,0,1,0,0,-1\n0,0,0x1,0,0,-1\n0,0,1,-inf,nan,-1\n"
+          "0,0,1,0,-0,-1.5e-3\n");
+    const ConfigError e = load_error(write("a.yaml",
+                                           "models: [{path: tri.obj, rays: {file: f.rays.csv}}]\n"
+                                           "accelerators: [{name: embree}]\n"));
+    EXPECT_EQ(e.issues().size(), 3u) << all_issues(e);
+    EXPECT_TRUE(
+        has_issue(e, 2, 11, "models[0].rays.file", "field 6: value -1e-50 does not survive conversion to float"))
+        << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 3, 1, "models[0].rays.file", "field 1: value 1e999 is beyond the float range"))
+        << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 4, 5, "models[0].rays.file", "field 3: '0x1' is hexadecimal")) << all_issues(e);
+}
+
 TEST_F(ConfigTest, RayFileNeedsItsHeader) {
     write_triangle_case(dir.path());
     write("nohead.rays.csv", "0,0,1,0,0,-1\n");
@@ -454,11 +487,15 @@ accelerators:
     EXPECT_EQ(c.accelerators[1].name, "kdtree");
     EXPECT_EQ(c.accelerators[1].repetitions, 4);
     // A merged key that is not allowed is named as merged; a merge of a scalar is named.
-    const ConfigError e = load_error(write("n.yaml", R"(models: [igea]
+    // Only these: a mapping whose merge failed is not also said to lack `name`, or to need
+    // exactly one of name/path/procedural/case.
+    const ConfigError e = load_error(write("n.yaml", R"(models: [igea, {<<: 3, seed: 2}]
 accelerators:
   - &x {name: kdtree, colour: red}
   - {<<: 3}
 )"));
+    EXPECT_EQ(e.issues().size(), 3u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 1, 21, "models[1].<<", "a merge key ('<<') takes a mapping")) << all_issues(e);
     EXPECT_TRUE(has_issue(e, 3, 23, "accelerators[0].colour", "unknown key 'colour'")) << all_issues(e);
     EXPECT_TRUE(has_issue(e, 4, 10, "accelerators[1].<<", "a merge key ('<<') takes a mapping")) << all_issues(e);
 }
@@ -485,24 +522,26 @@ accelerators: [{name: kdtree, params: {max_prims: 0x8, traversal_cost: 007.5}}]
         << all_issues(e);
 }
 
-// render.threads reaches a structure's own `threads` parameter: a count outside its range
-// is named at render.threads, with file and line.
-TEST_F(ConfigTest, ThreadCountsOutsideAStructuresThreadsParameterAreNamedAtRenderThreads) {
-    const ConfigError e = load_error(write("t.yaml", R"(render: {threads: 1024}
+// render.threads reaches a structure's own `threads` parameter when its entry gives none:
+// every count render.threads takes is one each structure builds with (lbvh took at most 256
+// of the 1024, and a config of 1024 render threads was refused through lbvh's parameter).
+TEST_F(ConfigTest, EveryRenderThreadCountIsOneEveryStructureBuildsWith) {
+    for (const AcceleratorInfo& info : accelerator_registry())
+        for (const ParamSpec& spec : info.params)
+            if (spec.name == "threads") {
+                EXPECT_LE(spec.min, 1) << info.name;
+                EXPECT_GE(spec.max, kMaxThreads) << info.name;
+            }
+    const Config c = load_config(write("t.yaml", R"(render: {threads: [1, 1024]}
 models: [igea]
 accelerators: [{name: embree}, {name: lbvh}]
-)"));
-    EXPECT_EQ(e.issues().size(), 1u) << all_issues(e);
-    EXPECT_TRUE(has_issue(e, 1, 19, "render.threads",
-                          "thread count 1024 is outside the range of accelerators[1] ('lbvh')'s own `threads` "
-                          "parameter, [0, 256]"))
-        << all_issues(e);
-    // Given on the entry, the render thread count does not reach it.
-    EXPECT_NO_THROW(load_config(write("u.yaml", R"(render: {threads: [1, 1024]}
-models: [igea]
-accelerators: [{name: lbvh, params: {threads: 0}}]
 )"),
-                                registry()));
+                                 registry());
+    EXPECT_EQ(c.thread_counts, (std::vector<int>{1, 1024}));
+    EXPECT_TRUE(has_issue(load_error(write("u.yaml",
+                                           "render: {threads: 1025}\nmodels: [igea]\naccelerators: "
+                                           "[{name: lbvh}]\n")),
+                          1, 19, "render.threads", "out of range [1, 1024]"));
 }
 
 // A ray CSV saved by a spreadsheet starts with a UTF-8 byte-order mark: read; UTF-16 is

@@ -81,5 +81,19 @@ TEST(CostImage, RenderModelWithARepeatedParameterIsRefused) {
     }
 }
 
+// The render command's numbers follow the config's one rule: --width 010 is not read as 10.
+TEST(CostImage, RenderFlagsRefuseNumbersYamlReadersDisagreeOn) {
+    for (const char* written : {"010", "0x10"}) {
+        std::vector<std::string> args = {
+            "--model", "procedural:soup,triangles=30", "--accel", "bvh", "--width", written, "--height", "8"};
+        std::vector<char*> argv;
+        for (auto& a : args) argv.push_back(a.data());
+        ::testing::internal::CaptureStderr();
+        EXPECT_EQ(render_command(int(argv.size()), argv.data()), 2) << written;
+        const std::string err = ::testing::internal::GetCapturedStderr();
+        EXPECT_NE(err.find(std::string("--width: '") + written + "'"), std::string::npos) << err;
+    }
+}
+
 }  // namespace
 }  // namespace accelbench

@@ -80,24 +80,44 @@ TEST_F(HostileInputTest, AnOutputThatIsNotARegularFileIsRefused) {
     const Outcome o = run({config, "--out", path("r.csv")});
     EXPECT_EQ(o.code, 2);
     EXPECT_NE(o.err.find("r.reps.csv' is a directory"), std::string::npos) << o.err;
+    // And the record of inputs: refused before any file is made (before: the run made
+    // i.csv, i.reps.csv and i.inputs.csv.tmp, then failed to rename it, naming no output).
+    fs::create_directories(path("i.inputs.csv"));
+    const Outcome in = run({config, "--out", path("i.csv")});
+    EXPECT_EQ(in.code, 2);
+    EXPECT_NE(in.err.find("i.inputs.csv' is a directory: the record of inputs beside"), std::string::npos) << in.err;
+    for (const char* made : {"i.csv", "i.reps.csv", "i.inputs.csv.tmp"}) EXPECT_FALSE(fs::exists(path(made))) << made;
+    // A file where the output's directory belongs is named as such.
+    write_file(dir.path(), "plain", "x");
+    const Outcome under = run({config, "--out", path("plain/sub/u.csv")});
+    EXPECT_EQ(under.code, 2);
+    EXPECT_NE(under.err.find("'" + path("plain") + "' is not a directory: it would hold the output"), std::string::npos)
+        << under.err;
     // merge's output likewise.
     ASSERT_EQ(run({config, "--out", out}).code, 0);
     const Outcome m = run({"/dev/null", out}, true);
     EXPECT_EQ(m.code, 2);
     EXPECT_NE(m.err.find("'/dev/null' is a device"), std::string::npos) << m.err;
+    const Outcome mi = run({path("i.csv"), out}, true);
+    EXPECT_EQ(mi.code, 2);
+    EXPECT_NE(mi.err.find("i.inputs.csv' is a directory"), std::string::npos) << mi.err;
+    EXPECT_FALSE(fs::exists(path("i.csv")));
 }
 
 TEST_F(HostileInputTest, ASecondWriterOfOneOutputIsRefused) {
     ASSERT_EQ(run({config, "--out", out}).code, 0);
     const std::string before = read_file(out), reps_before = read_file(repetitions_path(out));
+    ASSERT_EQ(run({path("copy.csv"), out}, true).code, 0);
     for (const std::string& held : {out, repetitions_path(out)}) {
         OutputLock other({held});  // another process's run: flock conflicts across open files
         const Outcome o = run({config, "--out", out, "--resume"});
         EXPECT_EQ(o.code, 2);
         EXPECT_NE(o.err.find("is being written by another process"), std::string::npos) << o.err;
-        fs::remove(path("copy.csv"));
-        fs::remove(path("copy.reps.csv"));
-        EXPECT_EQ(run({path("copy.csv"), out}, true).code, 0);  // reading a locked output is fine
+        // Merging an output a run still writes would read it half-finished: refused.
+        const Outcome from = run({path("copy2.csv"), out}, true);
+        EXPECT_EQ(from.code, 2);
+        EXPECT_NE(from.err.find("is being written by another process"), std::string::npos) << from.err;
+        EXPECT_FALSE(fs::exists(path("copy2.csv")));
         const Outcome into = run({out, path("copy.csv")}, true);
         EXPECT_EQ(into.code, 2);
         EXPECT_NE(into.err.find("is being written by another process"), std::string::npos) << into.err;
@@ -273,6 +293,15 @@ accelerators: [{name: bvh}]
         EXPECT_EQ(o.code, 2) << o.err;
         EXPECT_NE(o.err.find("'" + target + "' for --benchmark_out"), std::string::npos) << o.err;
         EXPECT_FALSE(fs::exists(out)) << target;
+    }
+    // An empty file name (--benchmark_out="$UNSET") wrote no JSON and no word about it; an
+    // empty --out put the results in the default file instead.
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{cfg, "--out", out, "--benchmark_out="}, std::vector<std::string>{cfg, "--out="}}) {
+        const Outcome o = run(args);
+        EXPECT_EQ(o.code, 2) << o.err;
+        EXPECT_NE(o.err.find("needs a value, got an empty one"), std::string::npos) << o.err;
+        EXPECT_FALSE(fs::exists(out));
     }
 }
 

@@ -8,7 +8,9 @@
 #include "csv/csv.h"
 #include "csv/provenance.h"
 #include "csv/results.h"
+#include "csv/run_inputs.h"
 #include "harness_test_util.h"
+#include "util/output_lock.h"
 
 namespace accelbench {
 namespace {
@@ -229,7 +231,9 @@ protected:
             reps += id + ",1\n";
         }
         write_file(dir.path(), name + ".reps.csv", reps);
-        return write_file(dir.path(), name + ".csv", text);
+        const std::string path = write_file(dir.path(), name + ".csv", text);
+        write_inputs(path, {{"config", std::string(64, 'c'), "grid"}});
+        return path;
     }
     std::string out() const { return (dir.path() / "merged.csv").string(); }
 };
@@ -270,20 +274,55 @@ TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
     const std::string header =
         "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa\n";
     const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2\n";
-    const auto timed =
-        write_file(dir.path(), "timed.csv", header + "1,ok," + prov + "2,ok," + prov + "3,skipped," + prov);
+    // Both runs of one config: the same record of inputs.
+    const auto write_run = [&](const std::string& name, const std::string& text) {
+        const std::string path = write_file(dir.path(), name, text);
+        write_inputs(path, {{"config", std::string(64, 'c'), "ci"}});
+        return path;
+    };
+    const auto timed = write_run("timed.csv", header + "1,ok," + prov + "2,ok," + prov + "3,skipped," + prov);
     write_file(dir.path(), "timed.reps.csv", "combo_id,repetition\n1,1\n");
-    const auto cg =
-        write_file(dir.path(), "cg.csv", header + "2,ok,200" + prov + "1,ok,100" + prov + "3,skipped," + prov);
+    const auto cg = write_run("cg.csv", header + "2,ok,200" + prov + "1,ok,100" + prov + "3,skipped," + prov);
     EXPECT_EQ(take_column(out(), timed, cg, "instructions", false), 2u);
     EXPECT_EQ(read_file(out()), header + "1,ok,100" + prov + "2,ok,200" + prov + "3,skipped," + prov);
     EXPECT_EQ(read_file(repetitions_path(out())), "combo_id,repetition\n1,1\n");
     EXPECT_THROW(take_column(out(), timed, cg, "no_such_column", false), std::runtime_error);
-    const auto other =
-        write_file(dir.path(), "other.csv", header + "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2\n");
+    const auto other = write_run("other.csv", header + "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2\n");
     EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
-    const auto twice = write_file(dir.path(), "twice.csv", header + "1,ok,100" + prov + "1,ok,101" + prov);
+    const auto twice = write_run("twice.csv", header + "1,ok,100" + prov + "1,ok,101" + prov);
     EXPECT_THROW(take_column(out(), timed, twice, "instructions", false), std::runtime_error);
+}
+
+TEST_F(MergeTest, RefusesAShardARunIsStillWriting) {
+    const auto a = shard("a", {{"1", "abc"}});
+    const auto b = shard("b", {{"2", "abc"}});
+    {
+        const OutputLock running({repetitions_path(b)});
+        EXPECT_THROW(
+            try {
+                merge_results(out(), {a, b}, true);
+            } catch (const std::runtime_error& e) {
+                EXPECT_NE(std::string(e.what()).find("being written"), std::string::npos) << e.what();
+                throw;
+            },
+            std::runtime_error);
+    }
+    EXPECT_FALSE(fs::exists(out()));
+    EXPECT_EQ(merge_results(out(), {a, b}, false), 2u);
+    EXPECT_EQ(read_inputs(out()), read_inputs(a));
+}
+
+TEST_F(MergeTest, RefusesInputsWithoutARecordOrOfOtherContentsUnlessAllowed) {
+    const auto a = shard("a", {{"1", "abc"}});
+    const auto b = shard("b", {{"2", "abc"}});
+    write_inputs(b, {{"config", std::string(64, 'd'), "grid"}});
+    EXPECT_THROW(merge_results(out(), {a, b}, false), std::runtime_error);
+    remove_inputs(b);
+    EXPECT_THROW(merge_results(out(), {a, b}, false), std::runtime_error);
+    EXPECT_THROW(take_column(out(), a, b, "status", false), std::runtime_error);
+    EXPECT_FALSE(fs::exists(out()));
+    EXPECT_EQ(merge_results(out(), {a, b}, true), 2u);
+    EXPECT_FALSE(fs::exists(inputs_path(out())));  // unknown contents: no record
 }
 
 // The values every row records are the columns merge and the analysis compare, in the

@@ -10,8 +10,12 @@
 #include "commands/cli.h"
 #include "csv/csv.h"
 #include "csv/results.h"
+#include "csv/run_inputs.h"
 #include "harness_test_util.h"
 #include "plan/combinations.h"
+#include "plan/run_plan.h"
+#include "util/output_lock.h"
+#include "util/sha256.h"
 
 namespace accelbench {
 namespace {
@@ -271,6 +275,69 @@ TEST_F(RunTest, ResumeAfterAnInterruptedRunMeasuresEachCombinationOnce) {
     EXPECT_EQ(read_csv(out).rows.size(), expected.size());
 }
 
+// A run's identity is its inputs' contents, not their names: a results file is continued
+// only from the config and files its rows were measured from.
+TEST_F(RunTest, ResumeRefusesInputsThatChangedUnderTheSameNames) {
+    ASSERT_EQ(run({config, "--out", out}), 0);
+    const auto recorded = read_inputs(out);
+    ASSERT_TRUE(recorded);
+    EXPECT_EQ(*recorded,
+              (RunInputs{{"config", sha256_file(config), "e2e"},
+                         {"model", sha256_file((dir.path() / "tri.obj").string()), "tri-rays"},
+                         {"rays", sha256_file((dir.path() / "tri.rays.csv").string()), "tri.rays.csv"}}));
+    const std::string mesh = read_file((dir.path() / "tri.obj").string());
+    auto refused = [&](const std::string& said) {
+        ::testing::internal::CaptureStderr();
+        EXPECT_EQ(run({config, "--out", out, "--resume"}), 2);
+        const std::string err = ::testing::internal::GetCapturedStderr();
+        EXPECT_NE(err.find("measured from other inputs"), std::string::npos) << err;
+        EXPECT_NE(err.find(said), std::string::npos) << err;
+    };
+    // The same mesh name with another triangle in it.
+    write_file(dir.path(), "tri.obj", "v 0 0 0\nv 2 0 0\nv 0 2 0\nf 1 2 3\n");
+    refused("model tri-rays: sha256 ");
+    write_file(dir.path(), "tri.obj", mesh);
+    // The same config name with other contents.
+    const std::string text = read_file(config);
+    write_file(dir.path(), "e2e.yaml", text + "errors: false\n");
+    refused("config e2e: sha256 ");
+    write_file(dir.path(), "e2e.yaml", text);
+    const size_t rows = read_csv(out).rows.size();
+    EXPECT_EQ(run({config, "--out", out, "--resume"}), 0);  // the same contents again
+    EXPECT_EQ(read_csv(out).rows.size(), rows);
+
+    // Rows without a record (an older build's) cannot be compared: refused.
+    remove_inputs(out);
+    ::testing::internal::CaptureStderr();
+    EXPECT_EQ(run({config, "--out", out, "--resume"}), 2);
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("no record of the inputs"), std::string::npos) << err;
+}
+
+// A mesh file replaced while a run goes on: the model's rows are refused, not measured
+// from a file the record does not name.
+TEST_F(RunTest, AModelFileReplacedAfterPlanningIsNotMeasured) {
+    RunOptions options;
+    options.config_path = config;
+    const RunPlan plan = plan_run(options);
+    const ModelSpec& tri = plan.config.models[1];
+    EXPECT_EQ(model_file_changed(plan, tri), "");
+    EXPECT_EQ(model_file_changed(plan, plan.config.models[0]), "");  // procedural: made by the code
+    write_file(dir.path(), "tri.obj", "v 0 0 0\nv 2 0 0\nv 0 2 0\nf 1 2 3\n");
+    EXPECT_NE(model_file_changed(plan, tri).find("changed since the run started"), std::string::npos);
+}
+
+TEST_F(RunTest, DryRunPrintsTheInputsARunRecords) {
+    ::testing::internal::CaptureStdout();
+    ASSERT_EQ(run({config, "--dry-run"}), 0);
+    const std::string text = ::testing::internal::GetCapturedStdout();
+    EXPECT_NE(text.find("  config " + sha256_file(config) + " e2e\n"), std::string::npos) << text;
+    EXPECT_NE(text.find("  rays   " + sha256_file((dir.path() / "tri.rays.csv").string()) + " tri.rays.csv\n"),
+              std::string::npos)
+        << text;
+    EXPECT_FALSE(std::filesystem::exists(inputs_path(out)));
+}
+
 TEST_F(RunTest, ShardsTogetherGiveTheWholeRunAndMergeBack) {
     std::vector<std::string> parts;
     for (int i = 0; i < 3; ++i) {
@@ -326,6 +393,53 @@ accelerators: [{name: brute_force}]
     EXPECT_FALSE(std::filesystem::exists(merged));
     EXPECT_EQ(merge({"--config", config, "--shards", "3", merged, parts[0], parts[1], parts[2]}), 0);
     EXPECT_EQ(read_csv(merged).rows.size(), 6u);
+}
+
+// Shards of one config name measured from different contents, shards of different configs,
+// and a shard a run is still writing are refused, with and without --config.
+TEST_F(RunTest, MergeRefusesShardsOfOtherContentsOtherConfigsAndOneStillWritten) {
+    const std::string a = (dir.path() / "a.csv").string(), b = (dir.path() / "b.csv").string();
+    const std::string merged = (dir.path() / "merged.csv").string();
+    ASSERT_EQ(run({config, "--out", a, "--shard", "0/2"}), 0);
+    const std::string text = read_file(config);
+    write_file(dir.path(), "e2e.yaml", text + "errors: false\n");  // same name, other contents
+    ASSERT_EQ(run({config, "--out", b, "--shard", "1/2"}), 0);
+    auto refused = [&](std::vector<std::string> args, int rc, const std::string& said) {
+        ::testing::internal::CaptureStderr();
+        EXPECT_EQ(merge(args), rc);
+        const std::string err = ::testing::internal::GetCapturedStderr();
+        EXPECT_NE(err.find(said), std::string::npos) << err;
+        EXPECT_FALSE(std::filesystem::exists(merged));
+    };
+    refused({merged, a, b}, 2, "were measured from different inputs (config e2e: sha256 ");
+    refused({"--config", config, "--shards", "2", merged, a, b}, 2, "measured from other contents than");
+    // Merged anyway on request, the output then has no record: its contents are unknown.
+    EXPECT_EQ(merge({"--allow-mixed", merged, a, b}), 0);
+    EXPECT_FALSE(read_inputs(merged));
+    std::filesystem::remove(merged);
+
+    // Another config's shard.
+    const std::string other_cfg = write_file(dir.path(), "other.yaml", R"(name: other
+render: {width: 24, height: 16}
+models: [{procedural: soup, triangles: 500, seed: 3}]
+accelerators: [{name: brute_force}]
+)");
+    const std::string other = (dir.path() / "other.csv").string();
+    ASSERT_EQ(run({other_cfg, "--out", other}), 0);
+    write_inputs(other, *read_inputs(b));  // even with a matching record, the config column differs
+    refused({merged, b, other}, 2, "rows of different configs");
+
+    // A shard whose run still holds its output lock.
+    write_file(dir.path(), "e2e.yaml", text);
+    const std::string c = (dir.path() / "c.csv").string();  // shard 1 again, of a's contents
+    ASSERT_EQ(run({config, "--out", c, "--shard", "1/2"}), 0);
+    {
+        const OutputLock running({a});
+        refused({merged, a, c}, 2, "is being written by another process");
+        refused({"--config", config, "--shards", "2", merged, a, c}, 2, "is being written by another process");
+    }
+    EXPECT_EQ(merge({"--config", config, "--shards", "2", merged, a, c}), 0);
+    EXPECT_EQ(read_inputs(merged), read_inputs(a));
 }
 
 TEST_F(RunTest, TimeoutsAreRowsAndTheRunGoesOn) {

@@ -180,6 +180,7 @@ Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::v
             for (const auto& item : merged) sources.push_back(item);
         for (const YAML::Node& source : sources) {
             if (!source.IsMap()) {
+                ok_ = false;  // its keys are unknown: "missing key" would name the wrong cause
                 c.error(source, child("<<"),
                         std::string("a merge key ('<<') takes a mapping (an alias such as *defaults) or a list of "
                                     "them, got ") +
@@ -200,11 +201,13 @@ Fields::Fields(Checker& c, const YAML::Node& map, std::string path, const std::v
                 entries_.push_back({key, k, entry.second});
             }
         }
-        if (sources.empty())
+        if (sources.empty()) {
+            ok_ = false;
             c.error(merged, child("<<"),
                     std::string("a merge key ('<<') takes a mapping (an alias such as *defaults) or a list of them, "
                                 "got ") +
                         kind_of(merged));
+        }
     }
 }
 
@@ -298,9 +301,10 @@ std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::st
 
 std::optional<bool> read_bool(Checker& c, const YAML::Node& n, const std::string& path) {
     if (bool v = false; n.IsScalar() && !quoted(n) && parse_bool_text(n.Scalar(), v)) return v;
+    // A quoted "true" is a string: said so, or the message would refuse what it reads as a bool.
     c.error(n, path,
             std::string("expected true or false, got ") +
-                (n.IsScalar() ? "'" + n.Scalar() + "'" : std::string(kind_of(n))));
+                (!n.IsScalar() ? std::string(kind_of(n)) : (quoted(n) ? "the string '" : "'") + n.Scalar() + "'"));
     return std::nullopt;
 }
 

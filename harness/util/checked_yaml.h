@@ -84,6 +84,8 @@ public:
     // `allowed` empty: any key (the caller checks them).
     Fields(Checker& c, const YAML::Node& map, std::string path, const std::vector<std::string>& allowed);
 
+    // A mapping whose keys are all known: false when it is no mapping, or a merge key in it
+    // merged no mapping (callers then add no "missing key" of their own).
     bool ok() const { return ok_; }
     const std::vector<Entry>& entries() const { return entries_; }
     const Entry* find(const std::string& key) const;

@@ -55,7 +55,21 @@ void OutputLock::release() {
 
 void OutputLock::add(const std::string& path) {
     require_regular_file_or_absent(path, "an output");
-    if (!fs::path(path).parent_path().empty()) fs::create_directories(fs::path(path).parent_path());
+    if (const fs::path dir = fs::path(path).parent_path(); !dir.empty()) {
+        // The first existing ancestor must be a directory ("filesystem error: cannot create
+        // directories" named neither the output nor what was in its way).
+        for (fs::path p = dir; !p.empty(); p = p.parent_path()) {
+            std::error_code ec;
+            if (fs::exists(p, ec)) {
+                if (!fs::is_directory(p, ec))
+                    throw std::runtime_error("'" + p.string() + "' is not a directory: it would hold the output '" +
+                                             path + "'");
+                break;
+            }
+            if (p == p.parent_path()) break;
+        }
+        fs::create_directories(dir);
+    }
     const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0) throw std::runtime_error("cannot open '" + path + "' for writing: " + std::strerror(errno));
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
@@ -68,6 +82,29 @@ void OutputLock::add(const std::string& path) {
         throw std::runtime_error("cannot lock '" + path + "': " + std::strerror(err));
     }
     fds_.push_back(fd);
+}
+
+InputLock::InputLock(const std::vector<std::string>& paths) {
+    for (const auto& p : paths) {
+        const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+        if (fd < 0) continue;  // absent: nothing to read
+        if (::flock(fd, LOCK_SH | LOCK_NB) == 0) {
+            fds_.push_back(fd);
+            continue;
+        }
+        const int err = errno;
+        ::close(fd);
+        for (int held : fds_) ::close(held);
+        if (err == EWOULDBLOCK)
+            throw std::runtime_error("'" + p +
+                                     "' is being written by another process (an accelbench run or merge holds its "
+                                     "lock): wait for it to finish, then merge");
+        throw std::runtime_error("cannot lock '" + p + "': " + std::strerror(err));
+    }
+}
+
+InputLock::~InputLock() {
+    for (int fd : fds_) ::close(fd);
 }
 
 }  // namespace accelbench

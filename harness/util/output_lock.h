@@ -28,6 +28,22 @@ private:
     std::vector<int> fds_;
 };
 
+// Shared locks on the files a merge reads. A run holds its output's exclusive lock until it
+// ends, so an input that cannot be locked is still being written: it is refused, never read
+// half-finished. Readers do not exclude each other.
+class InputLock {
+public:
+    // Locks each path that exists (one that does not is not read either). Throws
+    // std::runtime_error naming the file when a process holds its exclusive lock.
+    explicit InputLock(const std::vector<std::string>& paths);
+    InputLock(const InputLock&) = delete;
+    InputLock& operator=(const InputLock&) = delete;
+    ~InputLock();
+
+private:
+    std::vector<int> fds_;
+};
+
 // Throws std::runtime_error when `path` exists and is not a regular file: an output path
 // must name a file ('/dev/null' or a directory would end in a filesystem_error).
 void require_regular_file_or_absent(const std::string& path, const std::string& what);

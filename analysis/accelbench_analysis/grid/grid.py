@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from ..inputs.schema import ERROR_COLUMNS, Results, normalise_value
+from ..inputs.schema import ERROR_COLUMNS, RENDER_SETTING_COLUMNS, Results, normalise_value
 from ..mapping.selection import kd_auto_depth_pbrt, kd_auto_depth_report
 from ..outputs.errors import COMPACT_HEADER, compact_errors
 from ..outputs.formatting import fmt_sig, md_table
@@ -192,8 +192,18 @@ def _dedupe(rows: pd.DataFrame, notes: list[str]) -> pd.DataFrame:
     return kept
 
 
+def workloads(rows: pd.DataFrame) -> list[str]:
+    """The workloads the rows measure: the ray set and the render settings (image, threads,
+    light, ...) that tell them apart, as text; one entry when every row traced the same."""
+    settings = ["ray_set"] + [c for c in RENDER_SETTING_COLUMNS if c in rows.columns]
+    kinds = rows[settings].astype(str).drop_duplicates()
+    return ["; ".join(f"{c}={v}" for c, v in r.items()) for _, r in kinds.iterrows()]
+
+
 def _accel_rows(results: Results, cfg: GridConfig, what: str, notes: list[str]) -> pd.DataFrame:
-    """The rows of the config's accelerator, one per candidate (what: "the CSV", ...)."""
+    """The rows of the config's accelerator, one per candidate (what: "the CSV", ...). Rows
+    of more than one workload (ray sets, thread counts, images) are refused: one candidate
+    would be ranked by one workload's time and the next by another's."""
     df = results.rows
     others = df[df["accel"] != cfg.accel]
     if not others.empty:
@@ -204,6 +214,11 @@ def _accel_rows(results: Results, cfg: GridConfig, what: str, notes: list[str]) 
     rows = df[df["accel"] == cfg.accel]
     if rows.empty:
         raise GridConfigError(f"{what} has no rows of accelerator {cfg.accel!r} (the config's accelerator)")
+    if len(kinds := workloads(rows)) > 1:
+        raise GridConfigError(
+            f"{what} holds rows of {len(kinds)} workloads ({' | '.join(kinds[:4])}): candidates are "
+            f"ranked within one; give the CSVs of one"
+        )
     configs = sorted(set(rows["config"]))
     if not {cfg.name, final_config_name(cfg)} & set(configs):
         notes.append(
@@ -236,6 +251,11 @@ def analyse(results: Results, cfg: GridConfig, cheap: Results | None = None) -> 
     cheap_info = None
     if cheap is not None:
         context = _accel_rows(cheap, cfg, "the cheap pass's CSV", notes)
+        if workloads(context) != workloads(rows):
+            raise GridConfigError(
+                f"the cheap pass measured another workload ({workloads(context)[0]}) than the ranked "
+                f"rows ({workloads(rows)[0]}): its rows cannot stand beside them"
+            )
         cheap_info = _pass_info(cheap, context)
         final_keys = pd.MultiIndex.from_frame(rows[["model", "params"]])
         again = pd.MultiIndex.from_frame(context[["model", "params"]]).isin(final_keys)

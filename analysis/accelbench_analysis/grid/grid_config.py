@@ -189,16 +189,41 @@ def _int_setting(node: dict, key: str, where: str, default=None):
     return v
 
 
+# Integers PyYAML (YAML 1.1) and the harness's yaml-cpp read differently: a leading zero
+# (010: 8 here, 10 there), a 0x/0o/0b prefix, digit groups (1_000) and base 60 (1:30 is 90).
+# Refused here as the harness refuses them (base/params.h, number_form_problem).
+AMBIGUOUS_INT = re.compile(r"^[-+]?(0[0-9_]|0[xXoObB]|[0-9][0-9_]*_|[0-9]+:)")
+
+
+class _GridLoader(yaml.SafeLoader):
+    """safe_load with the harness's one rule for how an integer is written."""
+
+
+def _construct_int(loader: _GridLoader, node: yaml.ScalarNode) -> int:
+    if AMBIGUOUS_INT.match(node.value):
+        raise GridConfigError(
+            f"line {node.start_mark.line + 1}: {node.value!r} is written in a form YAML readers read "
+            f"differently (010 is 8 in PyYAML and 10 in yaml-cpp; 0x, 0o, 0b, 1_000, 1:30): write it in "
+            f"plain decimal"
+        )
+    return yaml.SafeLoader.construct_yaml_int(loader, node)
+
+
+_GridLoader.add_constructor("tag:yaml.org,2002:int", _construct_int)
+
+
 def load_grid_config(path: str | Path, accelbench: Path | None = None) -> GridConfig:
     """The grid config at `path`, its axes as the harness (`accelbench`, default
     default_accelbench()) expands them."""
     path = Path(path)
     try:
-        raw = yaml.safe_load(path.read_text())
+        raw = yaml.load(path.read_text(), Loader=_GridLoader)  # noqa: S506 (a SafeLoader)
     except FileNotFoundError:
         raise GridConfigError(f"{path}: no such file") from None
     except yaml.YAMLError as e:
         raise GridConfigError(f"{path}: not valid YAML ({e})") from None
+    except GridConfigError as e:
+        raise GridConfigError(f"{path}: {e}") from None
     if not isinstance(raw, dict):
         raise GridConfigError(f"{path}: expected a mapping at the top level")
     where = str(path)

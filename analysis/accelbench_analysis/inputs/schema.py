@@ -104,6 +104,20 @@ NUMERIC_COLUMNS = (
 
 STATUSES = ("ok", "skipped", "timeout", "error")
 
+# The render settings of a row: two rows differing in one of them traced other rays (or on
+# another number of threads), so neither stands for the other nor divides it.
+RENDER_SETTING_COLUMNS = [
+    "ray_source",
+    "image_width",
+    "image_height",
+    "spp",
+    "light",
+    "shading",
+    "render_threads",
+]
+# Settings that are counts: where a row has one, a whole number of at least 1.
+COUNT_SETTING_COLUMNS = ["render_threads", "image_width", "image_height", "spp"]
+
 # Rows differing in any of these fields were not measured with the same code on the same
 # machine. `render_threads` and `timestamp` are per-run facts, not identity.
 PROVENANCE_IDENTITY = ["git_sha", "git_dirty", "compiler", "build_type", "cpu", "embree_version", "isa"]
@@ -420,6 +434,33 @@ def to_numbers(
     return problems
 
 
+def check_settings(df: pd.DataFrame, starts: list[int]) -> list[str]:
+    """A `ray_set` the harness does not make, and a thread count, image size or sample
+    count that is not a whole number of at least 1 (0.5 threads, 0 pixels): the tables
+    select rows by these, so a wrong one would put a row where it does not belong."""
+    problems = []
+    sets = (CAMERA_SET,) + RAY_SETS
+    bad = ~df["ray_set"].isin(sets)
+    if bad.any():
+        problems.append(
+            f"column 'ray_set' must be one of {', '.join(sets)} (or empty: camera); found "
+            f"{sorted(set(df['ray_set'][bad]))} on {record_lines(starts, df.index[bad])}"
+        )
+    for col in COUNT_SETTING_COLUMNS:
+        if col not in df.columns:
+            continue
+        text = df[col].astype(str).str.strip()
+        nums = pd.to_numeric(text.where(~text.isin(["", "nan"])), errors="coerce")
+        given = ~text.isin(["", "nan"])
+        bad = given & ~(nums.notna() & (nums >= 1) & (nums == nums.round()))
+        if bad.any():
+            problems.append(
+                f"column {col!r} must be a whole number of at least 1; found "
+                f"{sorted(set(text[bad]))} on {record_lines(starts, df.index[bad])}"
+            )
+    return problems
+
+
 def read_csv(path: str | Path) -> pd.DataFrame:
     """Reads one harness CSV and checks it against the contract; raises ContractError."""
     path = Path(path)
@@ -429,6 +470,11 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         raise ContractError(
             f"{path}: this is a per-repetition file; pass the summary CSV "
             f"beside it (its .reps.csv is read automatically)"
+        )
+    if path.name.endswith(".inputs.csv"):
+        raise ContractError(
+            f"{path}: this is a run's record of its inputs (the sha256 of its config, model and "
+            f"ray files); pass the results CSV beside it"
         )
     header = _read_header(path)
     if (old := old_header_message(path, header)) is not None:
@@ -448,10 +494,11 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         raise ContractError(f"{path}: not a well-formed CSV ({e})") from None
     if df.empty:
         raise ContractError(f"{path}: no data rows")
-    problems = to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
     if "ray_set" not in df.columns:
         df["ray_set"] = CAMERA_SET
     df["ray_set"] = df["ray_set"].str.strip().replace("", CAMERA_SET)
+    problems = check_settings(df, starts)  # on the text as written
+    problems += to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
     if "render_cpu_s_median" in df.columns:
         problems += to_numbers(df, ["render_cpu_s_median"], starts)
 
@@ -527,6 +574,12 @@ def read_reps(path: Path) -> pd.DataFrame:
         raise ContractError(f"{path}: " + "; ".join(problems))
     df["source"] = str(path)
     return df
+
+
+def is_companion(path: str | Path) -> bool:
+    """A file the harness writes beside a results CSV (NAME.reps.csv: the repetitions;
+    NAME.inputs.csv: the record of its inputs), not a results file itself."""
+    return Path(path).name.endswith((".reps.csv", ".inputs.csv"))
 
 
 def reps_path(path: str | Path) -> Path:

@@ -1,7 +1,10 @@
 """Which of our CSV rows stands for which cell of the report's tables.
 
 A cell of the report is (model, structure, setting). Our rows are (model, accel, params).
-The mapping is explicit here and nowhere else:
+Only rows of the report's workload can stand for one (`report_rows`): camera rays (primary
+and shadow together, as the report timed them), one render thread, and per model one image,
+the report's 640x480 at one sample where the model has it. The mapping is explicit here and
+nowhere else:
 
 - the report's "default" setting is its Table 3: BVH median split, maxPrims 1, depth 50;
   LBVH maxPrims 1, depth 50; kd-tree maxPrims 1 with the scene-dependent depth
@@ -22,11 +25,100 @@ labelled row.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import pandas as pd
 
-from ..inputs.schema import Results
+from ..inputs.schema import CAMERA_SET, Results
+
+# The report's renders: 640x480 pixels, one sample each (its section 5), on one thread.
+REPORT_IMAGE = (640, 480, 1)
+IMAGE_COLUMNS = ("image_width", "image_height", "spp")
+
+
+def image_text(image: tuple[int, int, int]) -> str:
+    w, h, spp = image
+    return f"{w}x{h}" + (f" at {spp} samples" if spp != 1 else "")
+
+
+def images(rows: pd.DataFrame) -> pd.Series:
+    """Each row's (width, height, spp), or None where the CSV does not record it."""
+    if not all(c in rows.columns for c in IMAGE_COLUMNS):
+        return pd.Series([None] * len(rows), index=rows.index, dtype=object)
+    nums = [pd.to_numeric(rows[c], errors="coerce") for c in IMAGE_COLUMNS]
+    return pd.Series(
+        [None if any(pd.isna(v) for v in vals) else tuple(int(v) for v in vals) for vals in zip(*nums)],
+        index=rows.index,
+        dtype=object,
+    )
+
+
+def _count_text(values: pd.Series) -> str:
+    counts = values.value_counts()
+    return ", ".join(f"{n} {v}" for v, n in counts.items())
+
+
+def report_rows(
+    results: Results,
+    own_image: pd.Series | None = None,
+    what: str = "the report's tables, claims and figures",
+) -> tuple[Results, list[str]]:
+    """The rows the report's tables, their figures and the claims are made of: camera rays,
+    one render thread, and per model one image: the report's 640x480 at one sample where the
+    model has rows of it, else the largest it has. Rows of `own_image` (the ablations, each
+    config at its own image) are not chosen between by image. Returns those rows and notes
+    counting every row left out and why; what the outputs lack (a model without a row at the
+    report's image, no row of the workload at all) is also a warning of the Results, which
+    every output shows. No output mixes rows that are not comparable or hides what it lacks.
+    `what`: the outputs made of the rows, as the notes name them."""
+    rows = results.rows
+    notes: list[str] = []
+    lacks: list[str] = []
+    sets = rows["ray_set"] != CAMERA_SET
+    if sets.any():
+        notes.append(
+            f"left out of {what}: {int(sets.sum())} rows of ray sets "
+            f"({_count_text(rows.loc[sets, 'ray_set'])}); they time camera rays, primary and shadow "
+            f"together, as the report did (tables/ray_sets.md has the ray sets)"
+        )
+    threads = pd.to_numeric(rows["render_threads"], errors="coerce")
+    several = ~sets & threads.notna() & (threads != 1)
+    if several.any():
+        notes.append(
+            f"left out of {what}: {int(several.sum())} rows rendered on "
+            f"more than one thread ({_count_text(threads[several].astype(int).astype(str) + ' threads')}); "
+            f"the report rendered on one"
+        )
+    keep = ~sets & ~several
+    own = (own_image if own_image is not None else pd.Series(False, index=rows.index)).reindex(
+        rows.index, fill_value=False
+    )
+    image = images(rows)
+    for model in dict.fromkeys(rows.loc[keep & ~own, "model"]):
+        mine = keep & ~own & (rows["model"] == model) & image.notna()
+        have = set(image[mine])
+        if not have:
+            continue
+        chosen = REPORT_IMAGE if REPORT_IMAGE in have else max(have, key=lambda i: (i[0] * i[1] * i[2], i))
+        other = mine & (image != chosen)
+        if chosen != REPORT_IMAGE:
+            lacks.append(
+                f"{model} has no row at the report's {image_text(REPORT_IMAGE)}: its cells are "
+                f"{image_text(chosen)} renders"
+            )
+        if other.any():
+            notes.append(
+                f"left out on {model}: {int(other.sum())} rows at another image "
+                f"({_count_text(image[other].map(image_text))}); its cells are {image_text(chosen)} renders"
+            )
+            keep &= ~other
+    if len(rows) and not keep.any():
+        lacks.append(
+            f"no row is of the report's workload (camera rays on one render thread): {what} have "
+            f"no measurement of ours"
+        )
+    return replace(results, rows=rows[keep], warnings=list(results.warnings) + lacks), notes + lacks
+
 
 AUTO = "<auto>"  # the kd-tree's scene-dependent default depth (see kd_auto_depths)
 AUTO_TEXT = {"", "auto", "default"}

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.schema import KEY_COLUMNS, ContractError, Results, parse_params, read_csv
+from ..inputs.schema import KEY_COLUMNS, ContractError, Results, is_companion, parse_params, read_csv
 from ..mapping.selection import label_of
 from .regress import ERROR_COUNTS, EXACT_COUNTS, RENDER_SETTING_COLUMNS, embree_ratios
 
@@ -64,8 +64,9 @@ class Source:
 
 
 def sources(results: Path) -> list[Source]:
-    """Every harness CSV of every run under `results` (per-repetition files and the
-    regression check's partial runs left out: run-N.csv joins timed-N.csv and callgrind.csv)."""
+    """Every harness CSV of every run under `results`: the files beside each (repetitions,
+    records of inputs) and the regression check's partial runs left out (run-N.csv joins
+    timed-N.csv and callgrind.csv)."""
     out = []
     runs = results / "runs"
     for d in sorted(p for p in runs.glob("*") if p.is_dir() and not p.is_symlink()) if runs.is_dir() else []:
@@ -83,7 +84,7 @@ def sources(results: Path) -> list[Source]:
             ]
     ref = results / "reference" / "csv"
     out += [Source("reference", "reference", f) for f in sorted(ref.glob("*.csv"))] if ref.is_dir() else []
-    return [s for s in out if not s.file.name.endswith(".reps.csv")]
+    return [s for s in out if not is_companion(s.file)]
 
 
 def measured_rows(src: Source, results: Path) -> pd.DataFrame:

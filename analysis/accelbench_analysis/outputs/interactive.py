@@ -302,7 +302,8 @@ def ray_sets_spec(table: pd.DataFrame, sets: list[str], palette: dict[str, str])
         "$schema": SCHEMA,
         "title": "Mrays/s per ray set, structure and model",
         "data": {"values": records(table, list(table.columns))},
-        "facet": {"field": "model", "type": "nominal", "title": None},
+        # A panel per model and workload (thread count, image): bars of two workloads never share one.
+        "facet": {"field": "panel", "type": "nominal", "title": None},
         "columns": 2,
         "resolve": {"scale": {"y": "independent"}},
         "spec": {

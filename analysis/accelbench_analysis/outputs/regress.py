@@ -31,7 +31,14 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.schema import INSTRUCTIONS_COLUMN, KEY_COLUMNS, ContractError, Results, load_results
+from ..inputs.schema import (
+    INSTRUCTIONS_COLUMN,
+    KEY_COLUMNS,
+    RENDER_SETTING_COLUMNS,
+    ContractError,
+    Results,
+    load_results,
+)
 from .formatting import fmt_count, fmt_sig, md_table
 
 EXIT_PASS, EXIT_REGRESSION, EXIT_BAD_INPUT, EXIT_REMEASURE = 0, 1, 2, 3
@@ -59,17 +66,8 @@ INSTRUCTIONS_TOLERANCE = 0.10  # fail above +10%, remind to update the baseline 
 DEFAULT_TIME_FACTOR = 1.5
 # Render times are divided by this accelerator's in the same run (the baseline row).
 RATIO_DENOMINATOR = "embree"
-# Columns that, where the harness writes them, must agree between a row and the Embree row
-# it is divided by: the same rays must have been traced.
-RENDER_SETTING_COLUMNS = [
-    "ray_source",
-    "image_width",
-    "image_height",
-    "spp",
-    "light",
-    "shading",
-    "render_threads",
-]
+# The columns that, where the harness writes them, must agree between a row and the Embree
+# row it is divided by (the same rays must have been traced): schema.RENDER_SETTING_COLUMNS.
 
 PASS, FAIL, REMEASURE, NOT_CHECKED = "pass", "FAIL", "needs a second measurement", "not checked"
 

@@ -13,6 +13,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..inputs.schema import is_companion
 from .page import data_table, page, write_page
 
 INDEX = "index.html"
@@ -53,7 +54,7 @@ def entry(d: Path, kind: str) -> RunEntry | None:
         what = ", ".join(job.get("configs", [])) + (f" (tag {job['tag']})" if job.get("tag") else "")
         state = "complete" if meta.get("complete") else "unfinished"
         return RunEntry(d, kind, meta.get("started", ""), commit, what, state)
-    files = [f for f in sorted(d.glob("*.csv")) if not f.name.endswith(".reps.csv")]
+    files = [f for f in sorted(d.glob("*.csv")) if not is_companion(f)]
     if not files:
         return None
     commit, when = csv_provenance(files)

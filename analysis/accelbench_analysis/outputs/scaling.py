@@ -32,6 +32,15 @@ def scaling_frame(results: Results) -> pd.DataFrame:
     rows["structure"] = [label_of(a, p) for a, p in zip(rows["accel"], rows["param_dict"])]
     rows["family"] = rows["model"].str.split("@").str[0]
     keep = ["family", "model", "structure", "triangles", *TIMES]
+    # One point per size and structure: two (other parameters, or one size measured twice)
+    # would be fitted as if they were one series.
+    twice = rows.duplicated(["model", "structure"], keep=False)
+    if twice.any():
+        shown = rows.loc[twice, ["model", "structure", "params", "source"]].head(4)
+        raise ValueError(
+            "more than one row of a structure on one model size, so a fit would mix them: "
+            + "; ".join(f"{r.structure} on {r.model} [{r.params}] ({r.source})" for r in shown.itertuples())
+        )
     return rows[keep].sort_values(["family", "structure", "triangles"]).reset_index(drop=True)
 
 

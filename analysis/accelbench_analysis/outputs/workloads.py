@@ -3,8 +3,9 @@ diffuse, random) and thread scaling.
 
 Rows of ray-set runs carry `ray_set` != camera (configs/ray-sets.yaml); rows of
 thread-scaling runs are camera rows of a config whose render `threads` vary
-(configs/thread-scaling.yaml). Neither kind fills the report's tables: `workload_mask`
-tells them apart, and the `all` command gives the tables only the other rows.
+(configs/thread-scaling.yaml). Neither kind fills the report's tables (`without_thread_scaling`
+and mapping.selection.report_rows leave them out, saying so). A ratio to Embree divides by
+Embree's row of the same model, set and workload (thread count, image), never by another's.
 
 Outputs (when the input has such rows):
 - tables/ray_sets.md, .csv: each structure's Mrays/s per set and its ratio to Embree's
@@ -21,6 +22,7 @@ Outputs (when the input has such rows):
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import matplotlib
@@ -30,7 +32,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
-from ..inputs.schema import CAMERA_SET, RAY_SETS, Results  # noqa: E402
+from ..inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results  # noqa: E402
+from ..mapping.selection import EMBREE_PREFERRED  # noqa: E402
 from .formatting import md_escape  # noqa: E402
 from .interactive import ray_sets_spec, thread_scaling_spec, write_spec  # noqa: E402
 
@@ -42,15 +45,34 @@ def _thread_scaling_configs(rows: pd.DataFrame) -> pd.Series:
     return rows.groupby("config")["render_threads"].transform("nunique") > 1
 
 
-def workload_mask(rows: pd.DataFrame) -> pd.Series:
-    """Rows of ray-set or thread-scaling runs (not for the report's tables)."""
-    return (rows["ray_set"] != CAMERA_SET) | _thread_scaling_configs(rows)
+def without_thread_scaling(results: Results) -> tuple[Results, list[str]]:
+    """Every row but those of thread-scaling runs (the report's tables do not take them),
+    and a note counting what was left out."""
+    mask = _thread_scaling_configs(results.rows)
+    if not mask.any():
+        return results, []
+    configs = ", ".join(sorted(set(results.rows.loc[mask, "config"])))
+    # Camera rows go to the thread-scaling table, ray-set rows to the ray-set table (a
+    # section per thread count): say where each kind is, not where it is not.
+    camera = mask & (results.rows["ray_set"] == CAMERA_SET)
+    counts = {
+        "camera rays in tables/thread_scaling.md": int(camera.sum()),
+        "ray sets in tables/ray_sets.md": int((mask & ~camera).sum()),
+    }
+    where = ", ".join(f"{n} rows of {what}" for what, n in counts.items() if n)
+    note = (
+        f"left out of the report's tables, claims and figures: {int(mask.sum())} rows of "
+        f"thread-scaling runs ({configs}; {where})"
+    )
+    return replace(results, rows=results.rows[~mask]), [note]
 
 
 def structure_labels(rows: pd.DataFrame) -> pd.Series:
     """`accel`, plus the parameters that vary among that accelerator's rows
-    (e.g. "bvh split=sah"), so that two variants never share a label."""
-    labels = pd.Series(rows["accel"].values, index=rows.index, dtype=object)
+    (e.g. "bvh split=sah"), so that two variants never share a label. A `threads`
+    parameter follows the render thread count (a workload setting, not the structure's)."""
+    # A copy: a Series over rows["accel"].values would write the labels into `accel`.
+    labels = pd.Series(rows["accel"].to_numpy(copy=True), index=rows.index, dtype=object)
     for accel, group in rows.groupby("accel"):
         dicts = group["param_dict"]
         keys = sorted({k for d in dicts for k in d})
@@ -61,45 +83,85 @@ def structure_labels(rows: pd.DataFrame) -> pd.Series:
     return labels
 
 
+def workload_labels(rows: pd.DataFrame) -> pd.Series:
+    """The render settings (threads, image, light, ...) that vary among the rows, as text
+    ("render_threads=2; image_width=320"), "" where none varies: rows of different workloads
+    are never compared or divided by each other."""
+    settings = [c for c in RENDER_SETTING_COLUMNS if c in rows.columns]
+    varying = [c for c in settings if rows[c].astype(str).nunique() > 1]
+    if not varying:
+        return pd.Series("", index=rows.index, dtype=object)
+
+    def text(v) -> str:
+        return str(int(v)) if isinstance(v, float) and v == int(v) else str(v)
+
+    return rows[varying].apply(lambda r: "; ".join(f"{c}={text(r[c])}" for c in varying), axis=1)
+
+
 def ray_set_rows(results: Results) -> pd.DataFrame:
     rows = results.ok()
     rows = rows[rows["ray_set"].isin(RAY_SETS)].copy()
     if rows.empty:
         return rows
     rows["structure"] = structure_labels(rows)
+    rows["workload"] = workload_labels(rows)
+    # One panel of the tables and the figure per model and workload.
+    rows["panel"] = [m if not w else f"{m} ({w})" for m, w in zip(rows["model"], rows["workload"])]
     rows["ray_set"] = pd.Categorical(
         rows["ray_set"], categories=[s for s in RAY_SETS if s in set(rows["ray_set"])], ordered=True
     )
     return rows
 
 
+def _baseline_row(group: pd.DataFrame) -> pd.Series | None:
+    """Embree's row of one model, set and workload: the only one, else the one at Embree's
+    defaults; None when there is none or no single one."""
+    embree = group[group["accel"] == BASELINE]
+    if len(embree) <= 1:
+        return None if embree.empty else embree.iloc[0]
+    score = embree["param_dict"].map(lambda p: sum(p.get(k) == v for k, v in EMBREE_PREFERRED))
+    best = embree[score == score.max()]
+    return best.iloc[0] if len(best) == 1 else None
+
+
 def ray_set_table(rows: pd.DataFrame) -> pd.DataFrame:
-    """One row per model, structure and set: Mrays/s and its ratio to Embree's."""
-    base = (
-        rows[rows["accel"] == BASELINE]
-        .groupby(["model", "ray_set"], observed=True)["mrays_per_s"]
-        .median()
-        .rename("embree_mrays_per_s")
-    )
-    t = rows[["model", "structure", "ray_set", "mrays_per_s", "rays", "false_misses", "false_hits"]].merge(
-        base.reset_index(), on=["model", "ray_set"], how="left"
-    )
+    """One row per model, workload, structure and set: Mrays/s and its ratio to Embree's row
+    of the same model, set and workload (threads, image, ...): never to another thread
+    count's, never to a median of several."""
+    cols = [
+        "model",
+        "workload",
+        "panel",
+        "structure",
+        "ray_set",
+        "mrays_per_s",
+        "rays",
+        "false_misses",
+        "false_hits",
+    ]
+    parts = []
+    for _, g in rows.groupby(["model", "workload", "ray_set"], observed=True, sort=False):
+        t = g[cols].copy()
+        base = _baseline_row(g)
+        t["embree_mrays_per_s"] = float("nan") if base is None else base["mrays_per_s"]
+        parts.append(t)
+    t = pd.concat(parts) if parts else pd.DataFrame(columns=cols + ["embree_mrays_per_s"])
     t["ratio_to_embree"] = t["mrays_per_s"] / t["embree_mrays_per_s"]
-    return t.sort_values(["model", "structure", "ray_set"]).reset_index(drop=True)
+    return t.sort_values(["model", "workload", "structure", "ray_set"]).reset_index(drop=True)
 
 
 def ranking(rows: pd.DataFrame) -> pd.DataFrame:
-    """Per model and set, each structure's rank by Mrays/s (1 = fastest), and whether it
-    differs from its rank in the first set listed."""
-    r = rows[["model", "structure", "ray_set", "mrays_per_s"]].copy()
+    """Per panel (model and workload) and set, each structure's rank by Mrays/s (1 =
+    fastest), and whether it differs from its rank in the first set listed."""
+    r = rows[["panel", "structure", "ray_set", "mrays_per_s"]].copy()
     r["rank"] = (
-        r.groupby(["model", "ray_set"], observed=True)["mrays_per_s"]
+        r.groupby(["panel", "ray_set"], observed=True)["mrays_per_s"]
         .rank(ascending=False, method="min")
         .astype(int)
     )
     first = r["ray_set"].cat.categories[0]
-    ref = r[r["ray_set"] == first].set_index(["model", "structure"])["rank"].rename("first_rank")
-    r = r.join(ref, on=["model", "structure"])
+    ref = r[r["ray_set"] == first].set_index(["panel", "structure"])["rank"].rename("first_rank")
+    r = r.join(ref, on=["panel", "structure"])
     r["changed"] = r["rank"] != r["first_rank"]
     return r
 
@@ -121,13 +183,14 @@ def ray_set_markdown(table: pd.DataFrame) -> str:
         "",
         "Each structure's Mrays/s on each ray set (configs/ray-sets.yaml; every set made "
         "once per model from the reference's hits, so every structure traces the same rays), "
-        "and in parentheses its ratio to Embree's on the same model and set (> 1: faster than "
-        "Embree). Wrong answers against the reference (false misses + false hits) are shown "
-        "where there are any.",
+        "and in parentheses its ratio to Embree's row of the same model, set and workload "
+        "(threads, image: a model measured at several has a section for each; > 1: faster than "
+        "Embree; none where there is no single such Embree row). Wrong answers against the "
+        "reference (false misses + false hits) are shown where there are any.",
         "",
     ]
-    for model, g in table.groupby("model"):
-        out += [f"## {md_escape(model)}", ""]
+    for panel, g in table.groupby("panel"):
+        out += [f"## {md_escape(panel)}", ""]
         body = []
         for structure, s in g.groupby("structure"):
             cells = [md_escape(structure)]
@@ -156,13 +219,13 @@ def ranking_markdown(rank: pd.DataFrame) -> str:
     out = [
         "# Ranking by ray set",
         "",
-        f"Per model, each structure's rank by Mrays/s in each ray set (1 = fastest). A rank "
+        f"Per model and workload, each structure's rank by Mrays/s in each ray set (1 = fastest). A rank "
         f"marked * differs from its rank on `{sets[0]}` rays: there the order of structures "
         f"changes. The last column lists the sets in which the order changes.",
         "",
     ]
-    for model, g in rank.groupby("model"):
-        out += [f"## {md_escape(model)}", ""]
+    for panel, g in rank.groupby("panel"):
+        out += [f"## {md_escape(panel)}", ""]
         body = []
         order = g[g["ray_set"] == sets[0]].sort_values("rank")["structure"].tolist()
         order += sorted(set(g["structure"]) - set(order))
@@ -200,7 +263,7 @@ def ray_set_figure(rows: pd.DataFrame, path: Path, palette: dict[str, str]) -> P
         hue="structure",
         hue_order=list(palette),
         palette=palette,
-        col="model",
+        col="panel",
         sharey=False,
         height=3.6,
         aspect=1.3,
@@ -220,7 +283,8 @@ def thread_scaling_rows(results: Results) -> pd.DataFrame:
     if rows.empty:
         return rows
     rows["structure"] = structure_labels(rows)
-    keys = ["config", "model", "structure"]
+    # Per file too: the 1-thread row of another run of the same config is not this one's.
+    keys = ["source", "config", "model", "structure"]
     first = rows[rows["render_threads"] == 1].set_index(keys)
     rows = rows.join(first["render_s_median"].rename("wall_1"), on=keys)
     rows = rows.join(first["build_s_median"].rename("build_1"), on=keys)
@@ -328,7 +392,7 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
         figures.mkdir(parents=True, exist_ok=True)
         table = ray_set_table(rows)
         palette = hue_palette(rows["structure"])
-        table.to_csv(tables / "ray_sets.csv", index=False)
+        table.drop(columns=["panel"]).to_csv(tables / "ray_sets.csv", index=False)
         (tables / "ray_sets.md").write_text(ray_set_markdown(table))
         (tables / "ray_set_ranking.md").write_text(ranking_markdown(ranking(rows)))
         written += [

@@ -82,11 +82,16 @@ ParamRow<Config> auto_int_param(std::string name, std::optional<T> Config::*memb
             }};
 }
 
-// A thread count: 0 stands for every core of the machine, stored as that number
-// (build_thread_count, base/parallel.h).
+// The most threads a structure's build or render takes: render.threads reaches a
+// structure's own `threads` parameter when its entry gives none, so both take the same
+// range, and a thread count a config may give is one every structure builds with.
+inline constexpr int kMaxThreads = 1024;
+
+// A thread count in [0, kMaxThreads]: 0 stands for every core of the machine, stored as
+// that number (build_thread_count, base/parallel.h).
 template <class Config>
-ParamRow<Config> threads_param(std::string name, int Config::*member, double max, std::string help) {
-    return {{name, ParamType::Int, format_param(int64_t(Config{}.*member)), {}, 0, max, std::move(help)},
+ParamRow<Config> threads_param(std::string name, int Config::*member, std::string help) {
+    return {{name, ParamType::Int, format_param(int64_t(Config{}.*member)), {}, 0, kMaxThreads, std::move(help)},
             [name, member](Config& c, const ParamSet& p) { c.*member = build_thread_count(p.get_int(name)); }};
 }
 

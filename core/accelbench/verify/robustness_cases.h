@@ -26,8 +26,8 @@
 //  11  a dense cluster plus one outlier at 1e6 (Morton quantization)
 //  12  coplanar axis-aligned triangles on candidate split planes (kd-tree flat cells)
 //  13  overlapping coplanar triangles (deterministic closest primitive)
-//  14  bad input: NaN (a), Inf (b), huge (c) vertices, out-of-range index (d) are
-//      rejected at load; an unused NaN vertex (e) is harmless
+//  14  bad input: NaN (a), Inf (b), huge (c) vertices, an out-of-range index (d) and a
+//      NaN vertex no face uses (e) are rejected at load (one vertex policy, docs/configs.md)
 //  15  NaN/Inf rays, tmin = -0, tmax = inf, empty intervals
 //  16  nested shells 4e-5 apart
 //  17  long rays from a camera 1e6 scene sizes away

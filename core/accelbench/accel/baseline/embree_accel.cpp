@@ -13,7 +13,7 @@ namespace {
 const ParamTable<EmbreeAccel::Config>& embree_params() {
     using C = EmbreeAccel::Config;
     static const ParamTable<C> rows = {
-        int_param("threads", &C::threads, 0, 1024,
+        int_param("threads", &C::threads, 0, kMaxThreads,
                   "device build threads (0 = all cores); 1 for single-thread comparisons"),
         choice_param("quality", &C::quality, std::array<std::string_view, 3>{"low", "medium", "high"},
                      std::array{RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_MEDIUM, RTC_BUILD_QUALITY_HIGH},

@@ -61,8 +61,7 @@ const ParamTable<Bvh::Config>& bvh_params() {
         int_param("reinsertion", &C::reinsertion, 0, 100,
                   "passes of the reinsertion optimizer after the build (Meister & Bittner 2018; 0 = off, bvh v2 "
                   "uses 3): lower SAH cost for a longer build, the same answers"),
-        threads_param("threads", &C::threads, 256,
-                      "build threads (0 = all cores); the tree is the same for every value"),
+        threads_param("threads", &C::threads, "build threads (0 = all cores); the tree is the same for every value"),
     };
     return rows;
 }

@@ -31,8 +31,7 @@ const ParamTable<Lbvh::Config>& lbvh_params() {
                   "a range of at most this many primitives becomes a leaf (the report: 1)"),
         int_param("max_depth", &C::max_depth, 0, 1000,
                   "a node at this depth becomes a leaf whatever its size (root: depth 0; the report: 50)"),
-        threads_param("threads", &C::threads, 256,
-                      "build threads (0 = all cores); the tree is the same for every value"),
+        threads_param("threads", &C::threads, "build threads (0 = all cores); the tree is the same for every value"),
         int_param("task_threshold", &C::task_threshold, 1, 1e9,
                   "on several threads, a subtree is handed out as a task only above this many primitives (the report: "
                   "100)"),

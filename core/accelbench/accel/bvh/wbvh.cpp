@@ -51,7 +51,7 @@ const ParamTable<Wbvh::Config>& wbvh_params() {
         enum_param("kernel", &C::kernel, Wbvh::kKernelNames,
                    "simd: the vector slab and triangle tests compiled in (scalar on a target without SSE2); "
                    "scalar: the scalar forms, identical answers (for testing and measuring the vector gain)"),
-        threads_param("threads", &C::threads, 256,
+        threads_param("threads", &C::threads,
                       "build threads (0 = all cores), the binary build's and the collapse's; the tree is the same "
                       "for every value"),
     };

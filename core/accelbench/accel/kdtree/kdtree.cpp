@@ -29,8 +29,7 @@ const ParamTable<KdTree::Config>& kdtree_params() {
         bool_param("mailbox", &C::mailbox,
                    "test a triangle once per ray even when several leaves the ray visits hold it (the same "
                    "answers; prim_tests then counts the tests made)"),
-        threads_param("threads", &C::threads, 256,
-                      "build threads (0 = all cores); the tree is the same for every value"),
+        threads_param("threads", &C::threads, "build threads (0 = all cores); the tree is the same for every value"),
     };
     return rows;
 }
