@@ -69,6 +69,7 @@ RENDER_SETTING_COLUMNS = [
     "light",
     "shading",
     "render_threads",
+    "fp_mode",
 ]
 
 PASS, FAIL, REMEASURE, NOT_CHECKED = "pass", "FAIL", "needs a second measurement", "not checked"

@@ -28,7 +28,9 @@ struct RenderSettings {
     bool light = true;    // trace shadow rays toward the light
     bool shading = true;  // compute an image (Phong); off: trace only
     int threads = 1;
-    FpMode fp_mode = FpMode::Ieee;  // every tracing thread's (fp_mode.h)
+    // Every tracing thread's (fp_mode.h). FTZ/DAZ, as Embree's documentation asks: measured
+    // to cost or gain neither side anything on the bench's models (docs/benchmarks.md).
+    FpMode fp_mode = FpMode::FtzDaz;
 };
 
 enum class CountMode {
