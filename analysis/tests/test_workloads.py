@@ -3,6 +3,9 @@
 
 from __future__ import annotations
 
+import json
+
+import pandas as pd
 import pytest
 from synthetic import BVH, EMBREE, KD, row, write_csv
 
@@ -49,18 +52,20 @@ def ray_set_csv(path):
 
 # Wall seconds per (structure, threads); CPU time = wall x threads (busy threads).
 WALL = {("bvh", 1): 1.0, ("bvh", 2): 0.625, ("embree", 1): 0.4, ("embree", 2): 0.2}
+# Build wall seconds: both build on the thread count (their `threads` parameter follows it).
+BUILD = {("bvh", 1): 0.3, ("bvh", 2): 0.16, ("embree", 1): 0.2, ("embree", 2): 0.125}
 
 
 def thread_csv(path):
     rows = []
     for (accel, t), s in WALL.items():
-        params = dict(ACCELS[accel], threads=str(t)) if accel == "embree" else ACCELS[accel]
+        params = dict(ACCELS[accel], threads=str(t))
         rows.append(
             row(
                 "stanford-bunny",
                 accel,
                 params,
-                build=0.1,
+                build=BUILD[(accel, t)],
                 render=s,
                 config="thread-scaling",
                 render_threads=str(t),
@@ -105,9 +110,27 @@ def test_thread_scaling_speedup_and_efficiency(tmp_path):
     assert t.loc[("embree", 2), "efficiency"] == pytest.approx(1.0)
     assert t.loc[("bvh", 1), "speedup"] == pytest.approx(1.0)
     assert t.loc[("bvh", 2), "cpu_per_wall"] == pytest.approx(2.0)
-    # Embree's device thread count is a parameter that follows the render threads: still
-    # one structure, not two.
+    # The build beside the render: its own speedup over the 1-thread build.
+    assert t.loc[("bvh", 2), "build_speedup"] == pytest.approx(1.875)
+    assert t.loc[("embree", 2), "build_speedup"] == pytest.approx(1.6)
+    assert t.loc[("bvh", 1), "build_speedup"] == pytest.approx(1.0)
+    # A build thread count is a parameter that follows the render threads: still one
+    # structure per accelerator, not one per count.
     assert set(ts["structure"]) == {"bvh", "embree"}
+
+
+def test_thread_scaling_table_and_figure_show_the_build(tmp_path):
+    out = tmp_path / "out"
+    assert main(["all", str(thread_csv(tmp_path / "ts.csv")), "--out", str(out)]) == 0
+    md = (out / "tables" / "thread_scaling.md").read_text()
+    assert "| build ms | build speedup |" in md
+    assert "| bvh | 2 | 160.00 | 1.88 | 625.00 |" in md
+    csv = pd.read_csv(out / "tables" / "thread_scaling.csv")
+    assert {"build_s_median", "build_speedup"} <= set(csv.columns)
+    spec = json.loads((out / "figures" / "thread_scaling.vl.json").read_text())
+    by = {(v["structure"], v["measure"], v["render_threads"]): v["speedup"] for v in spec["data"]["values"]}
+    assert by[("bvh", "build", 2)] == pytest.approx(1.875)
+    assert by[("bvh", "render", 2)] == pytest.approx(1.6)
 
 
 def test_all_writes_and_links_them_and_keeps_the_tables(realistic_csv, tmp_path):

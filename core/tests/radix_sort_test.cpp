@@ -7,6 +7,8 @@
 #include <span>
 #include <vector>
 
+#include "accelbench/base/parallel.h"
+
 using namespace accelbench;
 
 namespace {
@@ -146,6 +148,34 @@ TEST(RadixSort, UpperBitsOfIndexOrderedItemsGiveTheWholeKeysOrder) {
     std::vector<uint64_t> scratch(items.size());
     radix_sort(std::span<uint64_t>(items), std::span<uint64_t>(scratch), 34, 12, [](uint64_t x) { return x >> 30; });
     EXPECT_EQ(items, expected);
+}
+
+// On several threads (blocks counted and scattered at once): the same items in the same
+// order as the serial sort, with the same passes skipped, for inputs large enough to take the
+// parallel passes, duplicates and constant digits included.
+TEST(RadixSort, ParallelPassesGiveTheSerialResult) {
+    std::mt19937_64 rng(17);
+    const size_t n = 3 * radix_sort_detail::kParallelMin + 12345;
+    for (int digit_bits : {8, 10, 11}) {
+        // 30-bit keys, many repeats: low and top bits vary, the middle ones are 0 (a skipped pass).
+        auto items = make_items<uint32_t>(n, [&](size_t) { return uint32_t(rng() % 256) | uint32_t(rng() % 4) << 28; });
+        auto serial = items, parallel = items;
+        std::vector<KeyValue<uint32_t>> scratch;
+        const RadixSortStats s = radix_sort(serial, scratch, 30, digit_bits);
+        for (int threads : {2, 7}) {
+            auto p = parallel;
+            std::vector<KeyValue<uint32_t>> scratch_p;
+            RadixSortStats ps;
+            BuildThreads(threads).run([&] { ps = radix_sort(p, scratch_p, 30, digit_bits, true); });
+            EXPECT_EQ(ps.passes, s.passes) << digit_bits;
+            EXPECT_EQ(ps.skipped_passes, s.skipped_passes) << digit_bits;
+            ASSERT_EQ(p.size(), serial.size());
+            for (size_t i = 0; i < n; ++i)
+                ASSERT_TRUE(p[i].key == serial[i].key && p[i].value == serial[i].value)
+                    << "threads " << threads << " digit_bits " << digit_bits << " item " << i;
+        }
+        EXPECT_GT(s.skipped_passes, 0) << digit_bits;  // the constant digit
+    }
 }
 
 TEST(RadixSort, RejectsBadWidths) {

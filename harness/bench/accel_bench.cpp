@@ -1,6 +1,7 @@
 // Build and trace speed of every structure as a ratio to Embree (threads=1), single
 // thread, on real models — the form the project's speed goals take — with the goals
-// checked in a table at the end.
+// checked in a table at the end; then the builds on two threads (build2/ rows, wall time,
+// against Embree on two threads and against one thread) in a second table.
 //
 //   accel_bench [--model=NAME|PATH]... [--fp_mode=ieee|ftz_daz] [google benchmark flags]
 //
@@ -35,8 +36,10 @@
 #include <time.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -150,6 +153,35 @@ const std::vector<Goal>& goals() {
     return list;
 }
 
+// Builds on two threads: each of these structures at threads=2 against Embree at threads=2,
+// and against itself at threads=1 (the speedup), in wall time (what a user waiting for the
+// tree sees; CPU time would add both threads up).
+const std::vector<std::string> kTwoThreadBuilds = {"bvh_median", "bvh_sah", "lbvh", "kdtree_nlogn", "wbvh8", "wbvh4"};
+
+// Their goals: the speedup over one thread, on the models named (none: every model), and
+// the wall time against Embree's 2-thread build.
+struct TwoThreadGoal {
+    std::string label;
+    double min_speedup;  // 0: none
+    std::vector<std::string> speedup_models;
+    double max_vs_embree;  // 0: none
+};
+
+const std::vector<TwoThreadGoal>& two_thread_goals() {
+    static const std::vector<TwoThreadGoal> list = {
+        {"bvh_sah", 1.7, {"stanford-dragon"}, 1.0},    {"lbvh", 1.7, {"stanford-dragon"}, 0},
+        {"kdtree_nlogn", 1.7, {"stanford-dragon"}, 0}, {"wbvh8", 1.7, {"stanford-dragon"}, 1.0},
+        {"wbvh4", 1.7, {"stanford-dragon"}, 1.0},
+    };
+    return list;
+}
+
+const TwoThreadGoal* two_thread_goal_for(const std::string& label) {
+    for (const TwoThreadGoal& g : two_thread_goals())
+        if (g.label == label) return &g;
+    return nullptr;
+}
+
 const Goal* goal_for(Phase phase, const std::string& label, const std::string& model) {
     for (const Goal& g : goals())
         if (g.phase == phase && g.label == label &&
@@ -236,6 +268,45 @@ void bench_build(benchmark::State& state, const Model& m, const Structure& s) {
     const double mtris = 1e-6 * double(scene.triangle_count());
     state.counters["Mtris/s"] = mtris / t.subject;
     state.counters["embree_Mtris/s"] = mtris / t.embree;
+}
+
+double wall_seconds_of(const std::function<void()>& f) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The structure's build at threads=2 (the benchmark's time), Embree's at threads=2 and the
+// structure's at threads=1, once each per iteration in wall time, the order reversed every
+// other iteration so that load coming and going hits all three alike.
+void bench_build_two_threads(benchmark::State& state, const Model& m, const Structure& s) {
+    const Scene& scene = m.resolved.scene;
+    Params two = s.params, one = s.params;
+    two["threads"] = "2";
+    one["threads"] = "1";
+    auto embree = make_accelerator("embree", {{"threads", "2"}});
+    auto subject2 = make_accelerator(s.accel, two);
+    auto subject1 = make_accelerator(s.accel, one);
+    const std::function<void()> steps[3] = {[&] { embree->build(scene); }, [&] { subject2->build(scene); },
+                                            [&] { subject1->build(scene); }};
+    double total[3] = {0, 0, 0};
+    bool forward = true;
+    for (auto _ : state) {
+        double t[3];
+        for (int k = 0; k < 3; ++k) {
+            const int step = forward ? k : 2 - k;
+            t[step] = wall_seconds_of(steps[step]);
+        }
+        forward = !forward;
+        for (int k = 0; k < 3; ++k) total[k] += t[k];
+        state.SetIterationTime(t[1]);
+    }
+    const double n = double(state.iterations());
+    state.counters["wall_ms"] = 1e3 * total[1] / n;
+    state.counters["embree2_ms"] = 1e3 * total[0] / n;
+    state.counters["one_thread_ms"] = 1e3 * total[2] / n;
+    state.counters["vs_embree2"] = total[1] / total[0];
+    state.counters["speedup"] = total[2] / total[1];
 }
 
 // Replays pre-made rays through an accelerator in the floating-point mode `fp_mode`:
@@ -341,8 +412,9 @@ struct Entry {
 // The console output plus, at the end, the ratio table with the goals.
 class GoalTable : public benchmark::ConsoleReporter {
 public:
-    GoalTable(std::vector<std::pair<std::string, Entry>> entries, FpMode fp_mode)
-        : entries_(std::move(entries)), fp_mode_(fp_mode) {}
+    GoalTable(std::vector<std::pair<std::string, Entry>> entries,
+              std::vector<std::pair<std::string, Entry>> two_thread_entries, FpMode fp_mode)
+        : entries_(std::move(entries)), two_thread_entries_(std::move(two_thread_entries)), fp_mode_(fp_mode) {}
 
     void ReportRuns(const std::vector<Run>& runs) override {
         ConsoleReporter::ReportRuns(runs);
@@ -355,6 +427,12 @@ public:
             const bool median_only =
                 r.run_type == Run::RT_Aggregate && r.aggregate_name == "median" && s.subject_ms.empty();
             if (!repetition && !median_only) continue;
+            if (r.counters.count("one_thread_ms")) {
+                s.subject_ms.push_back(r.counters.at("wall_ms"));
+                s.embree_ms.push_back(r.counters.at("embree2_ms"));
+                s.one_thread_ms.push_back(r.counters.at("one_thread_ms"));
+                continue;
+            }
             s.subject_ms.push_back(r.counters.at("cpu_ms"));
             s.embree_ms.push_back(r.counters.at("embree_ms"));
         }
@@ -387,13 +465,58 @@ public:
                         phase_name(e.phase).c_str(), e.label.c_str(), it->second.subject_ms.size(), ms, embree_ms,
                         ratio, goal_text.c_str(), verdict.c_str());
         }
+        print_two_thread_table();
     }
 
 private:
+    // The 2-thread builds: wall times, the speedup over one thread and the ratio to Embree's
+    // 2-thread build, each a median over the repetitions, beside their goals.
+    void print_two_thread_table() const {
+        bool header = false;
+        for (const auto& [name, e] : two_thread_entries_) {
+            const auto it = samples_.find(name);
+            if (it == samples_.end()) continue;
+            if (!header) {
+                std::printf(
+                    "\n2-thread builds (wall time, median over repetitions; the structure at threads=1 and Embree at "
+                    "threads=2 measured interleaved with it):\n");
+                std::printf("%-18s %-13s %4s %9s %9s %8s  %-9s %-8s %9s %7s  %-9s %s\n", "model", "structure", "reps",
+                            "2 thr ms", "1 thr ms", "speedup", "goal", "", "embree2", "ratio", "goal", "");
+                header = true;
+            }
+            const Samples& s = it->second;
+            const double ms = summarize(s.subject_ms).median, one = summarize(s.one_thread_ms).median;
+            const double embree = summarize(s.embree_ms).median;
+            const double speedup = one / ms, ratio = ms / embree;
+            std::string speedup_goal = "-", speedup_verdict, ratio_goal = "-", ratio_verdict;
+            if (const TwoThreadGoal* g = two_thread_goal_for(e.label)) {
+                const auto& models = g->speedup_models;
+                if (g->min_speedup > 0 &&
+                    (models.empty() || std::find(models.begin(), models.end(), e.model) != models.end())) {
+                    char buf[32];
+                    std::snprintf(buf, sizeof buf, ">= %.2fx", g->min_speedup);
+                    speedup_goal = buf;
+                    speedup_verdict = speedup >= g->min_speedup ? "met" : "NOT MET";
+                }
+                if (g->max_vs_embree > 0) {
+                    char buf[32];
+                    std::snprintf(buf, sizeof buf, "<= %.2fx", g->max_vs_embree);
+                    ratio_goal = buf;
+                    ratio_verdict = ratio <= g->max_vs_embree ? "met" : "NOT MET";
+                }
+            }
+            std::printf("%-18s %-13s %4zu %9.2f %9.2f %7.2fx  %-9s %-8s %9.2f %6.2fx  %-9s %s\n", e.model.c_str(),
+                        e.label.c_str(), s.subject_ms.size(), ms, one, speedup, speedup_goal.c_str(),
+                        speedup_verdict.c_str(), embree, ratio, ratio_goal.c_str(), ratio_verdict.c_str());
+        }
+    }
+
     struct Samples {
         std::vector<double> subject_ms, embree_ms;
+        std::vector<double> one_thread_ms;  // 2-thread builds: the structure at threads=1
     };
-    std::vector<std::pair<std::string, Entry>> entries_;  // in registration order
+    std::vector<std::pair<std::string, Entry>> entries_;             // in registration order
+    std::vector<std::pair<std::string, Entry>> two_thread_entries_;  // the 2-thread builds
     FpMode fp_mode_;
     std::map<std::string, Samples> samples_;
 };
@@ -495,7 +618,22 @@ int main(int argc, char** argv) {
             }
         }
     }
-    GoalTable reporter(std::move(entries), fp_mode);
+    // The 2-thread builds, after every single-thread row of every model.
+    std::vector<std::pair<std::string, Entry>> two_thread_entries;
+    for (const auto& m : models)
+        for (const Structure& s : structures()) {
+            if (std::find(kTwoThreadBuilds.begin(), kTwoThreadBuilds.end(), s.label) == kTwoThreadBuilds.end())
+                continue;
+            const std::string name = "build2/" + m->name + "/" + s.label;
+            const Model* model = m.get();
+            const Structure* structure = &s;
+            benchmark::RegisterBenchmark(name.c_str(),
+                                         [=](benchmark::State& st) { bench_build_two_threads(st, *model, *structure); })
+                ->UseManualTime()
+                ->Unit(benchmark::kMillisecond);
+            two_thread_entries.push_back({name, Entry{m->name, Phase::build, s.label}});
+        }
+    GoalTable reporter(std::move(entries), std::move(two_thread_entries), fp_mode);
     benchmark::RunSpecifiedBenchmarks(&reporter);
     benchmark::Shutdown();
     return 0;

@@ -557,6 +557,11 @@ size_t take_column(const std::string& out, const std::string& in, const std::str
 size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
     if (fs::exists(new_csv) && fs::equivalent(old_csv, new_csv))
         throw std::runtime_error("the output '" + new_csv + "' is the input: the check needs the old file");
+    // Never over another file: NEW may be a run's results (or their repetitions) that a
+    // conversion would replace.
+    for (const std::string& out : {new_csv, repetitions_path(new_csv)})
+        if (fs::exists(out))
+            throw std::runtime_error("the output '" + out + "' exists: choose another NEW, or remove it");
     const CsvData old = read_csv(old_csv);
     if (old.incomplete_tail)
         throw std::runtime_error(old_csv + ": the last line is incomplete (an interrupted run?); resume it first");

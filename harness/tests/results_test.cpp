@@ -141,6 +141,14 @@ TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
     EXPECT_THROW(convert_results(new_csv, (dir.path() / "again.csv").string()), std::runtime_error);
     EXPECT_THROW(convert_results(old_csv, old_csv), std::runtime_error);
     EXPECT_EQ(read_file(old_csv), kOldHeader + rows);
+    // An existing output, or its repetitions file, is never written over.
+    const auto kept = write_file(dir.path(), "kept.csv", "a run's results\n");
+    EXPECT_THROW(convert_results(old_csv, kept), std::runtime_error);
+    EXPECT_EQ(read_file(kept), "a run's results\n");
+    const std::string bare = (dir.path() / "bare.csv").string();
+    write_file(dir.path(), "bare.reps.csv", "combo_id,repetition\n");
+    EXPECT_THROW(convert_results(old_csv, bare), std::runtime_error);
+    EXPECT_FALSE(std::filesystem::exists(bare));
 }
 
 TEST(ConvertTest, AFileWithCurrentNamesButNoLabelGetsTheRegistrysLabels) {

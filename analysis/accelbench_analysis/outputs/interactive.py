@@ -321,12 +321,13 @@ def ray_sets_spec(table: pd.DataFrame, sets: list[str], palette: dict[str, str])
 
 
 def thread_scaling_spec(rows: pd.DataFrame, palette: dict[str, str]) -> dict:
-    """thread_scaling_rows as tables/thread_scaling.csv has them: speedup over one thread."""
+    """workloads.thread_scaling_long's rows: the build's and the render's speedup over one
+    thread, a row of panels each."""
     top = float(rows["render_threads"].max())
     x = {
         "field": "render_threads",
         "type": "quantitative",
-        "title": "render threads",
+        "title": "threads",
         "scale": {"zero": False},
         "axis": {"tickMinStep": 1},
     }
@@ -338,19 +339,19 @@ def thread_scaling_spec(rows: pd.DataFrame, palette: dict[str, str]) -> dict:
     }
     tooltip = [
         {"field": "structure", "type": "nominal"},
+        {"field": "measure", "type": "nominal"},
         {"field": "render_threads", "type": "quantitative", "title": "threads"},
-        number("render_s_median", "wall (s)"),
-        number("render_cpu_s_median", "CPU (s)"),
+        number("wall_s", "wall (s)"),
         number("speedup", "speedup", ".2f"),
-        number("efficiency", "efficiency", ".2f"),
-        number("cpu_per_wall", "CPU / wall", ".2f"),
     ]
     return {
         "$schema": SCHEMA,
-        "title": "Thread scaling (dashed: ideal)",
+        "title": "Thread scaling of the build and the render (dashed: ideal)",
         "data": {"values": records(rows, list(rows.columns))},
-        "facet": {"field": "model", "type": "nominal", "title": None},
-        "columns": 3,
+        "facet": {
+            "row": {"field": "measure", "type": "nominal", "title": None, "sort": ["build", "render"]},
+            "column": {"field": "model", "type": "nominal", "title": None},
+        },
         "spec": {
             **PANEL,
             "layer": [

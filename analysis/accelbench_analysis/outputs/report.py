@@ -174,8 +174,9 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
         )
     if (out_dir / "tables" / "thread_scaling.md").is_file():
         out.append(
-            "- [Thread scaling](tables/thread_scaling.md): wall and CPU time, speedup and "
-            "parallel efficiency at 1..nproc render threads "
+            "- [Thread scaling](tables/thread_scaling.md): build and render wall time, the "
+            "render's CPU time, both speedups and the render's parallel efficiency at 1..nproc "
+            "threads "
             "([figure](figures/thread_scaling.png))."
         )
     for png in sorted((out_dir / "figures").glob("cost-*.png")):

@@ -30,10 +30,14 @@
 #include <sys/mman.h>
 #endif
 
+#include "accelbench/base/default_init.h"
+
 namespace accelbench {
 
+// resize() and emplace_back() leave new elements unwritten (base/default_init.h): the tree's
+// builders write every element, some of them on several threads.
 template <class T>
-struct HugePageAllocator {
+struct HugePageAllocator : DefaultInitConstruct {
     using value_type = T;
     static constexpr size_t kHugePage = size_t(2) << 20;
 

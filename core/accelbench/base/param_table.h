@@ -23,11 +23,11 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <thread>
 #include <type_traits>
 #include <utility>
 #include <vector>
 
+#include "accelbench/base/parallel.h"
 #include "accelbench/base/params.h"
 
 namespace accelbench {
@@ -82,14 +82,12 @@ ParamRow<Config> auto_int_param(std::string name, std::optional<T> Config::*memb
             }};
 }
 
-// A thread count: 0 stands for every core of the machine, stored as that number.
+// A thread count: 0 stands for every core of the machine, stored as that number
+// (build_thread_count, base/parallel.h).
 template <class Config>
 ParamRow<Config> threads_param(std::string name, int Config::*member, double max, std::string help) {
     return {{name, ParamType::Int, format_param(int64_t(Config{}.*member)), {}, 0, max, std::move(help)},
-            [name, member](Config& c, const ParamSet& p) {
-                const int64_t n = p.get_int(name);
-                c.*member = n > 0 ? int(n) : int(std::max(1u, std::thread::hardware_concurrency()));
-            }};
+            [name, member](Config& c, const ParamSet& p) { c.*member = build_thread_count(p.get_int(name)); }};
 }
 
 // A float or double member, in [min, max].

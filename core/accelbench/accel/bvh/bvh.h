@@ -34,6 +34,7 @@
 #include "accelbench/accel/bvh/bvh_top_down.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
 #include "accelbench/accel/bvh/flat_bvh.h"
+#include "accelbench/base/parallel.h"
 
 namespace accelbench {
 
@@ -88,6 +89,7 @@ public:
         float isect_cost = 1.0f;  // SAH cost of a triangle test (split=sah)
         BvhTraversal traversal = BvhTraversal::ordered;
         uint32_t reinsertion = 0;  // reinsertion passes after the build (0: off)
+        int threads = 1;           // build threads (the tree is the same for every count)
         // How a leaf's triangles are tested: one at a time (scalar) or four per SSE test
         // (packet, bvh_packet_leaves.h); auto = packet where a leaf may hold more than one
         // triangle (split=sah's default max_prims 8), scalar for one-triangle leaves (the
@@ -125,7 +127,10 @@ public:
     const BvhPacketLeaves* packet_leaves() const { return config_.packet_leaves() ? &packets_ : nullptr; }
 
 private:
+    void build_on_threads(const Scene& scene);
+
     Config config_;
+    BuildThreads threads_;
     FlatBvh bvh_;
     BvhPacketLeaves packets_;  // built when config_.packet_leaves()
     BvhTopDownCounts counts_;

@@ -30,6 +30,7 @@
 
 #include "accelbench/accel/bvh/flat_bvh.h"
 #include "accelbench/accel/bvh/wbvh_simd.h"
+#include "accelbench/base/parallel.h"
 
 namespace accelbench {
 
@@ -40,12 +41,13 @@ WbvhTriPacket pack_triangles(const FlatBvh& bvh, std::span<const uint32_t> slots
 struct BvhPacketLeaves {
     // Each leaf's triangles in slot order, ceil(count / 4) packets per leaf, the lanes past
     // the leaf's count masked off by the test (prim kInvalidId).
-    std::vector<WbvhTriPacket> packets;
+    std::vector<WbvhTriPacket, DefaultInitAllocator<WbvhTriPacket>> packets;
     // Per node: a leaf's first packet (unused for inner nodes).
     std::vector<uint32_t> first_packet;
 
-    // Makes the packets of a finished (finalized) tree.
-    void build(const FlatBvh& bvh);
+    // Makes the packets of a finished (finalized) tree, on the build's threads when
+    // `parallel` (the same packets).
+    void build(const FlatBvh& bvh, bool parallel);
     size_t memory_bytes() const {
         return packets.size() * sizeof(WbvhTriPacket) + first_packet.size() * sizeof(uint32_t);
     }

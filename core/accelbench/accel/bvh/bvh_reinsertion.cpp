@@ -186,7 +186,7 @@ private:
         }
     }
 
-    std::vector<BvhNode> nodes_;  // the original nodes: leaves' primitive ranges, inner axes
+    BvhNodeArray nodes_;  // the original nodes: leaves' primitive ranges, inner axes
     std::vector<Bounds3> box_;
     std::vector<uint32_t> left_, right_, parent_;
     uint32_t root_ = 0;

@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "accelbench/accel/bvh/flat_bvh.h"
+#include "accelbench/base/parallel.h"
 #include "accelbench/scene/scene.h"
 
 namespace accelbench {
@@ -146,6 +147,7 @@ struct BvhTopDownSettings {
     uint32_t max_prims = 1;   // a range of at most this many primitives becomes a leaf
     uint32_t max_depth = 50;  // nodes at this depth are leaves whatever their size (root: 0)
     BvhAxisRule axis = BvhAxisRule::longest;
+    bool parallel = false;  // on the build's threads (called inside BuildThreads::run): the same tree
 };
 
 struct BvhTopDownCounts {
@@ -167,6 +169,9 @@ struct BvhRangeRequest {
     // As many references as the range, free for the strategy to use (out-of-place
     // partitioning); allocated once per build.
     std::span<Ref> scratch;
+    // A large range of a build on several threads: the strategy may spread its work over the
+    // build's threads (base/parallel.h), and must answer as on one.
+    bool parallel = false;
 };
 using BvhSplitRequest = BvhRangeRequest<BvhPrimRef>;
 
@@ -221,33 +226,66 @@ constexpr bool may_stop_early() {
 // The box and the centroid box of a range. For BvhCentroidRef the centroid box only:
 // `bounds` is left empty and the node boxes are made bottom-up after the build
 // (fit_bottom_up).
+// The box and centroid box of refs in two accumulator pairs, one for the even references
+// and one for the odd (two independent chains of dependent min/max operations, half as long).
+template <class Ref>
+struct FitAccumulators {
+    BvhBoxAccumulator b[2], cb[2];
+
+    // refs, the first of which has an even index in the range being fitted.
+    void add(std::span<const Ref> refs) {
+        auto one = [&](const Ref& r, int k) {
+            if constexpr (std::is_same_v<Ref, BvhPrimRef>) b[k].extend(r, cb[k]);
+            else cb[k].extend(r);
+        };
+        const size_t n = refs.size();
+        for (size_t i = 0; i + 1 < n; i += 2) {
+            one(refs[i], 0);
+            one(refs[i + 1], 1);
+        }
+        if (n % 2) one(refs[n - 1], 0);
+    }
+    void add(const FitAccumulators& o) {
+        for (int k = 0; k < 2; ++k) {
+            b[k].extend(o.b[k]);
+            cb[k].extend(o.cb[k]);
+        }
+    }
+    void result(Bounds3& bounds, Bounds3& centroid_bounds) {
+        b[0].extend(b[1]);
+        cb[0].extend(cb[1]);
+        bounds = std::is_same_v<Ref, BvhPrimRef> ? b[0].bounds() : Bounds3{};
+        centroid_bounds = cb[0].bounds();
+    }
+};
+
 template <class Ref>
 inline void fit(std::span<const Ref> refs, Bounds3& bounds, Bounds3& centroid_bounds) {
-    constexpr bool kBoxes = std::is_same_v<Ref, BvhPrimRef>;
-    // Two independent accumulator pairs halve the chain of dependent min/max operations.
-    BvhBoxAccumulator b[2], cb[2];
-    auto add = [&](const Ref& r, int k) {
-        if constexpr (kBoxes) b[k].extend(r, cb[k]);
-        else cb[k].extend(r);
-    };
-    const size_t n = refs.size();
-    for (size_t i = 0; i + 1 < n; i += 2) {
-        add(refs[i], 0);
-        add(refs[i + 1], 1);
-    }
-    if (n % 2) add(refs[n - 1], 0);
-    b[0].extend(b[1]);
-    cb[0].extend(cb[1]);
-    bounds = kBoxes ? b[0].bounds() : Bounds3{};
-    centroid_bounds = cb[0].bounds();
+    FitAccumulators<Ref> acc;
+    acc.add(refs);
+    acc.result(bounds, centroid_bounds);
+}
+
+// fit() on the build's threads: blocks of an even size, each accumulated as fit() does, the
+// blocks' even and odd accumulators merged in order: fit()'s floats (base/parallel.h).
+template <class Ref>
+inline void fit_parallel(std::span<const Ref> refs, Bounds3& bounds, Bounds3& centroid_bounds, bool parallel) {
+    constexpr size_t kBlock = 1 << 15;
+    if (!parallel || refs.size() < 2 * kBlock) return fit(refs, bounds, centroid_bounds);
+    std::vector<FitAccumulators<Ref>> parts(block_count(refs.size(), kBlock));
+    for_blocks(true, refs.size(), kBlock,
+               [&](size_t k, size_t begin, size_t end) { parts[k].add(refs.subspan(begin, end - begin)); });
+    for (size_t k = 1; k < parts.size(); ++k) parts[0].add(parts[k]);
+    parts[0].result(bounds, centroid_bounds);
 }
 
 // The boxes of a tree built from BvhCentroidRef, bottom-up (children follow their parent
 // in the array): a leaf's from its triangles' corners, which finalize() has just copied in
 // leaf order (a sequential read; the same floats as Scene::prim_bounds, which extends a
 // box by the three corners in this order), an inner node's from its children's.
-inline void fit_bottom_up(FlatBvh& bvh) {
-    for (size_t i = bvh.nodes.size(); i-- > 0;) {
+// The nodes [begin, end), from the back: every node's children after it within the range.
+inline void fit_bottom_up(FlatBvh& bvh, size_t begin, size_t end) {
+    for (size_t i = end; i-- > begin;) {
         BvhNode& node = bvh.nodes[i];
         Bounds3 b;
         if (node.is_leaf()) {
@@ -263,6 +301,25 @@ inline void fit_bottom_up(FlatBvh& bvh) {
         }
         node.bounds = b;
     }
+}
+
+// The subtree of node i; on the build's threads, the two children of a large one at once
+// (each box is the same union whoever computes it).
+inline void fit_subtree_bottom_up(FlatBvh& bvh, size_t i, bool parallel) {
+    constexpr size_t kSerial = 1 << 15;  // nodes
+    const size_t end = subtree_end(bvh, i);
+    if (!parallel || end - i < kSerial) return fit_bottom_up(bvh, i, end);
+    BvhNode& node = bvh.nodes[i];
+    fork_join(
+        true, [&] { fit_subtree_bottom_up(bvh, i + 1, true); },
+        [&] { fit_subtree_bottom_up(bvh, node.second_child(), true); });
+    Bounds3 b = bvh.nodes[i + 1].bounds;
+    b.extend(bvh.nodes[node.second_child()].bounds);
+    node.bounds = b;
+}
+
+inline void fit_bottom_up(FlatBvh& bvh, bool parallel) {
+    if (!bvh.nodes.empty()) fit_subtree_bottom_up(bvh, 0, parallel);
 }
 
 // Splits a range into two halves by count along `axis` (the object median; also the
@@ -301,7 +358,10 @@ inline void fit_bottom_up(FlatBvh& bvh) {
 template <class Ref>
 class EqualCountSplitter {
 public:
-    BvhSplit operator()(std::span<Ref> refs, std::span<Ref> scratch, int axis, float lo, float hi) {
+    // `parallel`: a large range on the build's threads (the counting and the scatter in
+    // blocks, merged in order: the same split, base/parallel.h).
+    BvhSplit operator()(std::span<Ref> refs, std::span<Ref> scratch, int axis, float lo, float hi,
+                        bool parallel = false) {
         const size_t n = refs.size(), mid = n / 2;
         return with_axis(axis, [&](auto a) {
             auto by_centroid = [a](const Ref& x, const Ref& y) { return x.centroid(a) < y.centroid(a); };
@@ -320,7 +380,7 @@ public:
                 std::nth_element(refs.begin(), refs.begin() + ptrdiff_t(mid), refs.end(), by_centroid);
                 return BvhSplit{mid, axis};
             }
-            return split_binned(a, refs.data(), scratch.data(), n, lo, hi);
+            return split_binned(a, refs.data(), scratch.data(), n, lo, hi, parallel);
         });
     }
 
@@ -330,7 +390,7 @@ private:
     // every captured value through memory at each reference (a char store may alias
     // anything), 38 instructions per reference in the counting loop.
     template <class Axis>
-    BvhSplit split_binned(Axis a, const Ref* refs, Ref* scratch, size_t n, float lo, float hi) {
+    BvhSplit split_binned(Axis a, const Ref* refs, Ref* scratch, size_t n, float lo, float hi, bool parallel) {
         const size_t mid = n / 2;
         const uint32_t bins = uint32_t(std::min<size_t>(kMaxBins, n / 4));  // ~4 per bin
         const float scale = float(bins) * (1.0f - 1e-6f) / (hi - lo);
@@ -341,13 +401,25 @@ private:
         BvhBoxAccumulator* const boxes = boxes_;
         BvhBoxAccumulator* const centroids = centroids_;
         // The bins are empty on entry (left empty below).
-        for (size_t i = 0; i < n; ++i) {
-            const Ref& r = refs[i];
-            const uint32_t b = uint32_t(std::min(last_bin, std::max(0.0f, (r.centroid(a) - lo) * scale)));
-            bin[i] = uint8_t(b);
-            ++counts[b];
-            if constexpr (kBoxes) boxes[b].extend(r, centroids[b]);
-            else centroids[b].extend(r);
+        struct Part {
+            uint32_t counts[kMaxBins] = {};
+            BvhBoxAccumulator boxes[kBoxes ? kMaxBins : 1], centroids[kMaxBins];
+        };
+        std::vector<Part> parts;  // parallel: each block's bins
+        if (!parallel) {
+            count_range(a, refs, bin, 0, n, lo, scale, last_bin, counts, boxes, centroids);
+        } else {
+            parts.resize(block_count(n, kParallelBlock));
+            for_blocks(true, n, kParallelBlock, [&](size_t k, size_t begin, size_t end) {
+                count_range(a, refs, bin, begin, end, lo, scale, last_bin, parts[k].counts, parts[k].boxes,
+                            parts[k].centroids);
+            });
+            for (const Part& p : parts)
+                for (uint32_t b = 0; b < bins; ++b) {
+                    counts[b] += p.counts[b];
+                    if constexpr (kBoxes) boxes[b].extend(p.boxes[b]);
+                    centroids[b].extend(p.centroids[b]);
+                }
         }
         uint32_t median_bin = 0, below = 0;
         while (below + counts[median_bin] <= mid) below += counts[median_bin++];
@@ -366,15 +438,25 @@ private:
         // three write positions are selected in registers: kept in an array indexed by the
         // group, each store's address waited for the previous increment through memory
         // (store-to-load forwarding) whenever two references in a row went the same way.
-        size_t next0 = 0, next1 = below, next2 = below + in_median;
-        for (size_t i = 0; i < n; ++i) {
-            const uint32_t b = bin[i];
-            const bool above = b > median_bin, in = b == median_bin;
-            const size_t dst = above ? next2 : (in ? next1 : next0);
-            scratch[dst] = refs[i];
-            next2 += above;
-            next1 += in;
-            next0 += !above & !in;
+        if (!parallel) {
+            scatter_range(refs, bin, scratch, 0, n, median_bin, 0, below, below + in_median);
+        } else {
+            // Each block's groups start after the earlier blocks' groups.
+            std::vector<size_t> starts(3 * parts.size());
+            size_t next[3] = {0, below, below + in_median};
+            for (size_t k = 0; k < parts.size(); ++k) {
+                uint32_t group[3] = {0, parts[k].counts[median_bin], 0};
+                for (uint32_t b = 0; b < bins; ++b)
+                    if (b != median_bin) group[b > median_bin ? 2 : 0] += parts[k].counts[b];
+                for (int g = 0; g < 3; ++g) {
+                    starts[3 * k + size_t(g)] = next[g];
+                    next[g] += group[g];
+                }
+            }
+            for_blocks(true, n, kParallelBlock, [&](size_t k, size_t begin, size_t end) {
+                scatter_range(refs, bin, scratch, begin, end, median_bin, starts[3 * k], starts[3 * k + 1],
+                              starts[3 * k + 2]);
+            });
         }
         auto by_centroid = [a](const Ref& x, const Ref& y) { return x.centroid(a) < y.centroid(a); };
         Ref* const first = scratch + below;
@@ -393,7 +475,38 @@ private:
         return split;
     }
 
+    // The counting loop over refs [begin, end) into the given bins. Every value it reads is
+    // a parameter (a local): see split_binned.
+    template <class Axis>
+    static void count_range(Axis a, const Ref* refs, uint8_t* bin, size_t begin, size_t end, float lo, float scale,
+                            float last_bin, uint32_t* counts, BvhBoxAccumulator* boxes, BvhBoxAccumulator* centroids) {
+        for (size_t i = begin; i < end; ++i) {
+            const Ref& r = refs[i];
+            const uint32_t b = uint32_t(std::min(last_bin, std::max(0.0f, (r.centroid(a) - lo) * scale)));
+            bin[i] = uint8_t(b);
+            ++counts[b];
+            if constexpr (kBoxes) boxes[b].extend(r, centroids[b]);
+            else centroids[b].extend(r);
+        }
+    }
+
+    // The three-way scatter of refs [begin, end), the groups' next positions starting at
+    // next0, next1, next2.
+    static void scatter_range(const Ref* refs, const uint8_t* bin, Ref* scratch, size_t begin, size_t end,
+                              uint32_t median_bin, size_t next0, size_t next1, size_t next2) {
+        for (size_t i = begin; i < end; ++i) {
+            const uint32_t b = bin[i];
+            const bool above = b > median_bin, in = b == median_bin;
+            const size_t dst = above ? next2 : (in ? next1 : next0);
+            scratch[dst] = refs[i];
+            next2 += above;
+            next1 += in;
+            next0 += !above & !in;
+        }
+    }
+
     static constexpr uint32_t kMaxBins = 256;                        // a bin index fits a byte
+    static constexpr size_t kParallelBlock = 1 << 14;                // references per block
     static constexpr bool kBoxes = std::is_same_v<Ref, BvhPrimRef>;  // BvhCentroidRef: centroid boxes only
     BvhBoxAccumulator boxes_[kBoxes ? kMaxBins : 1], centroids_[kMaxBins];
     uint32_t counts_[kMaxBins] = {};
@@ -408,17 +521,22 @@ private:
 struct BvhMedianSplit {
     using Ref = BvhCentroidRef;  // the median looks at centroids only
     std::optional<BvhSplit> operator()(std::span<Ref> refs, const BvhRangeRequest<Ref>& r) {
-        return equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis], r.centroid_bounds.upper[r.axis]);
+        return equal_counts(refs, r.scratch, r.axis, r.centroid_bounds.lower[r.axis], r.centroid_bounds.upper[r.axis],
+                            r.parallel);
     }
     detail::EqualCountSplitter<Ref> equal_counts;
 };
 
 // The references the builder starts from: one per scene triangle, in scene order.
-inline void put_refs(const Scene& scene, BvhPrimRef* out) {
-    for (size_t i = 0; i < scene.triangle_count(); ++i) out[i] = {scene.prim_bounds[i], uint32_t(i)};
+inline void put_refs(const Scene& scene, BvhPrimRef* out, bool parallel) {
+    for_blocks(parallel, scene.triangle_count(), 1 << 14, [&](size_t, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) out[i] = {scene.prim_bounds[i], uint32_t(i)};
+    });
 }
-inline void put_refs(const Scene& scene, BvhCentroidRef* out) {
-    for (size_t i = 0; i < scene.triangle_count(); ++i) out[i] = {scene.centroids[i], uint32_t(i)};
+inline void put_refs(const Scene& scene, BvhCentroidRef* out, bool parallel) {
+    for_blocks(parallel, scene.triangle_count(), 1 << 14, [&](size_t, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) out[i] = {scene.centroids[i], uint32_t(i)};
+    });
 }
 
 namespace detail {
@@ -454,19 +572,178 @@ private:
 
 }  // namespace detail
 
+namespace detail {
+
+// What one task of the build writes.
+struct TopDownOutput {
+    BvhPiece& piece;  // in place: the whole node array, shared by every task
+    BvhTopDownCounts counts;
+    uint32_t deepest = 0;  // deepest leaf so far (root: 0)
+};
+
+// The build's loop over one subtree, on one task; on several threads it hands a large second
+// child's subtree to another task (build_bvh_top_down).
+template <class Strategy>
+class TopDownBuild {
+public:
+    using Ref = typename BvhStrategyRef<Strategy>::type;
+    static constexpr bool kMayStopEarly = may_stop_early<Strategy>();
+    // A second child of at least this many references is handed out as a task, a range of
+    // at least kParallelMin split by the strategy on all of the build's threads.
+    static constexpr uint32_t kTaskMin = 4096;
+    static constexpr uint32_t kParallelMin = 1u << 16;
+
+    struct Range {
+        uint32_t begin, end, depth;
+        uint32_t parent;  // appending: node whose second child this range becomes (kInvalidId: none)
+        uint32_t pos;     // in place: the node's index
+        uint32_t buffer;  // index into buffers
+        Bounds3 bounds, centroid_bounds;
+    };
+
+    TopDownBuild(const BvhTopDownSettings& settings, const Strategy& prototype, Ref* const* buffers, uint32_t* prim_ids,
+                 bool parallel, bool in_place)
+        : settings_(settings),
+          prototype_(prototype),
+          buffers_{buffers[0], buffers[1]},
+          prim_ids_(prim_ids),
+          parallel_(parallel),
+          in_place_(in_place) {}
+
+    // Builds the subtree of `range` into out.piece: appended depth-first, or in place from
+    // range.pos.
+    void subtree(Range range, Strategy& strategy, EqualCountSplitter<Ref>& equal_counts, TopDownOutput& out) {
+        BvhNodeArray& nodes = out.piece.nodes;
+        std::vector<Range> pending;  // second children still to build; at most one per level
+        for (;;) {
+            const uint32_t index = in_place_ ? range.pos : uint32_t(nodes.size());
+            if (!in_place_ && range.parent != kInvalidId) nodes[range.parent].index = index;
+            const uint32_t count = range.end - range.begin;
+            const std::span<Ref> span(buffers_[range.buffer] + range.begin, count);
+
+            // Leaf or split?
+            std::optional<BvhSplit> split;
+            const bool small = count <= settings_.max_prims;
+            if (count > 1 && range.depth < settings_.max_depth && (!small || kMayStopEarly)) {
+                const Vec3 extent = range.centroid_bounds.diagonal();
+                const int axis = settings_.axis == BvhAxisRule::longest ? max_axis(extent) : int(range.depth % 3);
+                const std::span<Ref> span_scratch(buffers_[range.buffer ^ 1] + range.begin, count);
+                const bool wide = parallel_ && count >= kParallelMin;
+                if (extent[axis] > 0.0f)
+                    split = strategy(
+                        span, {range.bounds, range.centroid_bounds, axis, range.depth, small, span_scratch, wide});
+                if (split && (split->mid == 0 || split->mid >= count))
+                    throw std::logic_error("bvh: split strategy returned an empty side");
+                if (!split && !small) {
+                    ++out.counts.degenerate_splits;
+                    const int longest = max_axis(extent);
+                    split = equal_counts(span, span_scratch, longest, range.centroid_bounds.lower[longest],
+                                         range.centroid_bounds.upper[longest], wide);
+                }
+            } else if (!small) {
+                ++out.counts.forced_leaves;  // at max_depth with more than max_prims primitives
+            }
+
+            if (!split) {
+                for (uint32_t i = 0; i < count; ++i) prim_ids_[range.begin + i] = span[i].id;
+                out.deepest = std::max(out.deepest, range.depth);
+                const BvhNode leaf = BvhNode::leaf(range.bounds, range.begin, count);  // kCentroidsOnly: fitted below
+                // In place, a forced leaf's subtree is smaller than its 2m - 1 places: the
+                // caller sees forced_leaves and builds again, so nothing is written past them.
+                if (!in_place_) nodes.push_back(leaf);
+                else if (count == 1) nodes[index] = leaf;
+                if (pending.empty()) return;
+                range = pending.back();
+                pending.pop_back();
+                continue;
+            }
+            const uint32_t mid = range.begin + uint32_t(split->mid);
+            const uint32_t second_pos = index + 2 * (mid - range.begin);  // in place
+            const BvhNode inner = BvhNode::inner(range.bounds, in_place_ ? second_pos : 0, split->axis);
+            if (!in_place_) nodes.push_back(inner);  // second child patched later
+            else nodes[index] = inner;
+            const uint32_t buffer = range.buffer ^ uint32_t(split->in_scratch);
+            Range first{range.begin, mid, range.depth + 1, kInvalidId, index + 1, buffer, {}, {}};
+            Range second{mid, range.end, range.depth + 1, index, second_pos, buffer, {}, {}};
+            if (split->fitted) {
+                first.bounds = split->bounds[0];
+                first.centroid_bounds = split->centroid_bounds[0];
+                second.bounds = split->bounds[1];
+                second.centroid_bounds = split->centroid_bounds[1];
+            } else {
+                fit(std::span<const Ref>(buffers_[buffer] + first.begin, first.end - first.begin), first.bounds,
+                    first.centroid_bounds);
+                fit(std::span<const Ref>(buffers_[buffer] + second.begin, second.end - second.begin), second.bounds,
+                    second.centroid_bounds);
+            }
+            if (parallel_ && second.end - second.begin >= kTaskMin) {
+                hand_out(first, second, index, strategy, equal_counts, out);
+                if (pending.empty()) return;
+                range = pending.back();
+                pending.pop_back();
+                continue;
+            }
+            pending.push_back(second);
+            range = first;
+        }
+    }
+
+private:
+    // Builds `first` on this task and `second` on another, with a strategy and fallback of its
+    // own; appending, into a piece of its own, which goes in after the first child's subtree
+    // (its root is index 0 of the piece, relocated on assembly).
+    void hand_out(Range first, Range second, uint32_t parent, Strategy& strategy, EqualCountSplitter<Ref>& equal_counts,
+                  TopDownOutput& out) {
+        std::unique_ptr<BvhPiece> piece;
+        if (!in_place_) {
+            piece = std::make_unique<BvhPiece>();
+            second.parent = kInvalidId;
+        }
+        TopDownOutput task{in_place_ ? out.piece : *piece, {}, 0};
+        fork_join(
+            true, [&] { subtree(first, strategy, equal_counts, out); },
+            [&] {
+                Strategy own = prototype_;
+                EqualCountSplitter<Ref> own_equal_counts;
+                subtree(second, own, own_equal_counts, task);
+            });
+        if (!in_place_) out.piece.add_hole(parent, std::move(piece));
+        out.counts.degenerate_splits += task.counts.degenerate_splits;
+        out.counts.forced_leaves += task.counts.forced_leaves;
+        out.deepest = std::max(out.deepest, task.deepest);
+    }
+
+    const BvhTopDownSettings& settings_;
+    const Strategy& prototype_;  // as it was before the build: each task copies it
+    Ref* const buffers_[2];
+    uint32_t* const prim_ids_;
+    const bool parallel_, in_place_;
+};
+
+}  // namespace detail
+
+// The build. On one thread, the nodes are appended depth-first by one loop. On several
+// (settings.parallel, inside a BuildThreads::run), a second child of kTaskMin references or
+// more is handed out as a task, and the strategy splits ranges of kParallelMin or more on all
+// of the build's threads. Where a task's nodes go: with max_prims 1 every leaf holds one
+// primitive and a subtree over m of them has exactly 2m - 1 nodes, so each task writes in
+// place into the final array, sized 2n - 1 beforehand (a leaf forced at max_depth breaks
+// that; the build then starts again appending); otherwise into a piece of its own, the
+// pieces assembled depth-first at the end (base/tree_pieces.h). The array is the one thread's
+// either way, and the strategies' parallel splits give their serial answers (base/parallel.h).
 template <BvhSplitStrategy Strategy>
 FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& settings, Strategy& strategy,
                            BvhTopDownCounts& counts) {
-    constexpr bool kMayStopEarly = detail::may_stop_early<Strategy>();
-    using Ref = typename BvhStrategyRef<Strategy>::type;
+    using Build = detail::TopDownBuild<Strategy>;
+    using Ref = typename Build::Ref;
     constexpr bool kCentroidsOnly = std::is_same_v<Ref, BvhCentroidRef>;  // node boxes made bottom-up
     if (scene.triangle_count() > BvhNode::kMaxLeafPrims)
         throw std::runtime_error("bvh: scene '" + scene.name + "' has more triangles than a BVH node can count");
     FlatBvh bvh;
     counts = {};
     const uint32_t n = uint32_t(scene.triangle_count());
+    const bool parallel = settings.parallel;
     const detail::RefBuffer<Ref> refs(n), scratch(n);
-    put_refs(scene, refs.data());
     if (n == 0) {
         bvh.finalize(scene);
         return bvh;
@@ -475,78 +752,34 @@ FlatBvh build_bvh_top_down(const Scene& scene, const BvhTopDownSettings& setting
     // place leaves its children in the other one (BvhSplit::in_scratch), which is then
     // their scratch, so nothing is copied back.
     Ref* const buffers[2] = {refs.data(), scratch.data()};
-    bvh.nodes.reserve(2 * size_t(n) - 1);  // a binary tree with non-empty leaves has at most 2n-1 nodes
     bvh.prim_ids.resize(n);
-    detail::EqualCountSplitter<Ref> equal_counts;  // the fallback for ranges the strategy cannot separate
+    const Strategy prototype = strategy;  // before it is used: what each task starts from
 
-    struct Range {
-        uint32_t begin, end, depth;
-        uint32_t parent;  // node whose second child this range becomes (kInvalidId: none)
-        uint32_t buffer;  // index into buffers
-        Bounds3 bounds, centroid_bounds;
+    auto attempt = [&](bool in_place) {
+        put_refs(scene, refs.data(), parallel);
+        typename Build::Range root{0, n, 0, kInvalidId, 0, 0, {}, {}};
+        detail::fit_parallel<Ref>(std::span<const Ref>(refs.data(), n), root.bounds, root.centroid_bounds, parallel);
+        BvhPiece piece;
+        // A binary tree with non-empty leaves has at most 2n-1 nodes.
+        if (in_place) piece.nodes.resize(2 * size_t(n) - 1);  // not written (DefaultInitAllocator)
+        else if (!parallel) piece.nodes.reserve(2 * size_t(n) - 1);
+        detail::TopDownOutput out{piece, {}, 0};
+        detail::EqualCountSplitter<Ref> equal_counts;  // the fallback for ranges the strategy cannot separate
+        Build(settings, prototype, buffers, bvh.prim_ids.data(), parallel, in_place)
+            .subtree(root, strategy, equal_counts, out);
+        counts = out.counts;
+        if (in_place && counts.forced_leaves > 0) return std::optional<uint32_t>();
+        assemble_bvh_pieces(piece, bvh.nodes, parallel);
+        bvh.nodes.shrink_to_fit();  // leaves of several primitives leave part of the 2n-1 unused
+        return std::optional<uint32_t>(out.deepest);
     };
-    std::vector<Range> pending;  // second children still to build; at most one per level
-    Range range{0, n, 0, kInvalidId, 0, {}, {}};
-    detail::fit<Ref>(std::span<const Ref>(refs.data(), n), range.bounds, range.centroid_bounds);
-
-    for (;;) {
-        const uint32_t index = uint32_t(bvh.nodes.size());
-        if (range.parent != kInvalidId) bvh.nodes[range.parent].index = index;
-        const uint32_t count = range.end - range.begin;
-        const std::span<Ref> span(buffers[range.buffer] + range.begin, count);
-
-        // Leaf or split?
-        std::optional<BvhSplit> split;
-        const bool small = count <= settings.max_prims;
-        if (count > 1 && range.depth < settings.max_depth && (!small || kMayStopEarly)) {
-            const Vec3 extent = range.centroid_bounds.diagonal();
-            const int axis = settings.axis == BvhAxisRule::longest ? max_axis(extent) : int(range.depth % 3);
-            const std::span<Ref> span_scratch(buffers[range.buffer ^ 1] + range.begin, count);
-            if (extent[axis] > 0.0f)
-                split = strategy(span, {range.bounds, range.centroid_bounds, axis, range.depth, small, span_scratch});
-            if (split && (split->mid == 0 || split->mid >= count))
-                throw std::logic_error("bvh: split strategy returned an empty side");
-            if (!split && !small) {
-                ++counts.degenerate_splits;
-                const int longest = max_axis(extent);
-                split = equal_counts(span, span_scratch, longest, range.centroid_bounds.lower[longest],
-                                     range.centroid_bounds.upper[longest]);
-            }
-        } else if (!small) {
-            ++counts.forced_leaves;  // at max_depth with more than max_prims primitives
-        }
-
-        if (!split) {
-            for (uint32_t i = 0; i < count; ++i) bvh.prim_ids[range.begin + i] = span[i].id;
-            bvh.nodes.push_back(BvhNode::leaf(range.bounds, range.begin, count));  // kCentroidsOnly: fitted below
-            if (pending.empty()) break;
-            range = pending.back();
-            pending.pop_back();
-            continue;
-        }
-        bvh.nodes.push_back(BvhNode::inner(range.bounds, 0, split->axis));  // second child patched later
-        const uint32_t mid = range.begin + uint32_t(split->mid);
-        const uint32_t buffer = range.buffer ^ uint32_t(split->in_scratch);
-        Range first{range.begin, mid, range.depth + 1, kInvalidId, buffer, {}, {}};
-        Range second{mid, range.end, range.depth + 1, index, buffer, {}, {}};
-        if (split->fitted) {
-            first.bounds = split->bounds[0];
-            first.centroid_bounds = split->centroid_bounds[0];
-            second.bounds = split->bounds[1];
-            second.centroid_bounds = split->centroid_bounds[1];
-        } else {
-            detail::fit(std::span<const Ref>(buffers[buffer] + first.begin, first.end - first.begin), first.bounds,
-                        first.centroid_bounds);
-            detail::fit(std::span<const Ref>(buffers[buffer] + second.begin, second.end - second.begin), second.bounds,
-                        second.centroid_bounds);
-        }
-        pending.push_back(second);
-        range = first;
+    std::optional<uint32_t> deepest = attempt(parallel && settings.max_prims == 1);
+    if (!deepest) {
+        strategy = prototype;
+        deepest = attempt(false);
     }
-
-    bvh.nodes.shrink_to_fit();  // leaves of several primitives leave part of the 2n-1 unused
-    bvh.finalize(scene);
-    if constexpr (kCentroidsOnly) detail::fit_bottom_up(bvh);
+    bvh.finalize(scene, *deepest, parallel);
+    if constexpr (kCentroidsOnly) detail::fit_bottom_up(bvh, parallel);
     return bvh;
 }
 

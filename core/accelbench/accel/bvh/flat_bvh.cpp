@@ -6,6 +6,31 @@
 
 namespace accelbench {
 
+void FlatBvh::finalize(const Scene& scene, uint32_t tree_depth, bool parallel) {
+    triangles.resize(prim_ids.size());
+    for_blocks(parallel, prim_ids.size(), 16384, [&](size_t, size_t begin, size_t end) {
+        for (size_t i = begin; i < end; ++i) {
+            const uint32_t p = prim_ids[i];
+            triangles[i] = {scene.vertex(p, 0), scene.vertex(p, 1), scene.vertex(p, 2)};
+        }
+    });
+    depth = tree_depth;
+}
+
+void assemble_bvh_pieces(BvhPiece& root, BvhNodeArray& nodes, bool parallel) {
+    nodes.clear();
+    if (root.holes.empty()) {
+        nodes.swap(root.nodes);
+        return;
+    }
+    const uint64_t total = root.layout().first;
+    nodes.resize(total);
+    root.assemble(nodes.data(), nullptr, parallel, [](BvhNode& n, const BvhPiece::Map&, const BvhPiece::Map& refs) {
+        if (!n.is_leaf()) n.index = uint32_t(refs.node(n.index));
+    });
+    root.nodes.clear();
+}
+
 void FlatBvh::finalize(const Scene& scene) {
     // Appended into reserved memory: resize() wrote every triangle as zeros first (36
     // bytes per slot, 12 MB for the conference) before the corners overwrote them.

@@ -2,10 +2,8 @@
 
 #include <algorithm>
 #include <bit>
-#include <future>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "accelbench/accel/bvh/bvh_metrics.h"
@@ -26,7 +24,7 @@ const ParamTable<Lbvh::Config>& lbvh_params() {
                    "karras: split by binary search, boxes bottom-up, O(N) after the sort (Karras 2012); report: the "
                    "report's Algorithm 2, each node's box fitted from its primitives and the split by a linear scan "
                    "(both give the same tree); median: the codes and the sort, then the median BVH's build and tree, "
-                   "the LBVH the report's section 5.2 measured (one thread)"),
+                   "the LBVH the report's section 5.2 measured"),
         int_param("bits", &C::bits, kMortonMinBits, kMortonMaxBits<uint64_t>,
                   "Morton grid bits per axis (2^bits cells); up to 10 sorts 32-bit codes, 11..21 64-bit codes"),
         int_param("max_prims", &C::max_prims, 1, BvhNode::kMaxLeafPrims,
@@ -36,7 +34,8 @@ const ParamTable<Lbvh::Config>& lbvh_params() {
         threads_param("threads", &C::threads, 256,
                       "build threads (0 = all cores); the tree is the same for every value"),
         int_param("task_threshold", &C::task_threshold, 1, 1e9,
-                  "a subtree goes to another thread only above this many primitives (the report: 100)"),
+                  "on several threads, a subtree is handed out as a task only above this many primitives (the report: "
+                  "100)"),
         int_param("sort_digit_bits", &C::sort_digit_bits, kRadixMinDigitBits, kRadixMaxDigitBits,
                   "radix sort digit width: bits per counting pass"),
         bvh_traversal_param(&C::traversal),
@@ -51,7 +50,7 @@ AcceleratorInfo Lbvh::info() {
             .description =
                 "linear BVH (report section 3): Morton codes of the centroids, one radix sort, split at the "
                 "highest differing code bit (Karras 2012 or the report's Algorithm 2, the same tree); "
-                "optional subtree threads",
+                "optional build threads",
             .params = lbvh_params().specs(),
             .create = [](const ParamSet& p) { return std::make_unique<Lbvh>(p); },
             .label = fixed_label("LBVH"),
@@ -62,7 +61,7 @@ Lbvh::Config Lbvh::Config::from(const ParamSet& p) { return lbvh_params().from(p
 
 Lbvh::Lbvh(const ParamSet& params) : Lbvh(Config::from(params)) {}
 
-Lbvh::Lbvh(const Config& config) : config_(config) {}
+Lbvh::Lbvh(const Config& config) : config_(config), threads_(config.threads) {}
 
 Lbvh::Counts& Lbvh::Counts::operator+=(const Counts& o) {
     equal_code_splits += o.equal_code_splits;
@@ -76,96 +75,128 @@ Lbvh::Counts& Lbvh::Counts::operator+=(const Counts& o) {
 
 namespace {
 
-// Builds the tree over primitives sorted by Morton code. One builder serves all threads;
-// what a thread writes (its node buffer, its counts) is passed down the recursion.
+// Builds the tree over primitives sorted by Morton code. One builder serves all tasks;
+// what a task writes (its part of the node array, its counts) is passed down the recursion.
 //
-// Which subtrees go to other threads is decided by a thread budget passed down the
-// recursion (the root has `threads`; a hand-off splits a node's budget between its
-// children by their primitive counts), not by which threads happen to be free: so the
-// hand-offs, and the build_tasks count reported, are a property of the tree and the
-// parameters, the same in every build (the harness checks that builds are reproducible).
-// At most `threads` threads are live, as the budgets of live subtrees sum to it.
+// On several threads, every second child of more than task_threshold primitives is handed
+// out as a task (base/parallel.h). Which subtrees are handed out depends on the tree and the
+// parameters alone, so the build_tasks count reported is the same for every thread count
+// above one (the harness checks that builds are reproducible), and 0 on one thread, which
+// hands nothing out. Where a task's nodes go:
+//  - max_prims 1 (the default, the report's): every leaf holds one primitive, so a subtree
+//    over m primitives has exactly 2m - 1 nodes, and a node's second child lies 2 m1 after
+//    it (m1: its first child's primitives). Every task writes straight into the final array
+//    at those places (`direct`), sized 2n - 1 beforehand. Only a leaf forced at max_depth
+//    breaks the count; the build then starts the hierarchy again with pieces.
+//  - otherwise a task builds into a piece of its own (base/tree_pieces.h), put in place
+//    after its first sibling's subtree when the tree is assembled.
+// Either way the array is the one a one-thread depth-first build writes.
 template <class Code>
 class LbvhBuilder {
 public:
+    // What one task writes.
+    struct Output {
+        BvhPiece& piece;  // direct: the whole array, shared by every task
+        Lbvh::Counts& counts;
+        uint32_t deepest = 0;  // deepest leaf so far (root: 0)
+    };
+
     // `sorted_bounds[i]` is the box of the primitive sorted_[i] refers to.
     LbvhBuilder(const std::vector<KeyValue<Code>>& sorted, const std::vector<Bounds3>& sorted_bounds,
-                const Lbvh::Config& config)
-        : sorted_(sorted), sorted_bounds_(sorted_bounds), config_(config) {}
+                const Lbvh::Config& config, bool parallel, bool direct)
+        : sorted_(sorted), sorted_bounds_(sorted_bounds), config_(config), parallel_(parallel), direct_(direct) {}
 
-    // Builds the subtree over sorted_[begin, end) at `depth`, appending its nodes to `out`
-    // in depth-first order (its root first). Node indices are relative to out's start.
-    // Returns the subtree's bounds. `threads`: the subtree's thread budget, its own thread
-    // included. Small enough to be inlined into build_inner, so that the leaves — half of
-    // all nodes — cost no call of their own.
-    Bounds3 build(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts,
-                  int threads) {
+    // Builds the subtree over sorted_[begin, end) at `depth`, its nodes in depth-first order
+    // (its root first): direct, from index `pos` of the array; otherwise appended to
+    // out.piece, indices relative to the piece's start. Returns the subtree's bounds. Small
+    // enough to be inlined into build_inner, so that the leaves — half of all nodes — cost
+    // no call of their own.
+    Bounds3 build(uint32_t begin, uint32_t end, uint32_t depth, uint32_t pos, Output& out) {
         const uint32_t count = end - begin;
-        if (count <= config_.max_prims || depth >= config_.max_depth) return build_leaf(begin, end, out, counts);
-        return build_inner(begin, end, depth, out, counts, threads);
+        if (count <= config_.max_prims || depth >= config_.max_depth) return build_leaf(begin, end, depth, pos, out);
+        return build_inner(begin, end, depth, pos, out);
     }
 
 private:
-    Bounds3 build_leaf(uint32_t begin, uint32_t end, std::vector<BvhNode>& out, Lbvh::Counts& counts) const {
+    Bounds3 build_leaf(uint32_t begin, uint32_t end, uint32_t depth, uint32_t pos, Output& out) const {
         const uint32_t count = end - begin;
         if (count > config_.max_prims) {
             if (count > BvhNode::kMaxLeafPrims)
                 throw std::runtime_error("lbvh: a leaf of " + std::to_string(count) + " primitives at max_depth " +
                                          std::to_string(config_.max_depth) + " exceeds the node format's " +
                                          std::to_string(BvhNode::kMaxLeafPrims));
-            ++counts.forced_leaves;
+            ++out.counts.forced_leaves;
         }
+        out.deepest = std::max(out.deepest, depth);
         const Bounds3 b = global_aabb(begin, end);
-        out.push_back(BvhNode::leaf(b, begin, count));
+        // Direct: a forced leaf's subtree is smaller than its 2m - 1 places; the caller
+        // sees forced_leaves and builds again, so nothing is written past the array.
+        if (!direct_) out.piece.nodes.push_back(BvhNode::leaf(b, begin, count));
+        else if (count == 1) out.piece.nodes[pos] = BvhNode::leaf(b, begin, count);
         return b;
     }
 
-    // The box of the primitives sorted_[begin, end): the report's getGlobalAABB.
+    // The box of the primitives sorted_[begin, end): the report's getGlobalAABB. A large
+    // range (build=report's top nodes) in blocks on the build's threads, their boxes merged
+    // in order: the same floats (base/parallel.h).
     Bounds3 global_aabb(uint32_t begin, uint32_t end) const {
+        constexpr uint32_t kBlock = 1u << 15;
+        if (!parallel_ || end - begin < 2 * kBlock) return global_aabb_serial(begin, end);
+        std::vector<Bounds3> parts(block_count(end - begin, kBlock));
+        for_blocks(true, end - begin, kBlock, [&](size_t k, size_t b, size_t e) {
+            parts[k] = global_aabb_serial(begin + uint32_t(b), begin + uint32_t(e));
+        });
+        Bounds3 box = parts[0];
+        for (size_t k = 1; k < parts.size(); ++k) box.extend(parts[k]);
+        return box;
+    }
+    Bounds3 global_aabb_serial(uint32_t begin, uint32_t end) const {
         Bounds3 b = sorted_bounds_[begin];
         for (uint32_t i = begin + 1; i < end; ++i) b.extend(sorted_bounds_[i]);
         return b;
     }
 
-    Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, std::vector<BvhNode>& out, Lbvh::Counts& counts,
-                        int threads) {
-        const uint32_t self = uint32_t(out.size());
-        out.emplace_back();  // written once the node's box is known
+    Bounds3 build_inner(uint32_t begin, uint32_t end, uint32_t depth, uint32_t pos, Output& out) {
+        BvhNodeArray& nodes = out.piece.nodes;
+        const uint32_t self = direct_ ? pos : uint32_t(nodes.size());
+        if (!direct_) nodes.emplace_back();  // written once the node's box is known
         // Algorithm 2 fits the node's box from its primitives before it splits; Karras's
         // build leaves it to the children's boxes below.
         const bool report = config_.build == Lbvh::Build::report;
         const Bounds3 fitted = report ? global_aabb(begin, end) : Bounds3{};
         const Split split = report ? scan_split(begin, end) : find_split(begin, end);
-        if (split.axis < 0) ++counts.equal_code_splits;
+        if (split.axis < 0) ++out.counts.equal_code_splits;
 
         Bounds3 left, right;
-        uint32_t second;
-        if (threads > 1 && end - split.index > config_.task_threshold) {
-            // The second child's subtree goes to another thread, into its own buffer; this
-            // thread builds the first child meanwhile, then appends the second's nodes
-            // right after the first's: the order a one-thread build produces. Each side
-            // keeps at least one thread of the budget, the rest by primitive count.
-            const int task_threads =
-                std::clamp(int(int64_t(threads) * (end - split.index) / (end - begin)), 1, threads - 1);
-            ++counts.tasks;
-            std::vector<BvhNode> task_nodes;
+        uint32_t second = self + 2 * (split.index - begin);  // direct
+        if (parallel_ && end - split.index > config_.task_threshold) {
+            // The second child's subtree is a task of its own; this task builds the first
+            // child meanwhile. Not direct: into a piece of its own, which goes in after the
+            // first child's nodes (its root is index 0 of the piece, relocated on assembly).
+            ++out.counts.tasks;
+            std::unique_ptr<BvhPiece> piece;
+            if (!direct_) {
+                piece = std::make_unique<BvhPiece>();
+                piece->nodes.reserve(2 * size_t(end - split.index) - 1);
+            }
             Lbvh::Counts task_counts;
-            auto task = std::async(std::launch::async, [&] {
-                task_nodes.reserve(2 * size_t(end - split.index) - 1);
-                return build(split.index, end, depth + 1, task_nodes, task_counts, task_threads);
-            });
-            left = build(begin, split.index, depth + 1, out, counts, threads - task_threads);
-            right = task.get();
-            second = uint32_t(out.size());
-            append_relocated(out, task_nodes);
-            counts += task_counts;
+            Output task{direct_ ? out.piece : *piece, task_counts};
+            fork_join(
+                true, [&] { left = build(begin, split.index, depth + 1, self + 1, out); },
+                [&] { right = build(split.index, end, depth + 1, second, task); });
+            if (!direct_) {
+                second = 0;
+                out.piece.add_hole(self, std::move(piece));
+            }
+            out.counts += task_counts;
+            out.deepest = std::max(out.deepest, task.deepest);
         } else {
-            left = build(begin, split.index, depth + 1, out, counts, threads);
-            second = uint32_t(out.size());
-            right = build(split.index, end, depth + 1, out, counts, threads);
+            left = build(begin, split.index, depth + 1, self + 1, out);
+            if (!direct_) second = uint32_t(nodes.size());
+            right = build(split.index, end, depth + 1, second, out);
         }
         const Bounds3 b = report ? fitted : merge(left, right);
-        out[self] = BvhNode::inner(b, second, split.axis >= 0 ? split.axis : b.largest_axis());
+        nodes[self] = BvhNode::inner(b, second, split.axis >= 0 ? split.axis : b.largest_axis());
         return b;
     }
 
@@ -214,26 +245,32 @@ private:
         return {i, morton_bit_axis(bit)};
     }
 
-    // Appends a subtree built in its own buffer: its inner nodes' second-child indices
-    // were relative to that buffer and move by where it lands. Leaves index the sorted
-    // primitive array, which is shared, and need no change.
-    static void append_relocated(std::vector<BvhNode>& out, const std::vector<BvhNode>& subtree) {
-        const uint32_t base = uint32_t(out.size());
-        out.insert(out.end(), subtree.begin(), subtree.end());
-        for (size_t i = base; i < out.size(); ++i)
-            if (!out[i].is_leaf()) out[i].index += base;
-    }
-
     const std::vector<KeyValue<Code>>& sorted_;
     const std::vector<Bounds3>& sorted_bounds_;
     const Lbvh::Config& config_;
+    bool parallel_, direct_;
 };
+
+// The centroid bounds the codes are made over: per block, merged in order (base/parallel.h).
+Bounds3 centroid_bounds(std::span<const Vec3> centroids, bool parallel) {
+    constexpr size_t kBlock = 1 << 16;
+    if (!parallel || centroids.size() < 2 * kBlock) return point_bounds(centroids);
+    std::vector<Bounds3> parts(block_count(centroids.size(), kBlock));
+    for_blocks(true, centroids.size(), kBlock, [&](size_t k, size_t begin, size_t end) {
+        parts[k] = point_bounds(centroids.subspan(begin, end - begin));
+    });
+    Bounds3 box;
+    for (const Bounds3& part : parts) box.extend(part);
+    return box;
+}
 
 }  // namespace
 
 void Lbvh::build(const Scene& scene) {
-    if (config_.bits <= kMortonMaxBits<uint32_t>) build_with<uint32_t>(scene);
-    else build_with<uint64_t>(scene);
+    threads_.run([&] {
+        if (config_.bits <= kMortonMaxBits<uint32_t>) build_with<uint32_t>(scene);
+        else build_with<uint64_t>(scene);
+    });
 }
 
 template <class Code>
@@ -249,14 +286,22 @@ void Lbvh::build_with(const Scene& scene) {
     bvh_.prim_ids.clear();
     counts_ = {};
     const size_t n = scene.triangle_count();
+    const bool parallel = threads_.parallel();
+    constexpr size_t kBlock = 1 << 14;  // primitives per block of the parallel stages
+    uint32_t deepest = 0;
     try {
         if (n > 0) {
             if (n > UINT32_MAX / 2) throw std::runtime_error("lbvh: scene '" + scene.name + "' has too many triangles");
-            // Codes over the centroid bounds, then one sort.
-            const MortonQuantizer quantizer(point_bounds(scene.centroids), config_.bits);
+            // Codes over the centroid bounds, then one sort; every stage in blocks on the
+            // build's threads (Karras 2012 builds each stage in parallel).
+            const MortonQuantizer quantizer(centroid_bounds(scene.centroids, parallel), config_.bits);
             sorted.resize(n);
-            for (size_t i = 0; i < n; ++i) sorted[i] = {quantizer.code<Code>(scene.centroids[i]), uint32_t(i)};
-            const RadixSortStats sort = radix_sort(sorted, buffers.scratch, 3 * config_.bits, config_.sort_digit_bits);
+            for_blocks(parallel, n, kBlock, [&](size_t, size_t begin, size_t end) {
+                for (size_t i = begin; i < end; ++i)
+                    sorted[i] = {quantizer.code<Code>(scene.centroids[i]), uint32_t(i)};
+            });
+            const RadixSortStats sort =
+                radix_sort(sorted, buffers.scratch, 3 * config_.bits, config_.sort_digit_bits, parallel);
             counts_.sort_passes = uint64_t(sort.passes);
             counts_.sort_skipped_passes = uint64_t(sort.skipped_passes);
             if (config_.build == Build::median) {
@@ -264,8 +309,8 @@ void Lbvh::build_with(const Scene& scene) {
                 // over the scene, so the tree is the median BVH's bit for bit.
                 BvhMedianSplit median;
                 BvhTopDownCounts top_down;
-                bvh_ = build_bvh_top_down(scene, {config_.max_prims, config_.max_depth, BvhAxisRule::longest}, median,
-                                          top_down);
+                bvh_ = build_bvh_top_down(scene, {config_.max_prims, config_.max_depth, BvhAxisRule::longest, parallel},
+                                          median, top_down);
                 counts_.forced_leaves = top_down.forced_leaves;
                 counts_.degenerate_splits = top_down.degenerate_splits;
                 return;
@@ -276,17 +321,50 @@ void Lbvh::build_with(const Scene& scene) {
             // them in the recursion, where each leaf's load misses the cache on its own.
             bvh_.prim_ids.resize(n);
             sorted_bounds_.resize(n);
-            for (size_t i = 0; i < n; ++i) {
-                bvh_.prim_ids[i] = sorted[i].value;
-                sorted_bounds_[i] = scene.prim_bounds[sorted[i].value];
-            }
+            for_blocks(parallel, n, kBlock, [&](size_t, size_t begin, size_t end) {
+                for (size_t i = begin; i < end; ++i) {
+                    bvh_.prim_ids[i] = sorted[i].value;
+                    sorted_bounds_[i] = scene.prim_bounds[sorted[i].value];
+                }
+            });
             // A binary tree over n leaves has at most 2n - 1 nodes: reserving that up front
-            // means no reallocation during the build (task buffers reserve theirs likewise).
-            bvh_.nodes.reserve(2 * n - 1);
-            LbvhBuilder<Code> builder(sorted, sorted_bounds_, config_);
-            builder.build(0, uint32_t(n), 0, bvh_.nodes, counts_, config_.threads);
+            // means no reallocation during the build (task pieces reserve theirs likewise).
+            // On several threads the root's piece is small and the tree is assembled into
+            // bvh_.nodes; the piece's vector is kept for the next build.
+            // One thread: the nodes appended to bvh_.nodes, whose capacity a rebuild reuses.
+            // Several, max_prims 1: written in place into bvh_.nodes, sized 2n - 1. Several,
+            // else (or a forced leaf in place): pieces assembled into bvh_.nodes; the root
+            // piece's vector is kept for the next build.
+            const bool direct = parallel && config_.max_prims == 1;
+            BvhPiece root;
+            root.nodes.swap(direct || !parallel ? bvh_.nodes : spare_nodes_);
+            root.nodes.clear();
+            if (direct) root.nodes.resize(2 * n - 1);  // not written (DefaultInitAllocator)
+            else if (!parallel) root.nodes.reserve(2 * n - 1);
+            typename LbvhBuilder<Code>::Output out{root, counts_};
+            LbvhBuilder<Code>(sorted, sorted_bounds_, config_, parallel, direct).build(0, uint32_t(n), 0, 0, out);
+            if (direct && counts_.forced_leaves > 0) {
+                // Some subtree has fewer than 2m - 1 nodes: again, in pieces.
+                bvh_.nodes.swap(root.nodes);
+                root.nodes.swap(spare_nodes_);
+                root.nodes.clear();
+                const Lbvh::Counts sorting = counts_;
+                counts_ = {};
+                counts_.sort_passes = sorting.sort_passes;
+                counts_.sort_skipped_passes = sorting.sort_skipped_passes;
+                out.deepest = 0;
+                LbvhBuilder<Code>(sorted, sorted_bounds_, config_, parallel, false).build(0, uint32_t(n), 0, 0, out);
+                assemble_bvh_pieces(root, bvh_.nodes, parallel);
+                spare_nodes_.swap(root.nodes);
+            } else if (direct || !parallel) {
+                bvh_.nodes.swap(root.nodes);
+            } else {
+                assemble_bvh_pieces(root, bvh_.nodes, parallel);
+                spare_nodes_.swap(root.nodes);
+            }
+            deepest = out.deepest;
         }
-        bvh_.finalize(scene);
+        bvh_.finalize(scene, deepest, parallel);
     } catch (...) {
         bvh_ = FlatBvh{};
         counts_ = {};
@@ -297,7 +375,8 @@ void Lbvh::build_with(const Scene& scene) {
 uint64_t Lbvh::reserved_bytes() const {
     auto bytes = [](const auto& v) { return uint64_t(v.capacity()) * sizeof(v[0]); };
     return bytes(bvh_.nodes) + bytes(bvh_.prim_ids) + bytes(bvh_.triangles) + bytes(sort32_.sorted) +
-        bytes(sort32_.scratch) + bytes(sort64_.sorted) + bytes(sort64_.scratch) + bytes(sorted_bounds_);
+        bytes(sort32_.scratch) + bytes(sort64_.sorted) + bytes(sort64_.scratch) + bytes(sorted_bounds_) +
+        bytes(spare_nodes_);
 }
 
 BuildStats Lbvh::build_stats() const {

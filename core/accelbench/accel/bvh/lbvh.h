@@ -34,11 +34,14 @@
 //                 builder; this build measures what that costs: the BVH's build plus the
 //                 two stages.
 //
-// Subtrees are independent, which is what the report parallelises (section 3.2.1, its
-// "conditional multithreading": a new thread only for subtrees above a threshold). The
-// tree does not depend on the thread count: each task builds its subtree into its own
-// node buffer, and the parent appends it right after its first child's nodes, which is
-// where a one-thread depth-first build puts it.
+// Every stage runs on `threads` threads (Karras 2012 builds each in parallel): the codes,
+// the radix sort and the gathering of the sorted boxes in blocks, the hierarchy as tasks —
+// subtrees are independent, which is what the report parallelises too (section 3.2.1, its
+// "conditional multithreading": a new thread only for subtrees above a threshold); here a
+// second child above task_threshold primitives is handed out as a task, and the box fitting
+// (Karras's bottom-up unions, or the report's top-down fits) happens inside each task. The
+// tree does not depend on the thread count: each task builds its subtree into a piece of its
+// own, and the pieces are assembled where a one-thread depth-first build puts them.
 //
 // The tree is the shared FlatBvh and is traversed by the shared traversals
 // (bvh_traversal.h), exactly as the report reuses its BVH traversal (section 3.2).
@@ -52,6 +55,7 @@
 #include "accelbench/accel/accelerator.h"
 #include "accelbench/accel/bvh/bvh_traversal.h"
 #include "accelbench/accel/bvh/flat_bvh.h"
+#include "accelbench/base/parallel.h"
 #include "accelbench/base/radix_sort.h"
 
 namespace accelbench {
@@ -130,6 +134,8 @@ private:
     SortBuffers<uint32_t> sort32_;
     SortBuffers<uint64_t> sort64_;
     std::vector<Bounds3> sorted_bounds_;
+    BvhNodeArray spare_nodes_;  // several threads: the root piece's nodes (flat_bvh.h)
+    BuildThreads threads_;
 };
 
 }  // namespace accelbench

@@ -1,5 +1,7 @@
 #include "accelbench/accel/bvh/wbvh.h"
 
+#include <tbb/task_group.h>
+
 #include <algorithm>
 #include <bit>
 #include <cstring>
@@ -12,6 +14,7 @@
 #include "accelbench/accel/bvh/bvh_packet_leaves.h"
 #include "accelbench/accel/tree_tally.h"
 #include "accelbench/base/param_table.h"
+#include "accelbench/base/tree_pieces.h"
 
 namespace accelbench {
 
@@ -48,6 +51,9 @@ const ParamTable<Wbvh::Config>& wbvh_params() {
         enum_param("kernel", &C::kernel, Wbvh::kKernelNames,
                    "simd: the vector slab and triangle tests compiled in (scalar on a target without SSE2); "
                    "scalar: the scalar forms, identical answers (for testing and measuring the vector gain)"),
+        threads_param("threads", &C::threads, 256,
+                      "build threads (0 = all cores), the binary build's and the collapse's; the tree is the same "
+                      "for every value"),
     };
     return rows;
 }
@@ -68,6 +74,7 @@ Bvh::Config binary_config(const Wbvh::Config& c) {
     // The collapse reads the binary tree's triangle copies, and the binary tree is never
     // traced: no packet leaves (which would release the copies, bvh.cpp).
     b.leaf_test = Bvh::Config::LeafTest::scalar;
+    b.threads = c.threads;  // the binary build on the wide BVH's threads
     return b;
 }
 
@@ -96,7 +103,8 @@ AcceleratorInfo Wbvh::info() {
 
 Wbvh::Config Wbvh::Config::from(const ParamSet& params) { return wbvh_params().from(params); }
 
-Wbvh::Wbvh(const ParamSet& params) : config_(Config::from(params)), binary_(binary_config(config_)) {}
+Wbvh::Wbvh(const ParamSet& params)
+    : config_(Config::from(params)), binary_(binary_config(config_)), threads_(config_.threads) {}
 
 namespace {
 
@@ -157,56 +165,21 @@ int greedy_children(const FlatBvh& binary, uint32_t node, CollapseChild out[W]) 
 template <int W>
 class SahCollapse {
 public:
-    SahCollapse(const FlatBvh& binary, uint32_t max_prims, double packet_cost)
-        : binary_(binary), plan_(binary.nodes.size()) {
-        std::vector<uint32_t> prims(binary.nodes.size());
-        float root_distribute = kInfinity;  // distribute(root, W)
-        const auto leaf_cost = [&](float area, uint32_t n) {
-            return area * float(packet_cost) * float((n + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes);
-        };
-        // Children are stored after their parent (depth-first): one pass from the back.
-        for (size_t m = binary.nodes.size(); m-- > 0;) {
-            const BvhNode& b = binary.nodes[m];
-            Plan& p = plan_[m];
-            const float area = b.bounds.area();
-            if (b.is_leaf()) {
-                prims[m] = b.prim_count();
-                for (int i = 0; i < W; ++i) p.cost[i] = leaf_cost(area, prims[m]);
-                p.leaf = true;
-                continue;
-            }
-            const uint32_t l = uint32_t(m) + 1, r = b.second_child();
-            prims[m] = prims[l] + prims[r];
-            const Plan &pl = plan_[l], &pr = plan_[r];
-            float dist[W + 1];
-            uint8_t split[W + 1];
-            for (int j = 2; j <= W; ++j) {
-                dist[j] = kInfinity;
-                split[j] = 1;
-                for (int k = 1; k < j; ++k) {  // branch-free (minss and cmov): the outcome is data, not a pattern
-                    const float c = pl.cost[k - 1] + pr.cost[j - k - 1];
-                    const bool lower = c < dist[j];
-                    dist[j] = lower ? c : dist[j];
-                    split[j] = lower ? uint8_t(k) : split[j];
-                }
-            }
-            p.node_split = split[W];
-            if (m == 0) root_distribute = dist[W];
-            const float node = area + dist[W];
-            const float leaf = prims[m] <= max_prims ? leaf_cost(area, prims[m]) : kInfinity;
-            p.leaf = prims[m] <= max_prims && leaf <= node;  // a tie: the leaf, one node fewer
-            p.cost[0] = p.leaf ? leaf : node;
-            p.split[0] = 0;
-            for (int i = 2; i <= W; ++i) {
-                const bool fewer = !(dist[i] < p.cost[i - 2]);  // fewer slots are as cheap (or NaN)
-                p.cost[i - 1] = fewer ? p.cost[i - 2] : dist[i];
-                p.split[i - 1] = fewer ? 0 : split[i];
-            }
-        }
+    // The plan of every binary node: children are stored after their parent (depth-first),
+    // so one pass from the back; on the build's threads the two subtrees of a large node at
+    // once (each node's plan depends on its children's alone).
+    SahCollapse(const FlatBvh& binary, uint32_t max_prims, double packet_cost, bool parallel)
+        : binary_(binary),
+          plan_(binary.nodes.size()),
+          prims_(binary.nodes.size()),
+          max_prims_(max_prims),
+          packet_cost_(float(packet_cost)) {
+        plan_subtree(0, parallel);
         // The root is a wide node whatever its cost: one leaf child under it when that is
         // cheaper than distributing the tree over its W slots.
         root_is_leaf_ = binary.nodes[0].is_leaf() ||
-            (prims[0] <= max_prims && leaf_cost(binary.nodes[0].bounds.area(), prims[0]) <= root_distribute);
+            (prims_[0] <= max_prims &&
+             leaf_cost(binary.nodes[0].bounds.area(), prims_[0], packet_cost_) <= root_distribute_);
     }
 
     // The children of the wide node over binary node `node` (the root or an inner child).
@@ -223,6 +196,69 @@ public:
     }
 
 private:
+    static float leaf_cost(float area, uint32_t n, float packet_cost) {
+        return area * packet_cost * float((n + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes);
+    }
+
+    void plan_subtree(uint32_t m, bool parallel) {
+        constexpr size_t kSerial = 1 << 14;  // binary nodes
+        const size_t end = subtree_end(binary_, m);
+        if (!parallel || end - m < kSerial) {
+            for (size_t i = end; i-- > m;) plan_node(uint32_t(i));
+            return;
+        }
+        fork_join(
+            true, [&] { plan_subtree(m + 1, true); }, [&] { plan_subtree(binary_.nodes[m].second_child(), true); });
+        plan_node(m);
+    }
+
+    // Every member it reads is copied to a local first: the byte stores into the plans may
+    // alias anything, as far as the compiler knows, and would make it reload the members.
+    void plan_node(uint32_t m) {
+        const BvhNode& b = binary_.nodes[m];
+        Plan* const plans = plan_.data();
+        uint32_t* const prims = prims_.data();
+        const uint32_t max_prims = max_prims_;
+        const float packet_cost = packet_cost_;
+        Plan& p = plans[m];
+        const float area = b.bounds.area();
+        if (b.is_leaf()) {
+            const float cost = leaf_cost(area, b.prim_count(), packet_cost);
+            prims[m] = b.prim_count();
+            for (int i = 0; i < W; ++i) p.cost[i] = cost;
+            p.leaf = true;
+            return;
+        }
+        const uint32_t l = m + 1, r = b.second_child();
+        const uint32_t n = prims[l] + prims[r];
+        prims[m] = n;
+        const Plan &pl = plans[l], &pr = plans[r];
+        float dist[W + 1];
+        uint8_t split[W + 1];
+        for (int j = 2; j <= W; ++j) {
+            dist[j] = kInfinity;
+            split[j] = 1;
+            for (int k = 1; k < j; ++k) {  // branch-free (minss and cmov): the outcome is data, not a pattern
+                const float c = pl.cost[k - 1] + pr.cost[j - k - 1];
+                const bool lower = c < dist[j];
+                dist[j] = lower ? c : dist[j];
+                split[j] = lower ? uint8_t(k) : split[j];
+            }
+        }
+        p.node_split = split[W];
+        if (m == 0) root_distribute_ = dist[W];
+        const float node = area + dist[W];
+        const float leaf = n <= max_prims ? leaf_cost(area, n, packet_cost) : kInfinity;
+        p.leaf = n <= max_prims && leaf <= node;  // a tie: the leaf, one node fewer
+        p.cost[0] = p.leaf ? leaf : node;
+        p.split[0] = 0;
+        for (int i = 2; i <= W; ++i) {
+            const bool fewer = !(dist[i] < p.cost[i - 2]);  // fewer slots are as cheap (or NaN)
+            p.cost[i - 1] = fewer ? p.cost[i - 2] : dist[i];
+            p.split[i - 1] = fewer ? 0 : split[i];
+        }
+    }
+
     struct Plan {
         float cost[W];           // cost(n, i + 1)
         uint8_t split[W] = {};   // i > 0: k of distribute(n, i + 1), 0 when cost(n, i) is as low
@@ -245,6 +281,10 @@ private:
 
     const FlatBvh& binary_;
     std::vector<Plan> plan_;
+    std::vector<uint32_t> prims_;  // triangles under each binary node
+    uint32_t max_prims_;
+    float packet_cost_;
+    float root_distribute_ = kInfinity;  // distribute(root, W)
     bool root_is_leaf_ = false;
 };
 
@@ -274,35 +314,38 @@ uint32_t emit_leaf(const FlatBvh& binary, uint32_t m, HugePageArray<WbvhTriPacke
 
 }  // namespace
 
-// The collapse (see wbvh.h). Nodes are emitted depth-first: a node's inner children are
-// allocated together when it is written, then built in turn.
-template <int W>
-void Wbvh::collapse(const FlatBvh& binary, WbvhTree<W>& out) {
-    out.nodes.clear();
-    out.packets.clear();
-    out.depth = 0;
-    out.leaves = 0;
-    if (binary.empty()) return;
-    out.nodes.reserve(binary.nodes.size() / 2 + 1);  // each wide node replaces at least one binary inner node
-    out.packets.reserve(binary.prim_ids.size() / 2 + 1);
-    std::optional<SahCollapse<W>> sah;
-    if (config_.collapse == Collapse::sah) sah.emplace(binary, config_.max_prims, config_.packet_cost);
+namespace {
 
-    struct Todo {
-        uint32_t binary_node;  // binary node whose subtree the wide node covers
-        uint32_t wide_node;
-        uint32_t depth;
+template <int W>
+using WbvhPiece = TreePiece<WbvhNode<W>, WbvhTriPacket, HugePageArray<WbvhNode<W>>, HugePageArray<WbvhTriPacket>>;
+
+// Writes the wide tree the collapse chooses. A wide node's inner children get consecutive
+// slots when it is written, then their subtrees follow, the last child's first (the order of
+// the explicit stack this once was). On the build's threads, an inner child's subtree near
+// the top is handed out as a task (base/parallel.h), written into a piece of its own
+// (base/tree_pieces.h) that goes where its subtree would have started; the assembled arrays
+// are the one thread's.
+template <int W>
+class WideEmitter {
+public:
+    // What one task writes.
+    struct Output {
+        explicit Output(WbvhPiece<W>& p) : piece(p) {}
+        WbvhPiece<W>& piece;
+        uint32_t depth = 0;                  // deepest wide node (root: 0)
+        uint64_t leaves = 0;                 // leaf children
+        std::vector<uint32_t> slots, stack;  // emit_leaf's scratch
     };
-    std::vector<Todo> todo;
-    std::vector<uint32_t> slots, stack;
-    out.nodes.emplace_back();
-    todo.push_back({0, 0, 0});
-    while (!todo.empty()) {
-        const Todo t = todo.back();
-        todo.pop_back();
-        out.depth = std::max(out.depth, t.depth);
+
+    WideEmitter(const FlatBvh& binary, const SahCollapse<W>* sah, bool parallel)
+        : binary_(binary), sah_(sah), parallel_(parallel) {}
+
+    // The wide node over binary node `b` at wide depth `depth`, its leaves' packets and its
+    // inner children's subtrees written to out.piece; its references are local to that piece.
+    WbvhNode<W> node_over(uint32_t b, uint32_t depth, Output& out) const {
+        out.depth = std::max(out.depth, depth);
         CollapseChild kids[W];
-        const int n = sah ? sah->children(t.binary_node, kids) : greedy_children<W>(binary, t.binary_node, kids);
+        const int n = sah_ ? sah_->children(b, kids) : greedy_children<W>(binary_, b, kids);
         // Slots by decreasing surface area. The closest-hit traversal orders hit children by
         // distance, whatever their slots; the any-hit one enters the first hit slot, so there
         // the likeliest box to hold an occluder goes first. Measured (sah collapse, counts
@@ -313,7 +356,7 @@ void Wbvh::collapse(const FlatBvh& binary, WbvhTree<W>& out) {
         float area[W];
         for (int k = 0; k < n; ++k) {
             const CollapseChild c = kids[k];
-            const float a = binary.nodes[c.binary].bounds.area();
+            const float a = binary_.nodes[c.binary].bounds.area();
             int i = k;
             for (; i > 0 && area[i - 1] < a; --i) {
                 kids[i] = kids[i - 1];
@@ -332,35 +375,126 @@ void Wbvh::collapse(const FlatBvh& binary, WbvhTree<W>& out) {
             node.child[k] = kInvalidId;
             node.count[k] = 0;
         }
+        int inner[W], inner_count = 0;
         for (int k = 0; k < n; ++k) {
-            const BvhNode& c = binary.nodes[kids[k].binary];
+            const BvhNode& c = binary_.nodes[kids[k].binary];
             for (int a = 0; a < 3; ++a) {
                 node.planes[a][k] = c.bounds.lower[a];
                 node.planes[3 + a][k] = c.bounds.upper[a];
             }
             if (kids[k].leaf) {
                 ++out.leaves;
-                node.child[k] = uint32_t(out.packets.size());
-                node.count[k] = emit_leaf(binary, kids[k].binary, out.packets, slots, stack);
+                node.child[k] = uint32_t(out.piece.items.size());
+                node.count[k] = emit_leaf(binary_, kids[k].binary, out.piece.items, out.slots, out.stack);
             } else {
-                node.child[k] = uint32_t(out.nodes.size());
-                out.nodes.emplace_back();
-                todo.push_back({kids[k].binary, node.child[k], t.depth + 1});
+                node.child[k] = uint32_t(out.piece.nodes.size());
+                out.piece.nodes.emplace_back();  // written below (HugePageAllocator leaves it unwritten)
+                inner[inner_count++] = k;
             }
         }
-        out.nodes[t.wide_node] = node;
+        struct Task {
+            WbvhPiece<W>* piece;
+            uint32_t slot, binary;
+            Output out;
+            WbvhNode<W> node;
+        };
+        std::vector<std::unique_ptr<Task>> tasks;
+        for (int j = inner_count; j-- > 0;) {
+            const int k = inner[j];
+            if (hand_out(kids[k].binary, depth + 1)) {
+                auto piece = std::make_unique<WbvhPiece<W>>();
+                auto task =
+                    std::make_unique<Task>(Task{piece.get(), node.child[k], kids[k].binary, Output(*piece), {}});
+                out.piece.add_hole(node.child[k], std::move(piece));
+                tasks.push_back(std::move(task));
+                continue;
+            }
+            const WbvhNode<W> child = node_over(kids[k].binary, depth + 1, out);
+            out.piece.nodes[node.child[k]] = child;
+        }
+        if (!tasks.empty()) {
+            tbb::task_group group;
+            for (const auto& t : tasks)
+                group.run(
+                    [this, task = t.get(), depth] { task->node = node_over(task->binary, depth + 1, task->out); });
+            group.wait();
+            for (const auto& t : tasks) {
+                out.piece.nodes[t->slot] = t->node;
+                out.depth = std::max(out.depth, t->out.depth);
+                out.leaves += t->out.leaves;
+            }
+        }
+        return node;
     }
+
+private:
+    // A subtree handed out: near the top, and large enough to pay for a task and a piece.
+    bool hand_out(uint32_t b, uint32_t depth) const {
+        constexpr uint32_t kTaskDepth = 3;         // wide levels whose subtrees may be tasks
+        constexpr size_t kTaskBinaryNodes = 2048;  // binary nodes a task covers at least
+        return parallel_ && depth <= kTaskDepth && subtree_end(binary_, b) - b >= kTaskBinaryNodes;
+    }
+
+    const FlatBvh& binary_;
+    const SahCollapse<W>* sah_;
+    bool parallel_;
+};
+
+}  // namespace
+
+// The collapse (see wbvh.h).
+template <int W>
+void Wbvh::collapse(const FlatBvh& binary, WbvhTree<W>& out) {
+    out.nodes.clear();
+    out.packets.clear();
+    out.depth = 0;
+    out.leaves = 0;
+    if (binary.empty()) return;
+    const bool parallel = threads_.parallel();
+    std::optional<SahCollapse<W>> sah;
+    if (config_.collapse == Collapse::sah) sah.emplace(binary, config_.max_prims, config_.packet_cost, parallel);
+
+    WbvhPiece<W> root;
+    root.nodes.swap(out.nodes);
+    root.items.swap(out.packets);
+    if (!parallel) {
+        root.nodes.reserve(binary.nodes.size() / 2 + 1);  // each wide node replaces at least one binary inner node
+        root.items.reserve(binary.prim_ids.size() / 2 + 1);
+    }
+    typename WideEmitter<W>::Output emitted(root);
+    root.nodes.emplace_back();
+    const WbvhNode<W> top = WideEmitter<W>(binary, sah ? &*sah : nullptr, parallel).node_over(0, 0, emitted);
+    root.nodes[0] = top;
+    out.depth = emitted.depth;
+    out.leaves = emitted.leaves;
+    if (root.holes.empty()) {
+        out.nodes.swap(root.nodes);
+        out.packets.swap(root.items);
+        return;
+    }
+    const auto [nodes, packets] = root.layout();
+    out.nodes.resize(nodes);  // not written (HugePageAllocator)
+    out.packets.resize(packets);
+    root.assemble(out.nodes.data(), out.packets.data(), parallel,
+                  [](WbvhNode<W>& node, const typename WbvhPiece<W>::Map&, const typename WbvhPiece<W>::Map& refs) {
+                      for (int k = 0; k < W; ++k) {
+                          if (node.child[k] == kInvalidId) continue;
+                          node.child[k] = uint32_t(node.count[k] ? refs.item(node.child[k]) : refs.node(node.child[k]));
+                      }
+                  });
 }
 
 void Wbvh::build(const Scene& scene) {
     binary_.build(scene);
-    if (config_.width == 8) {
-        collapse(binary_.tree(), tree8_);
-        tree4_ = {};
-    } else {
-        collapse(binary_.tree(), tree4_);
-        tree8_ = {};
-    }
+    threads_.run([&] {
+        if (config_.width == 8) {
+            collapse(binary_.tree(), tree8_);
+            tree4_ = {};
+        } else {
+            collapse(binary_.tree(), tree4_);
+            tree8_ = {};
+        }
+    });
 }
 
 template <int W>

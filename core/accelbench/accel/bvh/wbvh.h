@@ -107,6 +107,7 @@ public:
         Collapse collapse = Collapse::sah;  // how binary nodes are grouped into wide nodes and leaves
         double packet_cost = 2;             // collapse=sah: cost of one packet test, a wide node's = 1
         Kernel kernel = Kernel::simd;       // vector tests, or the scalar ones they must equal
+        int threads = 1;                    // build threads (the same tree for every count)
 
         static Config from(const ParamSet& params);
     };
@@ -132,6 +133,7 @@ private:
 
     Config config_;
     Bvh binary_;  // the binned-SAH binary BVH collapsed (its buffers reused from build to build)
+    BuildThreads threads_;
     WbvhTree<4> tree4_;
     WbvhTree<8> tree8_;
 };

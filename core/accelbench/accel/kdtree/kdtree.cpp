@@ -29,6 +29,8 @@ const ParamTable<KdTree::Config>& kdtree_params() {
         bool_param("mailbox", &C::mailbox,
                    "test a triangle once per ray even when several leaves the ray visits hold it (the same "
                    "answers; prim_tests then counts the tests made)"),
+        threads_param("threads", &C::threads, 256,
+                      "build threads (0 = all cores); the tree is the same for every value"),
     };
     return rows;
 }
@@ -53,7 +55,7 @@ KdTree::Config KdTree::Config::from(const ParamSet& p) { return kdtree_params().
 
 KdTree::KdTree(const ParamSet& params) : KdTree(Config::from(params)) {}
 
-KdTree::KdTree(const Config& config) : config_(config) {
+KdTree::KdTree(const Config& config) : config_(config), threads_(config.threads) {
     if (config_.max_depth && (*config_.max_depth < 0 || *config_.max_depth > kMaxDepthLimit))
         throw std::invalid_argument("kdtree: max_depth " + std::to_string(*config_.max_depth) + " is outside [0, " +
                                     std::to_string(kMaxDepthLimit) + "]");

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "accelbench/accel/accelerator.h"
+#include "accelbench/base/parallel.h"
 
 namespace accelbench {
 
@@ -100,6 +101,7 @@ public:
         // referenced by several leaves along a ray is tested once. Exact: a retest over
         // the same or a shorter interval cannot answer differently.
         bool mailbox = false;
+        int threads = 1;  // build threads (the same tree for every count)
 
         static Config from(const ParamSet& params);
     };
@@ -131,6 +133,7 @@ public:
     uint64_t memory_bytes() const;
 
 private:
+    void build_on_threads(const Scene& scene);
     // The leaf's primitive references: `count` of them from the returned pointer.
     const uint32_t* leaf_prims(const KdNode& leaf, uint32_t& count) const;
     template <bool kMailbox, class C>
@@ -140,6 +143,7 @@ private:
     bool hit_triangle(const WatertightRay& wr, uint32_t prim, float tmin, float tmax, Hit& hit) const;
 
     Config config_;
+    BuildThreads threads_;
     // The triangles' corners, copied in primitive order: a leaf's test then loads one
     // 36-byte record instead of an index triple and three scattered vertices (~5%
     // faster on the bunny).
