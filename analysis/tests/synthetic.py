@@ -11,7 +11,9 @@ import numpy as np
 
 from accelbench_analysis.inputs.schema import (
     COUNT_COLUMNS,
+    EMBREE_ISA_COLUMN,
     ERROR_MEMORY_VERDICT_COLUMNS,
+    FP_MODE_COLUMN,
     IDENTITY_COLUMNS,
     ISA_COLUMN,
     PROVENANCE_COLUMNS,
@@ -47,11 +49,15 @@ PROVENANCE = {
     "render_threads": "1",
     "embree_version": "3.13.5",
     "isa": "sse2+sse4.2+avx+avx2+fma",
+    "embree_isa": "avx512",
     "timestamp": "2024-01-01T00:00:00Z",
+    # Not provenance, but a per-row setting written just before it (after `shading`).
+    "fp_mode": "ftz_daz",
 }
 
-# The harness writes the provenance columns, then `isa` last (schema.ISA_COLUMN).
-PROVENANCE_TAIL = PROVENANCE_COLUMNS + [ISA_COLUMN]
+# The harness writes the floating-point mode, the provenance columns, then `isa` and
+# `embree_isa` last. Files from before the first and the last lack them (drop=...).
+PROVENANCE_TAIL = [FP_MODE_COLUMN] + PROVENANCE_COLUMNS + [ISA_COLUMN, EMBREE_ISA_COLUMN]
 
 MODELS = {  # name: (triangles, vertices)
     "stanford-bunny": (69451, 35947),

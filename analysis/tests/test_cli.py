@@ -37,8 +37,10 @@ def test_report_md_states_provenance_stand_ins_and_regeneration(everything):
     text = (everything / "REPORT.md").read_text()
     assert PROVENANCE["git_sha"] in text and PROVENANCE["cpu"] in text
     assert "RelWithDebInfo" in text and "Embree 3.13.5" in text
-    # the vector extensions compiled in, from the rows' `isa` column
-    assert "vector extensions (isa) sse2+sse4.2+avx+avx2+fma" in text
+    # which instruction set each side ran: ours compiled in (`isa`), Embree's picked at run time
+    assert "**ISA:** our structures `sse2+sse4.2+avx+avx2+fma` (compiled for, `isa`); " in text
+    assert "Embree's kernels `avx512` (its run-time choice, `embree_isa`)" in text
+    assert "**Floating-point mode of the traces:** ftz_daz (" in text
     assert "procedural forest" in text and "procedural city" in text
     assert "Stanford dragon (871,414 triangles" in text and "happy-buddha-100k" in text
     assert "make reproduce-tables" in text

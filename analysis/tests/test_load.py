@@ -161,7 +161,7 @@ def test_error_columns_optional(tmp_path, realistic):
 def test_ragged_csv_is_a_contract_error(tmp_path):
     path = minimal(tmp_path)
     path.write_text(path.read_text() + "a,b,c" + ",x" * 200 + "\n")
-    with pytest.raises(ContractError, match=r"line 4 \(row 3\): 203 fields but the header has 55"):
+    with pytest.raises(ContractError, match=r"line 4 \(row 3\): 203 fields but the header has 57"):
         read_csv(path)
 
 
@@ -319,3 +319,35 @@ def test_a_file_with_the_old_repeated_names_says_how_to_convert_it(tmp_path):
         "convert-csv",
     ):
         assert part in str(e.value)
+
+
+def test_a_file_from_before_fp_mode_and_embree_isa_loads_as_ieee_and_unknown(tmp_path):
+    path = write_csv(
+        tmp_path / "old.csv",
+        [row("stanford-bunny", "embree", {"threads": "1"}, build=0.1, render=0.5)],
+        drop=("fp_mode", "embree_isa"),
+    )
+    df = read_csv(path)
+    assert list(df["fp_mode"]) == ["ieee"] and list(df["embree_isa"]) == ["unknown"]
+    current = read_csv(minimal(tmp_path))
+    assert set(current["fp_mode"]) == {"ftz_daz"} and set(current["embree_isa"]) == {"avx512"}
+
+
+def test_fp_mode_is_part_of_the_key_and_only_its_two_values_load(tmp_path):
+    both = [
+        row("stanford-bunny", "embree", {"threads": "1"}, build=0.1, render=0.5, fp_mode=mode)
+        for mode in ("ieee", "ftz_daz")
+    ]
+    assert len(read_csv(write_csv(tmp_path / "both.csv", both))) == 2
+    bad = row("stanford-bunny", "embree", {"threads": "1"}, build=0.1, render=0.5, fp_mode="ftz")
+    with pytest.raises(
+        ContractError, match=r"column 'fp_mode' must be one of ieee, ftz_daz; found \['ftz'\]"
+    ):
+        read_csv(write_csv(tmp_path / "bad.csv", [bad]))
+
+
+def test_embrees_kernel_isa_is_provenance(tmp_path):
+    a = minimal(tmp_path, "a.csv")
+    b = minimal(tmp_path, "b.csv", embree_isa="avx2")
+    res = load_results([a, b])
+    assert res.mixed and "embree_isa" in " ".join(res.warnings)

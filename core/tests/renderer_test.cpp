@@ -9,6 +9,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <set>
 
 #include "accelbench/accel/registry.h"
 #include "accelbench/scene/procedural.h"
@@ -347,5 +351,104 @@ TEST(Renderer, BruteForceAndEmbreeAgreeOnEveryPrimaryRay) {
         EXPECT_EQ(mismatches, 0u) << kind;
         EXPECT_EQ(a.hits, b.hits) << kind;
         EXPECT_EQ(a.shadow_rays, b.shadow_rays) << kind;
+    }
+}
+
+namespace {
+
+// A real accelerator that also records the floating-point mode of every thread that
+// traces through it, closest-hit and any-hit calls alike.
+class ModeRecorder final : public Accelerator {
+public:
+    explicit ModeRecorder(const Accelerator& inner) : inner_(inner) {}
+    void build(const Scene&) override {}
+    void closest_hits(std::span<const Ray> rays, std::span<Hit> hits, std::span<RayStats> stats) const override {
+        record();
+        inner_.closest_hits(rays, hits, stats);
+    }
+    void any_hits(std::span<const Ray> rays, std::span<uint8_t> occluded, std::span<RayStats> stats) const override {
+        record();
+        inner_.any_hits(rays, occluded, stats);
+    }
+    BuildStats build_stats() const override { return inner_.build_stats(); }
+    std::set<std::optional<FpMode>> modes() const {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return modes_;
+    }
+
+private:
+    void record() const {
+        std::lock_guard<std::mutex> lock(mutex_);
+        modes_.insert(current_fp_mode());
+    }
+    const Accelerator& inner_;
+    mutable std::mutex mutex_;
+    mutable std::set<std::optional<FpMode>> modes_;
+};
+
+}  // namespace
+
+TEST(FpMode, NamesRoundTripAndUnknownNamesAreRefused) {
+    for (std::string_view name : fp_mode_names()) EXPECT_EQ(fp_mode_name(*parse_fp_mode(name)), name);
+    EXPECT_EQ(parse_fp_mode("ftz_daz"), FpMode::FtzDaz);
+    EXPECT_FALSE(parse_fp_mode("ftz"));
+    EXPECT_FALSE(parse_fp_mode("IEEE"));
+}
+
+TEST(FpMode, ScopedModeFlushesDenormalsAndRestoresTheCallersMode) {
+    ASSERT_EQ(current_fp_mode(), FpMode::Ieee);
+    volatile float tiny = 1e-30f, scale = 1e-10f;  // product 1e-40: a float denormal
+    EXPECT_GT(tiny * scale, 0.0f);
+    {
+        const ScopedFpMode mode(FpMode::FtzDaz);
+        EXPECT_EQ(current_fp_mode(), FpMode::FtzDaz);
+        EXPECT_EQ(tiny * scale, 0.0f);  // FTZ
+        volatile float denormal = std::numeric_limits<float>::denorm_min();
+        EXPECT_EQ(denormal * 1.0f, 0.0f);  // DAZ
+        {
+            const ScopedFpMode inner(FpMode::Ieee);
+            EXPECT_GT(tiny * scale, 0.0f);
+        }
+        EXPECT_EQ(current_fp_mode(), FpMode::FtzDaz);
+    }
+    EXPECT_EQ(current_fp_mode(), FpMode::Ieee);
+    EXPECT_GT(tiny * scale, 0.0f);
+}
+
+// Every thread that traces runs in the settings' mode, whatever the entry point; the
+// caller's own mode is left as it was.
+TEST(FpMode, EveryTracingThreadRunsInTheSettingsMode) {
+    const Fixture f = prepare("soup", kSoup);
+    for (FpMode mode : {FpMode::Ieee, FpMode::FtzDaz}) {
+        TraceRequest request = small_request(CountMode::Off);
+        request.settings.threads = 3;
+        request.settings.fp_mode = mode;
+        const ModeRecorder render_side(*f.accel), rays_side(*f.accel), set_side(*f.accel), replay_side(*f.accel);
+        render(render_side, f.ps.scene, f.camera, request);
+        const std::vector<Ray> rays = camera_rays(f.camera, request.settings);
+        trace_rays(rays_side, f.ps.scene, rays, request);
+        trace_ray_set(set_side, rays, RayQuery::Any, request);
+        render_rays(replay_side, f.ps.scene, f.camera, request);
+        const std::set<std::optional<FpMode>> expected = {mode};
+        EXPECT_EQ(render_side.modes(), expected) << fp_mode_name(mode);
+        EXPECT_EQ(rays_side.modes(), expected) << fp_mode_name(mode);
+        EXPECT_EQ(set_side.modes(), expected) << fp_mode_name(mode);
+        EXPECT_EQ(replay_side.modes(), expected) << fp_mode_name(mode);
+        EXPECT_EQ(current_fp_mode(), FpMode::Ieee);
+    }
+}
+
+// On an ordinary scene no answer depends on the mode: the same hits, counts and image.
+TEST(FpMode, FlushingDenormalsChangesNoAnswerOnAnOrdinaryScene) {
+    for (const char* accel : {"bvh", "wbvh", "kdtree", "embree"}) {
+        const Fixture f = prepare("soup", kSoup, accel);
+        TraceRequest request = small_request(CountMode::PerPixel);
+        request.keep_hits = true;
+        const TraceOutput ieee = render(*f.accel, f.ps.scene, f.camera, request);
+        request.settings.fp_mode = FpMode::FtzDaz;
+        const TraceOutput flushed = render(*f.accel, f.ps.scene, f.camera, request);
+        expect_same_counts(ieee, flushed);
+        ASSERT_TRUE(ieee.image && flushed.image);
+        EXPECT_EQ(ieee.image->rgb, flushed.image->rgb) << accel;
     }
 }

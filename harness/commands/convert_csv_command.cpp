@@ -19,7 +19,8 @@ int convert_csv_command(int argc, char** argv) {
         "  writes the results file OLD to NEW with the renamed columns' new names (the\n"
         "  parameter columns, between params and status, keep theirs), copies OLD.reps.csv\n"
         "  beside NEW when there is one, then re-reads NEW and checks that every row and value\n"
-        "  is OLD's. Renames:";
+        "  is OLD's. Adds a missing label (the registry's), fp_mode (ieee: older rows traced in\n"
+        "  IEEE mode) and embree_isa (unknown). Renames:";
     for (const RenamedColumn& r : renamed_columns()) usage += concat(" ", r.old_name, " -> ", r.new_name);
     usage += "\n";
     std::vector<std::string> files;

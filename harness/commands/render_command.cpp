@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "accelbench/accel/registry.h"
+#include "accelbench/base/unknown_name.h"
 #include "accelbench/render/renderer.h"
 #include "accelbench/scene/mesh_io.h"
 #include "models/model_registry.h"
@@ -28,7 +29,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 const char* kRenderUsage =
     "usage: accelbench render --model NAME|PATH|procedural:KIND[,k=v...] --accel NAME\n"
     "         [--param k=v ...] [--out img.png] [--width W] [--height H] [--spp N]\n"
-    "         [--no-light] [--threads N] [--cost-out PREFIX]\n"
+    "         [--no-light] [--threads N] [--fp-mode ieee|ftz_daz] [--cost-out PREFIX]\n"
     "--cost-out PREFIX writes PREFIX-node_visits.png, PREFIX-prim_tests.png (heatmaps, inferno,\n"
     "each scaled to its own maximum) and PREFIX-cost.csv (per-pixel values)\n";
 
@@ -71,7 +72,7 @@ LoadedModel resolve_model(const std::string& text, const ModelRegistry& registry
 }
 
 int render_command(int argc, char** argv) {
-    std::string model, accel_name, out, cost_out, param;
+    std::string model, accel_name, out, cost_out, param, fp_mode;
     std::map<std::string, std::string> params;
     TraceRequest req;
     req.counts = CountMode::Totals;
@@ -88,14 +89,20 @@ int render_command(int argc, char** argv) {
         } else if (args.flag("--no-light")) {
             r.light = false;
         } else if (!(args.value("--model", model) || args.value("--accel", accel_name) || args.value("--out", out) ||
-                     args.value("--cost-out", cost_out) || args.value("--width", r.width, 1, 16384) ||
-                     args.value("--height", r.height, 1, 16384) || args.value("--spp", r.spp, 1, 4096) ||
-                     args.value("--threads", r.threads, 1, 1024))) {
+                     args.value("--cost-out", cost_out) || args.value("--fp-mode", fp_mode) ||
+                     args.value("--width", r.width, 1, 16384) || args.value("--height", r.height, 1, 16384) ||
+                     args.value("--spp", r.spp, 1, 4096) || args.value("--threads", r.threads, 1, 1024))) {
             args.unknown();
         }
     };
     if (auto code = args.walk(each)) return *code;
     if (model.empty() || accel_name.empty()) return args.error("--model and --accel are required");
+    if (!fp_mode.empty()) {
+        const auto mode = parse_fp_mode(fp_mode);
+        const std::vector<std::string> names(fp_mode_names().begin(), fp_mode_names().end());
+        if (!mode) return args.error("--fp-mode: " + unknown_name("fp_mode", fp_mode, names));
+        r.fp_mode = *mode;
+    }
     const AcceleratorInfo* info = find_accelerator(accel_name);
     if (!cost_out.empty() && info && !info->counts_traversal)
         return args.error("--cost-out needs traversal counters, which " + accel_name + " does not expose");
@@ -138,9 +145,10 @@ int render_command(int argc, char** argv) {
         BuildStats bs = accel->build_stats();
         auto opt = [](const std::optional<uint64_t>& v) { return v ? std::to_string(*v) : std::string("n/a"); };
         std::printf("build      %.4f s\n", build_s);
-        std::printf("render     %.4f s  (%dx%d, %d spp, light %s, %d thread%s)\n", render_s, req.settings.width,
-                    req.settings.height, req.settings.spp, req.settings.light ? "on" : "off", req.settings.threads,
-                    req.settings.threads == 1 ? "" : "s");
+        std::printf("render     %.4f s  (%dx%d, %d spp, light %s, %d thread%s, fp_mode %s)\n", render_s,
+                    req.settings.width, req.settings.height, req.settings.spp, req.settings.light ? "on" : "off",
+                    req.settings.threads, req.settings.threads == 1 ? "" : "s",
+                    std::string(fp_mode_name(req.settings.fp_mode)).c_str());
         std::printf("rays       %llu primary, %llu hits; %llu shadow, %llu occluded\n", (unsigned long long)r.rays,
                     (unsigned long long)r.hits, (unsigned long long)r.shadow_rays, (unsigned long long)r.shadow_hits);
         std::printf("speed      %.2f Mrays/s (primary + shadow)\n", double(r.rays + r.shadow_rays) / render_s * 1e-6);

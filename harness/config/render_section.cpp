@@ -84,7 +84,7 @@ void check_ray_set_bytes(ConfigReader& r, const RaySetsSpec& spec, const Fields&
 }  // namespace
 
 void read_render(ConfigReader& r, const YAML::Node& n) {
-    Fields f(r.c, n, "render", {"width", "height", "spp", "light", "shading", "threads"});
+    Fields f(r.c, n, "render", {"width", "height", "spp", "light", "shading", "threads", "fp_mode"});
     RenderSettings& render = r.cfg.render;
     if (auto* e = f.find("width"))
         if (auto v = read_int(r.c, e->value, f.child("width"), 1, 16384)) render.width = int(*v);
@@ -97,6 +97,14 @@ void read_render(ConfigReader& r, const YAML::Node& n) {
         if (auto v = read_bool(r.c, e->value, f.child("light"))) render.light = *v;
     if (auto* e = f.find("shading"))
         if (auto v = read_bool(r.c, e->value, f.child("shading"))) render.shading = *v;
+    if (auto* e = f.find("fp_mode"))
+        if (auto name = read_string(r.c, e->value, f.child("fp_mode"))) {
+            const std::vector<std::string> names(fp_mode_names().begin(), fp_mode_names().end());
+            if (auto mode = parse_fp_mode(*name)) render.fp_mode = *mode;
+            else
+                r.c.error(e->value, f.child("fp_mode"),
+                          unknown_name("fp_mode", *name, names, did_you_mean(*name, names)));
+        }
 }
 
 void read_ray_sets(ConfigReader& r, const YAML::Node& n) {

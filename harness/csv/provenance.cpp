@@ -65,13 +65,10 @@ std::string compiled_isa() {
 
 std::vector<std::pair<std::string, std::string>> provenance_values() {
     const Provenance& p = provenance();
-    return {{"git_sha", p.git_sha},
-            {"git_dirty", p.git_dirty ? "true" : "false"},
-            {"compiler", p.compiler},
-            {"build_type", p.build_type},
-            {"cpu", p.cpu},
-            {"embree_version", p.embree_version},
-            {"isa", p.isa}};
+    return {{"git_sha", p.git_sha},   {"git_dirty", p.git_dirty ? "true" : "false"},
+            {"compiler", p.compiler}, {"build_type", p.build_type},
+            {"cpu", p.cpu},           {"embree_version", p.embree_version},
+            {"isa", p.isa},           {"embree_isa", p.embree_isa}};
 }
 
 const Provenance& provenance() {
@@ -90,6 +87,7 @@ const Provenance& provenance() {
         p.cpu = cpu_model();
         p.embree_version = EmbreeAccel::version();
         p.isa = compiled_isa();
+        p.embree_isa = EmbreeAccel::kernel_isa();
         return p;
     }();
     return p;

@@ -1,5 +1,5 @@
 // Where a measurement came from: the commit, whether the tree was dirty, the compiler,
-// build type, CPU, Embree version and the vector ISA compiled in. Every CSV row carries these columns so results
+// build type, CPU, Embree version, the vector ISA compiled in and the one Embree's kernels run. Every CSV row carries these columns so results
 // from different builds or machines are never silently mixed.
 #pragma once
 
@@ -19,6 +19,9 @@ struct Provenance {
     // The vector extensions our code was compiled for (ACCELBENCH_ISA), e.g.
     // "sse2+sse4.2+avx+avx2+fma" (native on this machine) or "sse2" (portable).
     std::string isa;
+    // The instruction set of the kernels Embree picks at run time on this machine
+    // (EmbreeAccel::kernel_isa), e.g. "avx2" or "avx512": our side's `isa` beside Embree's.
+    std::string embree_isa;
 };
 
 // Gathered once per process. git_sha and git_dirty are those of the sources compiled,

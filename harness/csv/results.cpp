@@ -87,6 +87,7 @@ const ColumnSpec kMeasuredColumns[] = {
     {"spp", ColumnKind::Number, "count", "samples per pixel"},
     {"light", ColumnKind::Text, "", "shadow rays to the light: true or false"},
     {"shading", ColumnKind::Text, "", "shading on: true or false"},
+    {"fp_mode", ColumnKind::Text, "", "floating-point mode of every trace: ieee or ftz_daz (robustness cases: ieee)"},
     {"git_sha", ColumnKind::Text, "", "provenance: the commit built"},
     {"git_dirty", ColumnKind::Text, "", "provenance: code differs from the commit"},
     {"compiler", ColumnKind::Text, "", "provenance: compiler and version"},
@@ -96,6 +97,8 @@ const ColumnSpec kMeasuredColumns[] = {
     {"embree_version", ColumnKind::Text, "", "provenance: Embree version"},
     {"timestamp", ColumnKind::Text, "", "when the row was measured (UTC)"},
     {"isa", ColumnKind::Text, "", "provenance: vector extensions compiled in"},
+    {"embree_isa", ColumnKind::Text, "",
+     "provenance: instruction set of the kernels Embree runs (its run-time choice)"},
 };
 
 // Measured and global columns that once had the name of a parameter (the limit and the
@@ -199,6 +202,29 @@ bool lacks_label(const std::vector<std::string>& header) {
         std::find(header.begin(), header.end(), "label") == header.end();
 }
 
+// Columns added after files were written, each after another column, with the value every
+// older row gets: before `fp_mode` the harness set no floating-point mode, so every trace
+// ran in IEEE mode, the process default; which kernels Embree ran was not recorded.
+struct AddedColumn {
+    const char* name;
+    const char* after;
+    const char* old_value;
+};
+constexpr AddedColumn kAddedColumns[] = {
+    {"fp_mode", "shading", "ieee"},
+    {"embree_isa", "isa", "unknown"},
+};
+
+// The added columns `header` lacks (those whose predecessor it has).
+std::vector<AddedColumn> missing_added_columns(const std::vector<std::string>& header) {
+    std::vector<AddedColumn> missing;
+    for (const AddedColumn& c : kAddedColumns)
+        if (std::find(header.begin(), header.end(), c.after) != header.end() &&
+            std::find(header.begin(), header.end(), c.name) == header.end())
+            missing.push_back(c);
+    return missing;
+}
+
 // The registry's label of a row's structure, from its `accel` and canonical `params`; ""
 // for a structure or parameter the registry no longer has. A scene-dependent default
 // ("auto") is left to the structure, as a run does.
@@ -228,7 +254,7 @@ std::string registry_label(const std::string& accel, const std::string& params) 
 bool is_old_results_header(const std::vector<std::string>& header) {
     const auto status = status_position(header);
     if (!status) return false;
-    if (lacks_label(header)) return true;
+    if (lacks_label(header) || !missing_added_columns(header).empty()) return true;
     for (size_t i = *status + 1; i < header.size(); ++i)
         if (renamed_from(header[i])) return true;
     return false;
@@ -241,9 +267,12 @@ std::string old_header_message(const std::string& path, const std::vector<std::s
         if (!renames.empty()) renames.append(", ");
         renames.append(r.old_name).append(" -> ").append(r.new_name);
     }
+    std::string added;
+    for (const AddedColumn& c : missing_added_columns(header)) added.append(added.empty() ? "" : ", ").append(c.name);
     return path + ": written before the measured and global columns were renamed so that no name repeats (" + renames +
         "; the parameter columns keep their names)" + (lacks_label(header) ? " or before the label column" : "") +
-        "; convert it with `accelbench convert-csv " + path + " NEW`";
+        (added.empty() ? "" : " or before the columns " + added) + "; convert it with `accelbench convert-csv " + path +
+        " NEW`";
 }
 
 std::vector<std::string> repetition_columns() {
@@ -252,7 +281,7 @@ std::vector<std::string> repetition_columns() {
 
 const std::vector<std::string>& provenance_columns() {
     static const std::vector<std::string> cols = {"git_sha", "git_dirty",      "compiler", "build_type",
-                                                  "cpu",     "embree_version", "isa"};
+                                                  "cpu",     "embree_version", "isa",      "embree_isa"};
     return cols;
 }
 
@@ -616,6 +645,16 @@ size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
         }
         header.insert(header.begin() + long(*label_at), "label");
     }
+    // The added columns after their predecessors, with the value of an older row.
+    std::vector<size_t> added_at;
+    for (const AddedColumn& c : missing_added_columns(header)) {
+        const size_t at = size_t(std::find(header.begin(), header.end(), c.after) - header.begin()) + 1;
+        for (size_t& a : added_at)
+            if (a >= at) ++a;
+        added_at.push_back(at);
+        for (auto& r : rows) r.insert(r.begin() + long(std::min(at, r.size())), c.old_value);
+        header.insert(header.begin() + long(at), c.name);
+    }
     for (size_t i = *status_position(header) + 1; i < header.size(); ++i)
         if (const RenamedColumn* r = renamed_from(header[i])) header[i] = r->new_name;
     for (const RenamedColumn& r : renamed_columns())
@@ -649,7 +688,11 @@ size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
         fail(std::to_string(got.rows.size()) + " rows, " + old_csv + " has " + std::to_string(old.rows.size()));
     for (size_t i = 0; i < old.rows.size(); ++i) {
         std::vector<std::string> back = got.rows[i];
-        if (label_at && *label_at < back.size()) back.erase(back.begin() + long(*label_at));
+        std::vector<size_t> inserted = added_at;
+        if (label_at) inserted.push_back(*label_at);
+        std::sort(inserted.rbegin(), inserted.rend());  // the last first: the others keep their place
+        for (size_t at : inserted)
+            if (at < back.size()) back.erase(back.begin() + long(at));
         if (back != old.rows[i]) fail("row " + std::to_string(i + 1) + " differs from " + old_csv + "'s");
     }
     if (reps && read_csv(new_reps).rows.size() != read_csv(old_reps).rows.size())

@@ -33,6 +33,10 @@ std::string combination_key(const ModelSpec& model, const RenderSettings& r, con
         : std::to_string(r.width) + "x" + std::to_string(r.height) + ";spp=" + std::to_string(r.spp);
     render += std::string(";light=") + (r.light ? "1" : "0") + ";shading=" + (r.shading ? "1" : "0") +
         ";threads=" + std::to_string(r.threads);
+    // Named only when not IEEE: every row measured before the setting existed traced in
+    // IEEE mode, and keeps its id. A robustness case is judged in IEEE mode whatever it says.
+    if (r.fp_mode != FpMode::Ieee && model.kind != ModelSpec::Kind::Case)
+        render += ";fp_mode=" + std::string(fp_mode_name(r.fp_mode));
     return model.key + "|" + render + "|" + accel + "|" + params.canonical();
 }
 

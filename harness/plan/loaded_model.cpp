@@ -66,6 +66,7 @@ void add_reference_answers(LoadedModel& model, const RenderSettings& render) {
     // One thread: the harness forks a measurement process per combination afterwards, and
     // the answers do not depend on the thread count.
     request.settings.threads = 1;
+    request.settings.fp_mode = FpMode::Ieee;  // the ground truth of the error columns, whatever is measured
     request.light = model.light;
     request.albedo = model.albedo;
     request.keep_hits = true;

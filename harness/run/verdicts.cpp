@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "accelbench/base/memory.h"
+#include "accelbench/render/fp_mode.h"
 #include "util/text.h"
 
 namespace accelbench {
@@ -11,6 +12,9 @@ Measurement judge_measurement(const std::string& accel, const std::map<std::stri
                               const RobustnessCase& c, const StageFn& stage) {
     reset_peak_rss();
     if (stage) stage("judging case " + c.id);
+    // The catalogue's cases (denormal scales among them) are judged in IEEE mode, whatever
+    // the config's render.fp_mode: its expectations are IEEE arithmetic's.
+    const ScopedFpMode ieee(FpMode::Ieee);
     const CaseVerdict v = judge_case(c, accel, given);
     Measurement m;
     m.rays = v.rays;

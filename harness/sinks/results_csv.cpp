@@ -37,6 +37,8 @@ Row identification_row(const Config& config, const CombinationResult& result) {
         r["light"] = config.render.light ? "true" : "false";
         r["shading"] = config.render.shading ? "true" : "false";
     }
+    // A robustness case is judged in IEEE mode whatever the config says (judge_measurement).
+    r["fp_mode"] = std::string(fp_mode_name(judged ? FpMode::Ieee : config.render.fp_mode));
     for (const auto& [name, value] : provenance_values()) r[name] = value;
     r["render_threads"] = std::to_string(c.threads);
     r["timestamp"] = result.timestamp;

@@ -26,7 +26,7 @@ TEST_F(ConfigTest, ReadsTheDocumentedShape) {
     const std::string path = write("smoke.yaml", R"(name: smoke
 repetitions: 3
 timeout_s: 120
-render: {width: 160, height: 120, spp: 1, light: true, shading: false, threads: 2}
+render: {width: 160, height: 120, spp: 1, light: true, shading: false, threads: 2, fp_mode: ftz_daz}
 models:
   - stanford-bunny                                   # registry name
   - {procedural: soup, triangles: 2000, seed: 1}     # generated scene
@@ -49,6 +49,7 @@ skip:
     EXPECT_EQ(c.render.threads, 2);
     EXPECT_TRUE(c.render.light);
     EXPECT_FALSE(c.render.shading);
+    EXPECT_EQ(c.render.fp_mode, FpMode::FtzDaz);
 
     ASSERT_EQ(c.models.size(), 4u);
     EXPECT_EQ(c.models[0].kind, ModelSpec::Kind::Registry);
@@ -94,7 +95,8 @@ TEST_F(ConfigTest, DefaultsAndTheFileStemAsName) {
     EXPECT_EQ(c.render.height, 480);
     EXPECT_EQ(c.render.threads, 1);
     EXPECT_FALSE(c.render.shading);  // configs time tracing, not shading
-    EXPECT_TRUE(c.errors);           // every row says how wrong it is unless told not to
+    EXPECT_EQ(c.render.fp_mode, RenderSettings{}.fp_mode);
+    EXPECT_TRUE(c.errors);  // every row says how wrong it is unless told not to
 }
 
 TEST_F(ConfigTest, RobustnessCasesAreModels) {
@@ -354,6 +356,12 @@ models: [stanford-bunny]
 accelerators: [{name: embree}]
 )"));
     EXPECT_EQ(e.issues().size(), 4u) << all_issues(e);
+    const ConfigError mode = load_error(write("b.yaml", R"(render: {fp_mode: ftz}
+models: [stanford-bunny]
+accelerators: [{name: embree}]
+)"));
+    EXPECT_TRUE(has_issue(mode, 1, 19, "render.fp_mode", "unknown fp_mode 'ftz'")) << all_issues(mode);
+    EXPECT_NE(all_issues(mode).find("(known: ieee, ftz_daz)"), std::string::npos) << all_issues(mode);
     EXPECT_TRUE(has_issue(e, 1, 17, "render.width", "value 0 is out of range [1, 16384]"));
     EXPECT_TRUE(has_issue(e, 1, 28, "render.height", "expected an integer"));
     EXPECT_TRUE(has_issue(e, 1, 41, "render.light", "expected true or false, got 'maybe'"));

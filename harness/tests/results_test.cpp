@@ -2,8 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 
+#include "accelbench/accel/baseline/embree_accel.h"
 #include "accelbench/accel/registry.h"
 #include "csv/csv.h"
 #include "csv/provenance.h"
@@ -51,7 +53,7 @@ TEST(ResultsTest, TheIssueColumnsAndOneColumnPerParameterOfEveryAccelerator) {
                           "leaves",        "tree_depth",      "memory_bytes",   "sah_cost",       "prim_tests",
                           "node_visits",   "git_sha",         "git_dirty",      "compiler",       "build_type",
                           "cpu",           "render_threads",  "embree_version", "timestamp",      "isa",
-                          "combo_id"})
+                          "embree_isa",    "fp_mode",         "combo_id"})
         EXPECT_NE(std::find(cols.begin(), cols.end(), c), cols.end()) << c;
     // One column per parameter name of every accelerator, between `params` and `status`,
     // headed by the bare name.
@@ -116,7 +118,7 @@ const std::string kOldHeader =
     "config,combo_id,accel,params,max_depth,threads,width,status,rays,max_depth,width,height,threads,isa\n";
 const std::string kNewHeader =
     "config,combo_id,accel,label,params,max_depth,threads,width,status,rays,tree_depth,image_width,image_height,"
-    "render_threads,isa\n";
+    "render_threads,isa,embree_isa\n";
 
 TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
     TempDir dir("accelbench-convert-test-");
@@ -132,9 +134,9 @@ TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
     // The label column is added after accel, the registry's label of each row.
     EXPECT_EQ(read_file(new_csv),
               kNewHeader +
-                  "t,1,kdtree,kd-tree,max_depth=5,5,,,ok,10,5,64,48,2,sse2\n"
-                  "t,2,wbvh,\"wide BVH (4, SIMD)\",width=4,,,4,ok,10,17,64,48,2,\"a,b\"\n"
-                  "t,3,lbvh,LBVH,threads=3,,3,,skipped,,,,,1,sse2\n");
+                  "t,1,kdtree,kd-tree,max_depth=5,5,,,ok,10,5,64,48,2,sse2,unknown\n"
+                  "t,2,wbvh,\"wide BVH (4, SIMD)\",width=4,,,4,ok,10,17,64,48,2,\"a,b\",unknown\n"
+                  "t,3,lbvh,LBVH,threads=3,,3,,skipped,,,,,1,sse2,unknown\n");
     EXPECT_EQ(read_file(repetitions_path(new_csv)), "combo_id,repetition\n1,1\n2,1\n");
     EXPECT_FALSE(is_old_results_header(read_csv(new_csv).header));
     // A file already new, and the output being the input, are refused.
@@ -167,6 +169,25 @@ TEST(ConvertTest, AFileWithCurrentNamesButNoLabelGetsTheRegistrysLabels) {
               "t,1,bvh,BVH (binned SAH),split=sah,sah,ok,7\n"
               "t,2,gone,,,,ok,3\n"
               "t,3,kdtree,kd-tree,max_depth=auto,,ok,9\n");
+}
+
+// A file from before fp_mode and embree_isa: older rows traced in IEEE mode (the harness set
+// no mode), and which kernels Embree ran is not known.
+TEST(ConvertTest, AFileWithoutTheFloatingPointModeOrEmbreesIsaGetsIeeeAndUnknown) {
+    TempDir dir("accelbench-convert-test-");
+    const auto old_csv = write_file(dir.path(), "old.csv",
+                                    "config,combo_id,accel,label,params,status,light,shading,cpu,isa,x\n"
+                                    "t,1,bvh,BVH,,ok,true,false,c,avx2,7\n"
+                                    "t,2,bvh,BVH,,skipped,,,c,avx2,\n");
+    EXPECT_TRUE(is_old_results_header(read_csv(old_csv).header));
+    EXPECT_NE(old_header_message(old_csv, read_csv(old_csv).header).find("fp_mode, embree_isa"), std::string::npos);
+    const std::string new_csv = (dir.path() / "new.csv").string();
+    EXPECT_EQ(convert_results(old_csv, new_csv), 2u);
+    EXPECT_EQ(read_file(new_csv),
+              "config,combo_id,accel,label,params,status,light,shading,fp_mode,cpu,isa,embree_isa,x\n"
+              "t,1,bvh,BVH,,ok,true,false,ieee,c,avx2,unknown,7\n"
+              "t,2,bvh,BVH,,skipped,,,ieee,c,avx2,unknown,\n");
+    EXPECT_FALSE(is_old_results_header(read_csv(new_csv).header));
 }
 
 TEST(ConvertTest, ResumeAndMergeOfAnOldFileSayWhatWasRenamedAndHowToConvert) {
@@ -224,10 +245,10 @@ class MergeTest : public ::testing::Test {
 protected:
     TempDir dir{"accelbench-merge-test-"};
     std::string shard(const std::string& name, const std::vector<std::pair<std::string, std::string>>& rows) {
-        std::string text = "combo_id,status,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa\n";
+        std::string text = "combo_id,status,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
         std::string reps = "combo_id,repetition\n";
         for (const auto& [id, sha] : rows) {
-            text += id + ",ok," + sha + ",false,gcc 12,RelWithDebInfo,\"Xeon, 2 cores\",3.13.5,sse2\n";
+            text += id + ",ok," + sha + ",false,gcc 12,RelWithDebInfo,\"Xeon, 2 cores\",3.13.5,sse2,avx2\n";
             reps += id + ",1\n";
         }
         write_file(dir.path(), name + ".reps.csv", reps);
@@ -272,8 +293,8 @@ TEST_F(MergeTest, RefusesACombinationInTwoInputs) {
 // The timed run's rows with the instructions of a callgrind run, matched by combo_id.
 TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
     const std::string header =
-        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa\n";
-    const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2\n";
+        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
+    const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,avx2\n";
     // Both runs of one config: the same record of inputs.
     const auto write_run = [&](const std::string& name, const std::string& text) {
         const std::string path = write_file(dir.path(), name, text);
@@ -287,7 +308,7 @@ TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
     EXPECT_EQ(read_file(out()), header + "1,ok,100" + prov + "2,ok,200" + prov + "3,skipped," + prov);
     EXPECT_EQ(read_file(repetitions_path(out())), "combo_id,repetition\n1,1\n");
     EXPECT_THROW(take_column(out(), timed, cg, "no_such_column", false), std::runtime_error);
-    const auto other = write_run("other.csv", header + "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2\n");
+    const auto other = write_run("other.csv", header + "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,avx2\n");
     EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
     const auto twice = write_run("twice.csv", header + "1,ok,100" + prov + "1,ok,101" + prov);
     EXPECT_THROW(take_column(out(), timed, twice, "instructions", false), std::runtime_error);
@@ -339,6 +360,19 @@ TEST(ProvenanceTest, ValuesAreTheProvenanceColumnsInHeaderOrder) {
     for (const auto& c : result_columns())
         if (std::find(names.begin(), names.end(), c) != names.end()) in_header.push_back(c);
     EXPECT_EQ(in_header, names);
+}
+
+// Embree's kernel ISA is read from its verbose report, which goes to stdout: the value is
+// one of its x86 targets (this machine has at least SSE2), and stdout works afterwards.
+TEST(ProvenanceTest, EmbreeKernelIsaIsATargetAndStdoutIsRestored) {
+    ::testing::internal::CaptureStdout();
+    const std::string isa = EmbreeAccel::kernel_isa();
+    std::printf("after\n");
+    const std::string printed = ::testing::internal::GetCapturedStdout();
+    EXPECT_EQ(printed, "after\n");  // none of Embree's report leaks
+    const std::vector<std::string> targets = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
+    EXPECT_NE(std::find(targets.begin(), targets.end(), isa), targets.end()) << isa;
+    EXPECT_EQ(provenance().embree_isa, isa);
 }
 
 }  // namespace

@@ -212,6 +212,45 @@ accelerators: [{name: brute_force}, {name: bvh}, {name: kdtree, params: {max_pri
     EXPECT_NE(table.find("9 pass"), std::string::npos) << table;
 }
 
+// render.fp_mode is recorded in every row and is part of the combination's identity, but
+// never of the robustness cases', which are judged in IEEE mode whatever it says.
+TEST_F(RunTest, TheFloatingPointModeIsInEveryRowAndCasesStayIeee) {
+    const std::string models = R"(
+repetitions: 1
+models: [{procedural: soup, triangles: 500, seed: 2}, {case: 3b}]
+accelerators: [{name: bvh}, {name: wbvh}]
+)";
+    const std::string flushed =
+        write_file(dir.path(), "ftz.yaml", "name: fp\nrender: {width: 24, height: 16, fp_mode: ftz_daz}" + models);
+    const std::string ieee =
+        write_file(dir.path(), "ieee.yaml", "name: fp\nrender: {width: 24, height: 16, fp_mode: ieee}" + models);
+    const std::string out_ieee = (dir.path() / "ieee.csv").string();
+    ASSERT_EQ(run({flushed, "--out", out}), 0);
+    ASSERT_EQ(run({ieee, "--out", out_ieee}), 0);
+    const CsvData f = read_csv(out), i = read_csv(out_ieee);
+    ASSERT_EQ(f.rows.size(), 4u);
+    ASSERT_EQ(i.rows.size(), 4u);
+    for (size_t k = 0; k < 4; ++k) {
+        auto a = as_map(f, k), b = as_map(i, k);
+        ASSERT_EQ(a["model"] + a["accel"], b["model"] + b["accel"]);
+        EXPECT_EQ(a["status"], "ok") << a["message"];
+        EXPECT_EQ(b["fp_mode"], "ieee");
+        if (a["ray_source"] == "robustness-case") {
+            EXPECT_EQ(a["fp_mode"], "ieee") << a["model"];
+            EXPECT_EQ(a["verdict"], "pass") << a["model"] << " " << a["accel"] << ": " << a["verdict_counts"];
+            EXPECT_EQ(a["combo_id"], b["combo_id"]);
+            continue;
+        }
+        EXPECT_EQ(a["fp_mode"], "ftz_daz") << a["accel"];
+        EXPECT_NE(a["combo_id"], b["combo_id"]) << a["accel"];
+        // The same answers as the (IEEE) reference, and the same counts as in IEEE mode.
+        for (const char* col : {"false_misses", "false_hits", "prim_mismatches", "nan_results"})
+            EXPECT_EQ(a[col], "0") << a["accel"] << " " << col;
+        for (const char* col : {"hits", "shadow_hits", "prim_tests", "node_visits", "t_err_ulp_max"})
+            EXPECT_EQ(a[col], b[col]) << a["accel"] << " " << col;
+    }
+}
+
 // Bad input is exit code 2 and leaves no row that could be taken for a result.
 TEST_F(RunTest, AModelThatDoesNotLoadWritesNoRowsAndIsExitCode2) {
     write_file(dir.path(), "empty.obj", "v 0 0 0\nv 1 0 0\n");

@@ -5,7 +5,7 @@ analysis/README.md for the column list). Loading checks that contract before any
 computed: a file missing required columns, with an unknown status or with text where a
 number belongs is rejected with an error that names the file, the columns and the rows.
 
-Provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa) is grouped: rows
+Provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa, embree_isa) is grouped: rows
 that differ in any of these fields belong to different groups, labelled A, B, ... in file
 order. More than one group is never an error (comparing two machines is legitimate), but
 it is never silent either: every output carries a warning, table cells are tagged with
@@ -23,12 +23,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-# A row's identity. `ray_set` (camera, or one of RAY_SETS) and `render_threads`
-# tell apart the rows of one combination in a ray-set or thread-scaling run; CSVs from
-# before ray sets get ray_set = camera.
-KEY_COLUMNS = ["config", "model", "accel", "params", "ray_set", "render_threads"]
+# A row's identity. `ray_set` (camera, or one of RAY_SETS), `render_threads` and
+# `fp_mode` tell apart the rows of one combination in a ray-set, thread-scaling or
+# floating-point-mode run; CSVs from before ray sets get ray_set = camera.
+KEY_COLUMNS = ["config", "model", "accel", "params", "ray_set", "render_threads", "fp_mode"]
 CAMERA_SET = "camera"
 RAY_SETS = ("primary", "shadow", "ao", "diffuse", "random")
+# The floating-point mode every trace of a row ran in (the config's render.fp_mode; the
+# robustness catalogue's rows: ieee). Files from before the column traced in IEEE mode,
+# the process default, and load with "ieee".
+FP_MODE_COLUMN = "fp_mode"
+FP_MODES = ("ieee", "ftz_daz")
 
 
 def stat_columns(measure: str) -> list[str]:
@@ -114,16 +119,28 @@ RENDER_SETTING_COLUMNS = [
     "light",
     "shading",
     "render_threads",
+    "fp_mode",
 ]
 # Settings that are counts: where a row has one, a whole number of at least 1.
 COUNT_SETTING_COLUMNS = ["render_threads", "image_width", "image_height", "spp"]
 
 # Rows differing in any of these fields were not measured with the same code on the same
 # machine. `render_threads` and `timestamp` are per-run facts, not identity.
-PROVENANCE_IDENTITY = ["git_sha", "git_dirty", "compiler", "build_type", "cpu", "embree_version", "isa"]
-# The vector extensions compiled in (CMake's ACCELBENCH_ISA), the harness's last column;
-# files written before it existed load with "unknown".
+PROVENANCE_IDENTITY = [
+    "git_sha",
+    "git_dirty",
+    "compiler",
+    "build_type",
+    "cpu",
+    "embree_version",
+    "isa",
+    "embree_isa",
+]
+# The vector extensions compiled in (CMake's ACCELBENCH_ISA), and the instruction set of the
+# kernels Embree picked at run time (the harness's last column); files written before
+# either existed load with "unknown".
 ISA_COLUMN = "isa"
+EMBREE_ISA_COLUMN = "embree_isa"
 
 # The results CSV's columns other than the parameters' (which sit between `params` and
 # `status`, one per parameter name of the registry), in the harness's order, with their kind
@@ -173,6 +190,7 @@ RESULT_CSV_COLUMNS: list[tuple[str, str]] = [
     ("spp", "number"),
     ("light", "text"),
     ("shading", "text"),
+    (FP_MODE_COLUMN, "text"),
     ("git_sha", "text"),
     ("git_dirty", "text"),
     ("compiler", "text"),
@@ -182,6 +200,7 @@ RESULT_CSV_COLUMNS: list[tuple[str, str]] = [
     ("embree_version", "text"),
     ("timestamp", "text"),
     (ISA_COLUMN, "text"),
+    (EMBREE_ISA_COLUMN, "text"),
 ]
 
 # Build types whose timings are representative (the Makefile builds RelWithDebInfo).
@@ -236,7 +255,7 @@ class ProvenanceGroup:
         return (
             f"{self.label}: commit {sha[:12]}{dirty}, cpu {self.fields['cpu']}, "
             f"{self.fields['compiler']}, {self.fields['build_type']}, isa {self.fields['isa']}, "
-            f"Embree {self.fields['embree_version']} ({self.rows} rows from "
+            f"Embree {self.fields['embree_version']} (kernels {self.fields['embree_isa']}) ({self.rows} rows from "
             f"{', '.join(self.files)})"
         )
 
@@ -497,6 +516,9 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     if "ray_set" not in df.columns:
         df["ray_set"] = CAMERA_SET
     df["ray_set"] = df["ray_set"].str.strip().replace("", CAMERA_SET)
+    if FP_MODE_COLUMN not in df.columns:
+        df[FP_MODE_COLUMN] = "ieee"
+    df[FP_MODE_COLUMN] = df[FP_MODE_COLUMN].str.strip()
     problems = check_settings(df, starts)  # on the text as written
     problems += to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
     if "render_cpu_s_median" in df.columns:
@@ -510,6 +532,13 @@ def read_csv(path: str | Path) -> pd.DataFrame:
             f"{sorted(set(df['status'][bad_status]))} on {record_lines(starts, df.index[bad_status])}"
         )
     df["status"] = status
+
+    bad_mode = ~df[FP_MODE_COLUMN].isin(FP_MODES)
+    if bad_mode.any():
+        problems.append(
+            f"column {FP_MODE_COLUMN!r} must be one of {', '.join(FP_MODES)}; found "
+            f"{sorted(set(df[FP_MODE_COLUMN][bad_mode]))} on {record_lines(starts, df.index[bad_mode])}"
+        )
 
     if "verdict" in df.columns:
         verdict = df["verdict"].str.strip().str.lower()
@@ -547,13 +576,11 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     dup = df.duplicated(KEY_COLUMNS, keep=False)
     if dup.any():
         keys = df.loc[dup, KEY_COLUMNS].drop_duplicates().head(3).to_dict("records")
-        raise ContractError(
-            f"{path}: the key (config, model, accel, params, ray_set, render_threads) must be unique; "
-            f"repeated: {keys}"
-        )
+        raise ContractError(f"{path}: the key ({', '.join(KEY_COLUMNS)}) must be unique; repeated: {keys}")
     df["source"] = str(path)
-    if ISA_COLUMN not in df.columns:
-        df[ISA_COLUMN] = "unknown"
+    for col in (ISA_COLUMN, EMBREE_ISA_COLUMN):
+        if col not in df.columns:
+            df[col] = "unknown"
     for col in PROVENANCE_IDENTITY + ["timestamp"]:
         df[col] = df[col].astype(str).str.strip()
     return df
@@ -677,7 +704,7 @@ def load_results(paths: list[str | Path]) -> Results:
         if dup.any():
             n = int(rows[dup].drop_duplicates(KEY_COLUMNS).shape[0])
             warnings.append(
-                f"{n} (config, model, accel, params, ray_set, render_threads) keys occur in more than one "
+                f"{n} ({', '.join(KEY_COLUMNS)}) keys occur in more than one "
                 f"file; where such a row fills a table cell the newest timestamp "
                 f"is used and the cell's note says so."
             )

@@ -52,7 +52,7 @@ MEASURES = [*RATIOS, *TIMES, *COUNTS]
 # A combination: the same structure, parameters, model and rays, whichever config measured it.
 SETTINGS = ["ray_set", "render_threads", *[c for c in RENDER_SETTING_COLUMNS if c != "render_threads"]]
 COMBINATION = ["model", "accel", "params", *SETTINGS]
-PROVENANCE = ["git_sha", "git_dirty", "cpu", "compiler", "build_type", "isa", "embree_version"]
+PROVENANCE = ["git_sha", "git_dirty", "cpu", "compiler", "build_type", "isa", "embree_version", "embree_isa"]
 SOURCE = ["kind", "run", "file", "config", "timestamp"]
 
 

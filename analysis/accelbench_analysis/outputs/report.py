@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
-from ..inputs.schema import Results
+from ..inputs.schema import FP_MODE_COLUMN, Results
 from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow, reference_ablation_text, summary_line
 from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
 from .figures import FIGURES, Skipped
@@ -37,10 +37,19 @@ def provenance_lines(results: Results) -> list[str]:
         out.append(
             f"  **Commit:** `{f['git_sha']}`"
             + (" **(dirty work tree)**" if f["git_dirty"] == "true" else "")
-            + f"; {f['compiler']}, {f['build_type']}; vector extensions (isa) {f['isa']}; "
-            f"Embree {f['embree_version']}; "
-            f"{g.rows} rows"
+            + f"; {f['compiler']}, {f['build_type']}; Embree {f['embree_version']}; {g.rows} rows"
         )
+        # A ratio against Embree is also a ratio of instruction sets: say which each side ran.
+        out.append(
+            f"  **ISA:** our structures `{f['isa']}` (compiled for, `isa`); "
+            f"Embree's kernels `{f['embree_isa']}` (its run-time choice, `embree_isa`)"
+        )
+    modes = rows[FP_MODE_COLUMN].value_counts()
+    out.append(
+        "- **Floating-point mode of the traces:** "
+        + ", ".join(f"{m} ({n} rows)" if len(modes) > 1 else m for m, n in modes.items())
+        + " (ieee: IEEE 754; ftz_daz: flush-to-zero and denormals-are-zero; the robustness catalogue always ieee)"
+    )
     if ts:
         out.append(f"- **Measured:** {ts[0]}" + (f" to {ts[-1]}" if ts[-1] != ts[0] else ""))
     out.append("- **CSV:** " + ", ".join(f"`{f}`" for f in results.files))

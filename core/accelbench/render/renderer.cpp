@@ -131,15 +131,17 @@ BatchTotals trace_batch(const Accelerator& accel, std::span<const Ray> rays, con
 }
 
 // Runs work(batch, scratch) for every batch in [0, count) on `threads` threads (the calling
-// thread is one of them). Batches are handed out by an atomic counter, so a slow tile does
+// thread is one of them), each in the floating-point mode `mode` (the calling thread's is
+// restored afterwards). Batches are handed out by an atomic counter, so a slow tile does
 // not hold up the others. The first exception stops the remaining batches and is
 // rethrown here.
 template <class Work>
-void for_each_batch(size_t count, int threads, Work&& work) {
+void for_each_batch(size_t count, int threads, FpMode mode, Work&& work) {
     std::atomic<size_t> next{0};
     std::exception_ptr error;
     std::mutex error_mutex;
     auto worker = [&] {
+        const ScopedFpMode fp_mode(mode);
         Scratch scratch;
         try {
             for (size_t b; (b = next.fetch_add(1)) < count;) work(b, scratch);
@@ -259,6 +261,7 @@ RenderRays render_rays(const Accelerator& accel, const Scene& scene, const Camer
     check_settings(rs, true);
     const CameraRays cam(camera, rs.width, rs.height);
     const ShadowSetup shadow = shadow_setup(scene, request, default_light(scene.bounds, camera));
+    const ScopedFpMode fp_mode(rs.fp_mode);
     RenderRays out;
     std::vector<Ray> rays;
     std::vector<Hit> hits;
@@ -324,7 +327,7 @@ TraceOutput render(const Accelerator& accel, const Scene& scene, const Camera& c
     std::vector<BatchTotals> totals(tiles);
 
     // Tiles write disjoint pixels of the shared outputs, so they need no locking.
-    for_each_batch(tiles, rs.threads, [&](size_t tile, Scratch& s) {
+    for_each_batch(tiles, rs.threads, rs.fp_mode, [&](size_t tile, Scratch& s) {
         const int x0 = int(tile % size_t(tiles_x)) * kTile, y0 = int(tile / size_t(tiles_x)) * kTile;
         const int x1 = std::min(x0 + kTile, rs.width), y1 = std::min(y0 + kTile, rs.height);
         tile_primary_rays(cam, rs, tile, s.rays);
@@ -363,7 +366,7 @@ TraceOutput trace_rays(const Accelerator& accel, const Scene& scene, std::span<c
     if (request.keep_hits) out.primary_hits.resize(rays.size());
     std::vector<BatchTotals> totals(batches);
 
-    for_each_batch(batches, request.settings.threads, [&](size_t b, Scratch& s) {
+    for_each_batch(batches, request.settings.threads, request.settings.fp_mode, [&](size_t b, Scratch& s) {
         const size_t first = b * kBatchRays;
         const std::span<const Ray> batch = rays.subspan(first, std::min(kBatchRays, rays.size() - first));
         totals[b] = trace_batch(accel, batch, shadow, request.counts, s);
@@ -389,7 +392,7 @@ TraceOutput trace_ray_set(const Accelerator& accel, std::span<const Ray> rays, R
 
     // Batches write disjoint ranges of the outputs and keep their own totals, summed in
     // batch order below: nothing depends on which thread traced which batch.
-    for_each_batch(batches, request.settings.threads, [&](size_t b, Scratch& s) {
+    for_each_batch(batches, request.settings.threads, request.settings.fp_mode, [&](size_t b, Scratch& s) {
         const size_t first = b * kBatchRays;
         const std::span<const Ray> batch = rays.subspan(first, std::min(kBatchRays, rays.size() - first));
         const size_t n = batch.size();

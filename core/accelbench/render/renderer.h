@@ -15,6 +15,7 @@
 
 #include "accelbench/accel/accelerator.h"
 #include "accelbench/base/image.h"
+#include "accelbench/render/fp_mode.h"
 #include "accelbench/scene/camera.h"
 #include "accelbench/scene/light.h"
 
@@ -27,6 +28,9 @@ struct RenderSettings {
     bool light = true;    // trace shadow rays toward the light
     bool shading = true;  // compute an image (Phong); off: trace only
     int threads = 1;
+    // Every tracing thread's (fp_mode.h). FTZ/DAZ, as Embree's documentation asks: measured
+    // to cost or gain neither side anything on the bench's models (docs/benchmarks.md).
+    FpMode fp_mode = FpMode::FtzDaz;
 };
 
 enum class CountMode {
@@ -93,8 +97,8 @@ enum class RayQuery : uint8_t { Closest, Any };
 // Traces the rays of one ray set (ray_sets.h) as they are, one query per ray and nothing
 // derived from the answers (no shadow rays, no image): rays/hits and primary_stats of the
 // output describe these rays; keep_hits keeps primary_hits (Closest) or occluded (Any);
-// CountMode::PerPixel gives one RayStats per ray. Only settings.threads is read from the
-// settings. Results do not depend on the thread count.
+// CountMode::PerPixel gives one RayStats per ray. Only settings.threads and
+// settings.fp_mode are read from the settings. Results do not depend on the thread count.
 TraceOutput trace_ray_set(const Accelerator& accel, std::span<const Ray> rays, RayQuery query,
                           const TraceRequest& request);
 

@@ -1,7 +1,15 @@
 #include "accelbench/accel/baseline/embree_accel.h"
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "accelbench/base/param_table.h"
 
@@ -74,6 +82,73 @@ EmbreeAccel::~EmbreeAccel() {
 std::string EmbreeAccel::version() {
     return std::to_string(RTC_VERSION_MAJOR) + "." + std::to_string(RTC_VERSION_MINOR) + "." +
         std::to_string(RTC_VERSION_PATCH);
+}
+
+namespace {
+
+// Runs `f` with the process's standard output going to a temporary file, and returns what
+// was written there (Embree prints its verbose report to std::cout).
+template <class F>
+std::string captured_stdout(F&& f) {
+    std::cout.flush();
+    std::fflush(stdout);
+    FILE* tmp = std::tmpfile();
+    const int saved = dup(STDOUT_FILENO);
+    if (!tmp || saved < 0 || dup2(fileno(tmp), STDOUT_FILENO) < 0) {
+        if (tmp) std::fclose(tmp);
+        if (saved >= 0) close(saved);
+        return "";
+    }
+    f();
+    std::cout.flush();
+    std::fflush(stdout);
+    dup2(saved, STDOUT_FILENO);
+    close(saved);
+    std::string text;
+    std::rewind(tmp);
+    for (int c; (c = std::fgetc(tmp)) != EOF;) text.push_back(char(c));
+    std::fclose(tmp);
+    return text;
+}
+
+// The targets of the first line of `report` that contains `marker` ("SSE2 SSE4.2 AVX AVX2
+// AVX512 (supported)"), each lower case.
+std::vector<std::string> targets_on_line(const std::string& report, const std::string& marker) {
+    std::istringstream lines(report);
+    for (std::string line; std::getline(lines, line);) {
+        const size_t at = line.find(marker);
+        if (at == std::string::npos) continue;
+        std::string list = line.substr(0, at);
+        if (const size_t colon = list.find(':'); colon != std::string::npos) list = list.substr(colon + 1);
+        std::istringstream words(list);
+        std::vector<std::string> targets;
+        for (std::string w; words >> w;) {
+            for (char& c : w) c = char(std::tolower(static_cast<unsigned char>(c)));
+            targets.push_back(w);
+        }
+        return targets;
+    }
+    return {};
+}
+
+}  // namespace
+
+std::string EmbreeAccel::kernel_isa() {
+    static const std::string isa = [] {
+        const std::string report = captured_stdout([] {
+            if (RTCDevice device = rtcNewDevice("verbose=1,threads=1")) rtcReleaseDevice(device);
+        });
+        // The device section lists the targets the CPU enables, then those compiled in.
+        const auto enabled = targets_on_line(report, "(supported)");
+        const auto compiled = targets_on_line(report, "(compile time enabled)");
+        std::string best = "unknown";
+        for (const char* target : {"sse2", "sse4.2", "avx", "avx2", "avx512"})
+            if (std::find(enabled.begin(), enabled.end(), target) != enabled.end() &&
+                std::find(compiled.begin(), compiled.end(), target) != compiled.end())
+                best = target;
+        return best;
+    }();
+    return isa;
 }
 
 void EmbreeAccel::build(const Scene& scene) {

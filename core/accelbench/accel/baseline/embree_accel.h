@@ -34,6 +34,11 @@ public:
     BuildStats build_stats() const override;
 
     static std::string version();
+    // The instruction set of the kernels Embree runs on this machine, lower case ("sse2",
+    // "sse4.2", "avx", "avx2", "avx512"): it picks at run time the best target that is both
+    // compiled into the library and enabled on the CPU. Embree 3's API has no query for it,
+    // so it is read once from a verbose device's report; "unknown" if that cannot be read.
+    static std::string kernel_isa();
 
 private:
     RTCDevice device_ = nullptr;
