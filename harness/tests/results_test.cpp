@@ -314,6 +314,26 @@ TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
     EXPECT_THROW(take_column(out(), timed, twice, "instructions", false), std::runtime_error);
 }
 
+// Under valgrind Embree sees no AVX-512 and runs its AVX2 kernels: the callgrind run of the
+// same build differs from the timed run in embree_isa only, and the timed run's value stays.
+TEST_F(MergeTest, TakeColumnAcceptsAnotherEmbreeIsaAndKeepsTheTimedRuns) {
+    const std::string header =
+        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
+    const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,";
+    const auto write_run = [&](const std::string& name, const std::string& text) {
+        const std::string path = write_file(dir.path(), name, text);
+        write_inputs(path, {{"config", std::string(64, 'c'), "ci"}});
+        return path;
+    };
+    const auto timed = write_run("timed.csv", header + "1,ok," + prov + "avx512\n");
+    const auto cg = write_run("cg.csv", header + "1,ok,100" + prov + "avx2\n");
+    EXPECT_EQ(take_column(out(), timed, cg, "instructions", false), 1u);
+    EXPECT_EQ(read_file(out()), header + "1,ok,100" + prov + "avx512\n");
+    // Any other provenance column still refuses.
+    const auto other = write_run("other.csv", header + "1,ok,100,abc,false,gcc 12,RelWithDebInfo,x,3.13.5,avx2,avx2\n");
+    EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
+}
+
 TEST_F(MergeTest, RefusesAShardARunIsStillWriting) {
     const auto a = shard("a", {{"1", "abc"}});
     const auto b = shard("b", {{"2", "abc"}});
