@@ -244,19 +244,31 @@ std::optional<std::string> read_string(Checker& c, const YAML::Node& n, const st
     return n.Scalar();
 }
 
-std::optional<int64_t> read_int(Checker& c, const YAML::Node& n, const std::string& path, int64_t lo, int64_t hi) {
-    const std::string range = concat("[", std::to_string(lo), ", ", std::to_string(hi), "]");
+namespace {
+
+// The text of a plain scalar written as a number, or nullptr after saying why it is none
+// (a quoted scalar is a string; `expected` is what the key takes, e.g. "an integer in [0, 8]").
+const std::string* number_text(Checker& c, const YAML::Node& n, const std::string& path, const std::string& expected) {
     if (!n.IsScalar() || quoted(n)) {
         c.error(n, path,
-                "expected an integer in " + range + ", got " +
+                "expected " + expected + ", got " +
                     (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
-        return std::nullopt;
+        return nullptr;
     }
-    const std::string& t = n.Scalar();
-    if (const std::string why = number_form_problem(t); !why.empty()) {
+    if (const std::string why = number_form_problem(n.Scalar()); !why.empty()) {
         c.error(n, path, why);
-        return std::nullopt;
+        return nullptr;
     }
+    return &n.Scalar();
+}
+
+}  // namespace
+
+std::optional<int64_t> read_int(Checker& c, const YAML::Node& n, const std::string& path, int64_t lo, int64_t hi) {
+    const std::string range = concat("[", std::to_string(lo), ", ", std::to_string(hi), "]");
+    const std::string* text = number_text(c, n, path, "an integer in " + range);
+    if (!text) return std::nullopt;
+    const std::string& t = *text;
     int64_t v = 0;
     auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     if (ec != std::errc() || p != t.data() + t.size()) {
@@ -275,17 +287,9 @@ std::optional<double> read_number(Checker& c, const YAML::Node& n, const std::st
                                   bool lo_open) {
     char range[96];
     std::snprintf(range, sizeof range, "%s%g, %g]", lo_open ? "(" : "[", lo, hi);
-    if (!n.IsScalar() || quoted(n)) {
-        c.error(n, path,
-                std::string("expected a number in ") + range + ", got " +
-                    (n.IsScalar() ? "the string '" + n.Scalar() + "'" : std::string(kind_of(n))));
-        return std::nullopt;
-    }
-    const std::string& t = n.Scalar();
-    if (const std::string why = number_form_problem(t); !why.empty()) {
-        c.error(n, path, why);
-        return std::nullopt;
-    }
+    const std::string* text = number_text(c, n, path, std::string("a number in ") + range);
+    if (!text) return std::nullopt;
+    const std::string& t = *text;
     char* end = nullptr;
     double v = std::strtod(t.c_str(), &end);
     if (t.empty() || end != t.c_str() + t.size() || !std::isfinite(v)) {

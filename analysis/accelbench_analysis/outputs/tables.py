@@ -523,17 +523,7 @@ def model_table(
         f"(plus the binned-SAH BVH and Embree). Each model: our median with its 95% "
         f"confidence interval, the report's number, and ours/report."
     )
-    main = TableDoc(
-        f"table{number}",
-        title,
-        caption,
-        groups,
-        header,
-        rows,
-        notes=[n for n in fixed if n] + notes,
-        warnings=list(results.warnings),
-        show_tags=results.mixed,
-    )
+    main = report_table(f"table{number}", title, caption, groups, header, rows, fixed + notes, results)
     return [main, relative_table(results, report_nums, number, report_models, picker, srows, ours)]
 
 
@@ -621,6 +611,22 @@ def relative_table(
         header,
         rows,
         notes=notes,
+        show_tags=results.mixed,
+    )
+
+
+def report_table(name, title, caption, groups, header, rows, notes, results) -> TableDoc:
+    """One of the report's tables beside ours: the notes that apply (None where a note does
+    not), the results' warnings, and provenance tags where the results mix builds."""
+    return TableDoc(
+        name,
+        title,
+        caption,
+        groups,
+        header,
+        rows,
+        notes=[n for n in notes if n],
+        warnings=list(results.warnings),
         show_tags=results.mixed,
     )
 
@@ -717,16 +723,15 @@ def table2(
         note_times(),
         note_errors(picked_rows(row_picks)),
     ] + note_tags(results)
-    doc = TableDoc(
+    doc = report_table(
         "table2",
         "Table 2: kd-tree parameters on the Stanford bunny",
         caption,
         groups,
         header,
         rows,
-        notes=[n for n in fixed if n] + notes,
-        warnings=list(results.warnings),
-        show_tags=results.mixed,
+        fixed + notes,
+        results,
     )
     return [doc]
 
