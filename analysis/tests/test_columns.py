@@ -16,7 +16,24 @@ from accelbench_analysis.inputs.schema import REQUIRED_COLUMNS, RESULT_CSV_COLUM
 
 REPO = Path(__file__).resolve().parents[2]
 ACCELBENCH = REPO / "build" / "accelbench"
-COMMITTED_CSVS = sorted(p for p in (REPO / "results").rglob("*.csv") if p.is_file())
+
+
+def committed_csvs() -> list[Path]:
+    """The CSVs git tracks under results/ (not the runs this machine made, which .gitignore
+    keeps out and older builds may have written); every CSV there outside a git checkout."""
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(REPO), "ls-files", "-z", "--", "results"],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return sorted(p for p in (REPO / "results").rglob("*.csv") if p.is_file() and "runs" not in p.parts)
+    return sorted(REPO / f for f in out.split("\0") if f.endswith(".csv"))
+
+
+COMMITTED_CSVS = committed_csvs()
 needs_binary = pytest.mark.skipif(not ACCELBENCH.is_file(), reason=f"{ACCELBENCH} not built")
 
 
