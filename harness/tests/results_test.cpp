@@ -257,6 +257,15 @@ protected:
         return path;
     }
     std::string out() const { return (dir.path() / "merged.csv").string(); }
+    // A run's results file with the instructions column, as make regress's timed and
+    // callgrind runs write it; both runs of one config share their record of inputs.
+    static constexpr const char* kInstructionsHeader =
+        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
+    std::string write_run(const std::string& name, const std::string& rows) {
+        const std::string path = write_file(dir.path(), name, kInstructionsHeader + rows);
+        write_inputs(path, {{"config", std::string(64, 'c'), "ci"}});
+        return path;
+    }
 };
 
 TEST_F(MergeTest, JoinsShardsAndTheirRepetitions) {
@@ -292,45 +301,32 @@ TEST_F(MergeTest, RefusesACombinationInTwoInputs) {
 
 // The timed run's rows with the instructions of a callgrind run, matched by combo_id.
 TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
-    const std::string header =
-        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
+    const std::string header = kInstructionsHeader;
     const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,avx2\n";
-    // Both runs of one config: the same record of inputs.
-    const auto write_run = [&](const std::string& name, const std::string& text) {
-        const std::string path = write_file(dir.path(), name, text);
-        write_inputs(path, {{"config", std::string(64, 'c'), "ci"}});
-        return path;
-    };
-    const auto timed = write_run("timed.csv", header + "1,ok," + prov + "2,ok," + prov + "3,skipped," + prov);
+    const auto timed = write_run("timed.csv", "1,ok," + prov + "2,ok," + prov + "3,skipped," + prov);
     write_file(dir.path(), "timed.reps.csv", "combo_id,repetition\n1,1\n");
-    const auto cg = write_run("cg.csv", header + "2,ok,200" + prov + "1,ok,100" + prov + "3,skipped," + prov);
+    const auto cg = write_run("cg.csv", "2,ok,200" + prov + "1,ok,100" + prov + "3,skipped," + prov);
     EXPECT_EQ(take_column(out(), timed, cg, "instructions", false), 2u);
     EXPECT_EQ(read_file(out()), header + "1,ok,100" + prov + "2,ok,200" + prov + "3,skipped," + prov);
     EXPECT_EQ(read_file(repetitions_path(out())), "combo_id,repetition\n1,1\n");
     EXPECT_THROW(take_column(out(), timed, cg, "no_such_column", false), std::runtime_error);
-    const auto other = write_run("other.csv", header + "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,avx2\n");
+    const auto other = write_run("other.csv", "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,avx2\n");
     EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
-    const auto twice = write_run("twice.csv", header + "1,ok,100" + prov + "1,ok,101" + prov);
+    const auto twice = write_run("twice.csv", "1,ok,100" + prov + "1,ok,101" + prov);
     EXPECT_THROW(take_column(out(), timed, twice, "instructions", false), std::runtime_error);
 }
 
 // Under valgrind Embree sees no AVX-512 and runs its AVX2 kernels: the callgrind run of the
 // same build differs from the timed run in embree_isa only, and the timed run's value stays.
 TEST_F(MergeTest, TakeColumnAcceptsAnotherEmbreeIsaAndKeepsTheTimedRuns) {
-    const std::string header =
-        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
+    const std::string header = kInstructionsHeader;
     const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,";
-    const auto write_run = [&](const std::string& name, const std::string& text) {
-        const std::string path = write_file(dir.path(), name, text);
-        write_inputs(path, {{"config", std::string(64, 'c'), "ci"}});
-        return path;
-    };
-    const auto timed = write_run("timed.csv", header + "1,ok," + prov + "avx512\n");
-    const auto cg = write_run("cg.csv", header + "1,ok,100" + prov + "avx2\n");
+    const auto timed = write_run("timed.csv", "1,ok," + prov + "avx512\n");
+    const auto cg = write_run("cg.csv", "1,ok,100" + prov + "avx2\n");
     EXPECT_EQ(take_column(out(), timed, cg, "instructions", false), 1u);
     EXPECT_EQ(read_file(out()), header + "1,ok,100" + prov + "avx512\n");
     // Any other provenance column still refuses.
-    const auto other = write_run("other.csv", header + "1,ok,100,abc,false,gcc 12,RelWithDebInfo,x,3.13.5,avx2,avx2\n");
+    const auto other = write_run("other.csv", "1,ok,100,abc,false,gcc 12,RelWithDebInfo,x,3.13.5,avx2,avx2\n");
     EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
 }
 
