@@ -1,0 +1,267 @@
+"""Every claim under every setting (mapping/settings.py): the factor matrix.
+
+Each claim is judged at our defaults, at the faithful setting and at each setting that
+switches one factor of the faithful setting back to our default, by the same code on the
+rows that setting declares. Nothing is chosen: the matrix is written whole
+(tables/claims_factors.csv, columns claim, setting, value, verdict, and the heat map
+figures/claims_factors.png from one Vega-Lite specification), and a claim's cause is the
+factor whose switch flips its faithful verdict, or "no single factor".
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import pandas as pd
+
+from ..inputs.schema import Results
+from ..mapping.selection import Picker, setting_spec
+from ..mapping.settings import CLAIMS_ONLY_CONFIGS, DEFAULT, FAITHFUL, SETTINGS, Setting
+from ..mapping.spread import Spread, claim_spread
+from . import claims_more  # noqa: F401  (registers its claims)
+from .claims import (
+    CLAIMS,
+    FAILS,
+    HOLDS,
+    NOT_COMPARABLE,
+    STRUCTURE_SHORT,
+    Claim,
+    Finding,
+    Missing,
+    OurSource,
+    evaluate,
+    holds_within,
+)
+from .tables import METRIC, preferred_variant
+
+MATRIX_COLUMNS = ("claim", "setting", "value", "verdict")
+NOT_MEASURED = "not measured"
+# Metrics of ours beyond the tables' (the report prints none of these).
+OUR_COLUMN = {"depth": "tree_depth"}
+
+
+class SettingSource(OurSource):
+    """Our numbers at one setting: the rows of its configs, each structure's rows with the
+    setting's parameters (a model's own values replacing the structure's), its model
+    labels. Remembers the (combo_id, metric) pairs a claim read, for its spread."""
+
+    def __init__(self, results: Results, report_nums: pd.DataFrame, setting: Setting):
+        rows = results.rows
+        if "config" in rows:
+            keep = (
+                rows["config"].isin(setting.configs)
+                if setting.configs
+                else ~rows["config"].isin(CLAIMS_ONLY_CONFIGS)
+            )
+            rows = rows[keep]
+        super().__init__(replace(results, rows=rows), report_nums, extra={"": ()})
+        self.results = replace(results, rows=rows)
+        self.picker = Picker(self.results)
+        self.setting = setting
+        present = self.picker.models
+        self.models = {
+            m: next((label for label in labels if label in present), labels[0])
+            for m, labels in setting.models_of().items()
+        }
+        self.read: set[tuple[str, str]] = set()
+        self.models_read: set[str] = set()
+
+    def begin(self) -> None:
+        super().begin()
+        self.read = set()
+        self.models_read = set()
+
+    def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
+        if metric == "total":
+            return self.get(model, structure, "build", setting) + self.get(
+                model, structure, "render", setting
+            )
+        self.models_read.add(model)
+        ours = self.model(model)
+        # "threads=N": the structure at the report's setting built on N threads.
+        threads = setting.partition("=")[2] if setting.startswith("threads=") else None
+        spec = setting_spec("default" if threads else setting, structure, self.picker, ours, self.depths)
+        wanted = dict(spec.required)
+        wanted.update(self.setting.params_of(structure, model))
+        if threads:
+            wanted["threads"] = threads
+        spec = replace(spec, required=tuple(wanted.items()))
+        variants = self.picker.variants([ours], spec)
+        variant = wanted.get("traversal") if "traversal" in wanted else preferred_variant(variants)
+        pick = self.picker.pick(ours, spec, variant if variant in variants else None)
+        what = f"{STRUCTURE_SHORT.get(structure, structure)} ({setting}) on {ours}"
+        if not pick.ok:
+            raise Missing(f"{what}: {pick.reason}")
+        v = pick.value(OUR_COLUMN.get(metric) or METRIC[metric].ours)
+        if v is None:
+            raise Missing(f"{what} has no {metric}")
+        self._groups.add(str(pick.row["prov_group"]))
+        self.read.add((str(pick.row.get("combo_id", "")), metric))
+        return v
+
+
+def setting_source(results: Results, report_nums: pd.DataFrame, setting: Setting) -> SettingSource:
+    return SettingSource(results, report_nums, setting)
+
+
+@dataclass
+class Cell:
+    """One claim at one setting."""
+
+    finding: Finding
+    read: set[tuple[str, str]] = field(default_factory=set)
+    models_read: set[str] = field(default_factory=set)
+
+    @property
+    def verdict(self) -> str:
+        return self.finding.verdict if self.finding.verdict in (HOLDS, FAILS) else NOT_COMPARABLE
+
+
+@dataclass
+class Matrix:
+    """cells[claim id][setting name]; sources[setting name]."""
+
+    cells: dict[str, dict[str, Cell]]
+    sources: dict[str, SettingSource]
+
+    def verdict(self, claim_id: str, setting: str) -> str:
+        return self.cells[claim_id][setting].verdict
+
+    def spread(self, results: Results, claim_id: str, setting: str) -> Spread:
+        return claim_spread(results, self.cells[claim_id][setting].read)
+
+
+def evaluate_matrix(results: Results, report_nums: pd.DataFrame, claims: list[Claim] | None = None) -> Matrix:
+    cells: dict[str, dict[str, Cell]] = {c.id: {} for c in claims or CLAIMS}
+    sources = {}
+    for s in SETTINGS:
+        src = setting_source(results, report_nums, s)
+        sources[s.name] = src
+        for c in claims or CLAIMS:
+            finding = evaluate(c, src)
+            if not src.picker.rows.shape[0]:
+                finding = Finding(NOT_COMPARABLE, f"{NOT_MEASURED}: this run has no rows of setting {s.name}")
+            cells[c.id][s.name] = Cell(finding, set(src.read), set(src.models_read))
+    return Matrix(cells, sources)
+
+
+def within_noise(matrix: Matrix, results: Results, c: Claim, setting: str) -> tuple[bool, Spread]:
+    """Whether the claim's verdict at `setting` lies inside the spread measured on the
+    combinations it read: some draw of its timed values within that spread gives the
+    opposite verdict. Returns that and the spread."""
+    cell = matrix.cells[c.id][setting]
+    spread = claim_spread(results, cell.read)
+    if cell.verdict not in (HOLDS, FAILS) or spread.value <= 0:
+        return False, spread
+    opposite = FAILS if cell.verdict == HOLDS else HOLDS
+    return holds_within(c, matrix.sources[setting], spread.value, opposite), spread
+
+
+def flipping_factors(matrix: Matrix, claim_id: str) -> list[str]:
+    """The factor settings whose switch gives the opposite of the faithful verdict (labelled
+    variants never count: they cannot fail)."""
+    at = matrix.cells[claim_id]
+    base = at[FAITHFUL].verdict
+    if base not in (HOLDS, FAILS):
+        return []
+    return [
+        s.name
+        for s in SETTINGS
+        if s.name not in (DEFAULT, FAITHFUL)
+        and not s.by_construction
+        and {base, at[s.name].verdict} == {HOLDS, FAILS}
+    ]
+
+
+def cause_text(matrix: Matrix, claim_id: str) -> str:
+    """What decides the claim between our defaults and the faithful setting."""
+    at = matrix.cells[claim_id]
+    d, f = at[DEFAULT].verdict, at[FAITHFUL].verdict
+    flips = flipping_factors(matrix, claim_id)
+    if f not in (HOLDS, FAILS):
+        return "not judged at the faithful setting"
+    if flips:
+        return "flipped by " + ", ".join(flips)
+    if d in (HOLDS, FAILS) and d != f:
+        return "no single factor (default and faithful differ; no one switch flips it)"
+    judged = {c.verdict for c in at.values()} - {NOT_COMPARABLE}
+    return "the same at every setting judged" if len(judged) == 1 else "no single factor"
+
+
+def matrix_frame(matrix: Matrix) -> pd.DataFrame:
+    rows = [
+        {"claim": cid, "setting": s.name, "value": at[s.name].finding.evidence, "verdict": at[s.name].verdict}
+        for cid, at in matrix.cells.items()
+        for s in SETTINGS
+    ]
+    return pd.DataFrame(rows, columns=list(MATRIX_COLUMNS))
+
+
+def matrix_markdown(matrix: Matrix) -> list[str]:
+    """The matrix as a table: one row per claim, one column per setting (✓ holds, ✗ does
+    not hold, – not comparable), and the cause."""
+    mark = {HOLDS: "✓", FAILS: "✗", NOT_COMPARABLE: "–"}
+    head = "| claim | " + " | ".join(s.name for s in SETTINGS) + " | cause |"
+    rule = "|:---|" + ":---:|" * len(SETTINGS) + ":---|"
+    out = [head, rule]
+    for cid, at in matrix.cells.items():
+        out.append(
+            f"| {cid} | "
+            + " | ".join(mark[at[s.name].verdict] for s in SETTINGS)
+            + f" | {cause_text(matrix, cid)} |"
+        )
+    return out
+
+
+VERDICT_COLOURS = {HOLDS: "#4c9a5b", FAILS: "#c8553d", NOT_COMPARABLE: "#bbbbbb"}
+
+
+def heat_map_spec(frame: pd.DataFrame) -> dict:
+    """Claims x settings, each cell coloured by its verdict (one specification: the page
+    embeds it, the PNG is rendered from it)."""
+    data = json.loads(frame.to_json(orient="records"))
+    return {
+        "$schema": "https://vega.github.io/schema/vega-lite/v6.json",
+        "title": "Every claim under every setting (one factor switched back from faithful per column)",
+        "data": {"values": data},
+        "mark": {"type": "rect", "stroke": "white"},
+        "encoding": {
+            "x": {"field": "setting", "type": "nominal", "sort": [s.name for s in SETTINGS], "title": None},
+            "y": {
+                "field": "claim",
+                "type": "nominal",
+                "sort": list(dict.fromkeys(frame["claim"])),
+                "title": None,
+            },
+            "color": {
+                "field": "verdict",
+                "type": "nominal",
+                "scale": {"domain": list(VERDICT_COLOURS), "range": list(VERDICT_COLOURS.values())},
+            },
+            "tooltip": [{"field": c} for c in MATRIX_COLUMNS],
+        },
+        "config": {"axis": {"labelLimit": 300}},
+    }
+
+
+def write_matrix(matrix: Matrix, tables_dir: Path, figures_dir: Path | None = None) -> list[Path]:
+    """tables/claims_factors.csv and, where vl-convert renders, figures/claims_factors.png
+    beside its specification figures/claims_factors.vl.json."""
+    frame = matrix_frame(matrix)
+    tables_dir.mkdir(parents=True, exist_ok=True)
+    csv = tables_dir / "claims_factors.csv"
+    frame.to_csv(csv, index=False)
+    written = [csv]
+    if figures_dir is not None:
+        figures_dir.mkdir(parents=True, exist_ok=True)
+        spec = heat_map_spec(frame)
+        spec_path = figures_dir / "claims_factors.vl.json"
+        spec_path.write_text(json.dumps(spec, separators=(",", ":"), allow_nan=False))
+        import vl_convert
+
+        png = figures_dir / "claims_factors.png"
+        png.write_bytes(vl_convert.vegalite_to_png(spec, scale=1.5))
+        written += [spec_path, png]
+    return written

@@ -1,0 +1,130 @@
+"""The claims' files: tables/claims.md, claims.csv, claims_factors.csv, the heat map, and
+the cost model's; and the claims' part of REPORT.md. Every one shows the same summary
+(claim_verdicts.summary_markdown) made from the same verdicts."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+
+from ..inputs.schema import Results
+from ..mapping.settings import DEFAULT, FAITHFUL, SETTING
+from .claim_matrix import Matrix, evaluate_matrix, flipping_factors, setting_source, write_matrix
+from .claim_verdicts import (
+    ClaimVerdicts,
+    claims_table,
+    judge_all,
+    summary_with_matrix,
+    table2_side_by_side,
+    verdicts_frame,
+)
+from .claims import CLAIMS, FAILS, HOLDS, Finding, Missing, ReportSource, evaluate, tolerance_text
+from .cost_model import cost_model_lines, fit_all, write_cost_model
+from .formatting import md_escape
+
+
+@dataclass
+class ClaimsResult:
+    """What the claims wrote and found, for REPORT.md."""
+
+    rows: list[ClaimVerdicts]
+    matrix: Matrix
+    reference: dict[str, Finding] | None = None  # the reference run's default verdicts
+
+    def machine_dependent(self) -> list[str]:
+        if self.reference is None:
+            return []
+        return [
+            r.claim.id
+            for r in self.rows
+            if {r.at[DEFAULT].verdict, self.reference[r.claim.id].verdict} == {HOLDS, FAILS}
+        ]
+
+
+def plain_statements(result: ClaimsResult) -> list[str]:
+    """What a reader must know before any verdict: the default renders are unshaded, and
+    which claims hold only with the report's hit-list traversal."""
+    traversal = [
+        r.claim.id for r in result.rows if "traversal=ordered" in flipping_factors(result.matrix, r.claim.id)
+    ]
+    shading = [
+        r.claim.id for r in result.rows if "shading off" in flipping_factors(result.matrix, r.claim.id)
+    ]
+    return [
+        "Our default renders are unshaded (tracing timed alone); the faithful setting renders with "
+        "Phong shading and a shadow ray per hit, as the report did. "
+        + (f"Claims whose faithful verdict flips with shading off: {', '.join(shading)}. " if shading else "")
+        + (
+            "Claims whose faithful verdict needs the report's hit-list traversal (its Algorithm 1; "
+            f"ordered traversal flips them): {', '.join(traversal)}."
+            if traversal
+            else "No claim's faithful verdict depends on the hit-list traversal."
+        ),
+        "",
+    ]
+
+
+def claims_markdown(result: ClaimsResult, results: Results, report_src: ReportSource) -> str:
+    out = ["# The report's claims, checked", ""]
+    out += [f"> **Warning:** {md_escape(w)}\n" for w in results.warnings]
+    out += summary_with_matrix(result.rows, result.matrix)
+    out += [""] + plain_statements(result)
+    out += [
+        "Settings: "
+        + "; ".join(f"**{s.name}**: {s.factor or 'every reading of the report'}" for s in SETTING.values()),
+        "",
+        tolerance_text(),
+        "",
+    ]
+    dependent = result.machine_dependent()
+    if result.reference is not None:
+        out += [
+            "Machine-dependent (holds at default on one run, not on the committed reference run): "
+            + (", ".join(dependent) if dependent else "none")
+            + ".",
+            "",
+        ]
+    out += ["## Every claim", ""] + claims_table(result.rows)
+    out += ["", "## Table 2 at the faithful setting, beside the report's", ""]
+    out += table2_side_by_side(report_src, result.matrix)
+    return "\n".join(out) + "\n"
+
+
+def write_cost_model_files(results: Results, report_nums: pd.DataFrame, out_dir: Path) -> None:
+    """tables/cost_model.csv and cost_model.md: each of Table 2's sweeps fitted on its own,
+    the report's and ours at the faithful setting (shading on: our floor is measured)."""
+    report_fits = fit_all(ReportSource(report_nums), Missing)
+    our_fits = fit_all(setting_source(results, report_nums, SETTING[FAITHFUL]), Missing)
+    if not report_fits:
+        return
+    write_cost_model(report_fits, our_fits, out_dir)
+    text = ["# A cost model of render time", ""] + cost_model_lines(report_fits, our_fits)
+    (out_dir / "cost_model.md").write_text("\n".join(text) + "\n")
+
+
+def write_claims(
+    results: Results,
+    report_nums: pd.DataFrame,
+    out_dir: Path,
+    reference: Results | None = None,
+) -> tuple[Path, ClaimsResult]:
+    """tables/claims.md, claims.csv, claims_factors.csv (+ figures/claims_factors.png beside
+    the tables directory) and the cost model's files."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    report_src = ReportSource(report_nums)
+    matrix = evaluate_matrix(results, report_nums)
+    reports = {c.id: evaluate(c, report_src) for c in CLAIMS}
+    rows = judge_all(CLAIMS, reports, matrix, results)
+    ref = None
+    if reference is not None:
+        ref_src = setting_source(reference, report_nums, SETTING[DEFAULT])
+        ref = {c.id: evaluate(c, ref_src) for c in CLAIMS}
+    result = ClaimsResult(rows, matrix, ref)
+    write_matrix(matrix, out_dir, out_dir.parent / "figures")
+    verdicts_frame(rows).to_csv(out_dir / "claims.csv", index=False)
+    write_cost_model_files(results, report_nums, out_dir)
+    path = out_dir / "claims.md"
+    path.write_text(claims_markdown(result, results, report_src))
+    return path, result
