@@ -157,6 +157,23 @@ TEST(Procedural, SoupStaysInTheUnitBoxWithTheGivenSize) {
     EXPECT_FALSE(ps.camera.has_value());  // the default fit suits a box
 }
 
+// The report's scene sizes are vertex counts (its #Primitives): the forest and the city
+// sized by vertices are the largest scenes that do not exceed the count (a leaf adds 3
+// vertices, a quad 4, a box up to 24: the gap below the target is a few vertices).
+TEST(Procedural, SizedByVerticesReachesTheCountFromBelow) {
+    for (const auto& [kind, want] : std::vector<std::pair<std::string, int64_t>>{{"forest", 30000}, {"city", 40000}}) {
+        const ProceduralScene ps = generate_procedural(kind, {{"vertices", std::to_string(want)}, {"seed", "1"}});
+        const auto n = int64_t(ps.scene.vertices.size());
+        EXPECT_LE(n, want) << kind;
+        EXPECT_GE(n, want - 24) << kind;
+        // The same scene as the one asked for by its triangle count.
+        const ProceduralScene same = gen(kind, int64_t(ps.scene.triangle_count()), 1);
+        EXPECT_TRUE(same_scene(ps, same)) << kind;
+    }
+    EXPECT_THROW(generate_procedural("city", {{"vertices", "40000"}, {"triangles", "20000"}}), ParamError);
+    EXPECT_THROW(generate_procedural("forest", {{"vertices", "100"}}), ParamError);
+}
+
 TEST(Procedural, BadKindsAndParametersAreErrors) {
     try {
         make_procedural("jungle", {});

@@ -147,6 +147,21 @@ std::vector<ParamSpec> size_and_seed(const char* default_triangles, const char* 
     };
 }
 
+// The forest's and the city's sizes: by triangles or, as the report counts its scenes
+// (its #Primitives are vertex counts), by vertices.
+std::vector<ParamSpec> scene_size(const char* default_triangles, const char* help) {
+    std::vector<ParamSpec> specs = size_and_seed(default_triangles, help);
+    specs.push_back({"vertices",
+                     ParamType::Int,
+                     "0",
+                     {},
+                     0,
+                     1.5e8,
+                     "size by vertices instead (0: by triangles): the largest scene with at most this many "
+                     "vertices; not together with triangles"});
+    return specs;
+}
+
 // ---- forest ----------------------------------------------------------------------------
 //
 // The Trees scene's character (report 5.3.1): most triangles are small leaves packed into
@@ -656,22 +671,57 @@ ProceduralScene make_soup(const ParamSet& p) {
     return out;
 }
 
+// The largest scene of the kind with at most `want` vertices. Vertices grow with the
+// triangle target at a nearly fixed ratio (forest ~3: its leaves are lone triangles; city
+// ~2: quads and boxes) but in steps (the layout changes with the size), so the target is
+// found by search: secant steps on the ratio, then single steps to the largest target
+// that does not exceed `want`. Each step generates the scene (tens of ms at the report's
+// sizes).
+ProceduralScene sized_by_vertices(const ProceduralInfo& info, const std::map<std::string, std::string>& given,
+                                  int64_t want) {
+    auto make = [&](int64_t triangles) {
+        std::map<std::string, std::string> p = given;  // keeps `vertices`: the name says how it was sized
+        p["triangles"] = std::to_string(triangles);
+        return info.generate(resolve_params(info.name, info.params, p, "procedural scene"));
+    };
+    auto vertices = [](const ProceduralScene& s) { return int64_t(s.scene.vertices.size()); };
+    const int64_t lowest = 1000;
+    int64_t t = std::max(lowest, want / 2);
+    ProceduralScene s = make(t);
+    for (int step = 0; step < 8 && vertices(s) != want; ++step) {
+        const double ratio = double(vertices(s)) / double(t);
+        const int64_t next = std::max(lowest, int64_t(double(want) / ratio));
+        if (next == t) break;
+        t = next;
+        s = make(t);
+    }
+    while (vertices(s) > want) {
+        if (t == lowest)
+            throw ParamError("procedural scene '" + info.name + "': vertices=" + std::to_string(want) +
+                             " is fewer than its smallest scene has (" + std::to_string(vertices(s)) + ")");
+        s = make(--t);
+    }
+    for (ProceduralScene up = make(t + 1); vertices(up) <= want; up = make(++t + 1)) s = std::move(up);
+    return s;
+}
+
 }  // namespace
 
 const std::vector<ProceduralInfo>& procedural_registry() {
     static const std::vector<ProceduralInfo> registry = [] {
         std::vector<ProceduralInfo> r;
-        r.push_back({"forest",
-                     "procedural analog of the report's Trees scene (5.3.1), not that model: groves of broad-leaved "
-                     "trees and conifers whose leaves are dense clusters of small triangles, on a large ground plane "
-                     "under an empty sky",
-                     size_and_seed("252000", "total triangle count (exact; the report's Trees scene has 252,178)"),
-                     make_forest});
+        r.push_back(
+            {"forest",
+             "procedural analog of the report's Trees scene (5.3.1), not that model: groves of broad-leaved "
+             "trees and conifers whose leaves are dense clusters of small triangles, on a large ground plane "
+             "under an empty sky",
+             scene_size("252000", "total triangle count (exact; the report's Trees scene has 252,178 primitives)"),
+             make_forest});
         r.push_back(
             {"city",
              "procedural analog of the report's Sci-Fi Tropical City (5.3.2), not that model: a street grid "
              "of set-back buildings with inset windows, cornices, rooftop machinery and palms, filling the view",
-             size_and_seed("91000", "total triangle count (exact; the report's city has 90,811)"), make_city});
+             scene_size("91000", "total triangle count (exact; the report's city has 90,811 primitives)"), make_city});
         std::vector<ParamSpec> soup = size_and_seed("10000", "number of triangles");
         soup[0].min = 1;
         soup.push_back(
@@ -695,7 +745,11 @@ ProceduralScene generate_procedural(const std::string& kind, const std::map<std:
         throw ParamError(
             unknown_name("procedural scene", kind, names_of(procedural_registry(), &ProceduralInfo::name)));
     ParamSet set = resolve_params(kind, info->params, params, "procedural scene");
-    ProceduralScene scene = info->generate(set);
+    const bool by_vertices = set.given("vertices") && set.get_int("vertices") > 0;
+    if (by_vertices && set.given("triangles"))
+        throw ParamError("procedural scene '" + kind + "': give triangles or vertices, not both");
+    ProceduralScene scene =
+        by_vertices ? sized_by_vertices(*info, params, set.get_int("vertices")) : info->generate(set);
     if (resolved) *resolved = std::move(set);
     return scene;
 }
