@@ -110,11 +110,11 @@ test-sanitize: deps
 # continues. The driver: analysis/accelbench_analysis/reproduce.py. REPORT.md compares
 # the run with the report and the committed reference run (results/reference/).
 # The configs of the job, in order (add one here):
-REPRODUCE_CONFIGS := table2 table4 table5 faithful faithful-unshaded ablations scaling ray-sets thread-scaling
+REPRODUCE_CONFIGS := table2 table4 table5 faithful faithful-unshaded scaling ray-sets thread-scaling
 SCALING_CONFIG    := scaling
 ifneq ($(QUICK),)
 # QUICK=1: reduced configs (smaller models and images, one repetition), no cost images.
-REPRODUCE_CONFIGS := quick-table2 quick-tables quick-faithful quick-ablations scaling-quick
+REPRODUCE_CONFIGS := quick-table2 quick-tables quick-faithful scaling-quick
 SCALING_CONFIG    := scaling-quick
 endif
 REFERENCE_RUN := results/reference
