@@ -133,7 +133,7 @@ def write_tables_of(data: Loaded, out: Path) -> list[Path]:
 
 
 def write_claims_of(data: Loaded, out: Path):
-    from .outputs.report.claims import write_claims
+    from .outputs.report.claims_output import write_claims
 
     return write_claims(data.with_ablations, data.report_nums, out / "tables", data.reference)
 

@@ -6,16 +6,16 @@ from __future__ import annotations
 
 from synthetic import BVH, KD, LBVH, row, write_csv
 
-from accelbench_analysis.inputs.schema import load_results
+from accelbench_analysis.inputs.load import load_results
 from accelbench_analysis.mapping.spread import claim_spread, measured_spread
-from accelbench_analysis.outputs.claim_matrix import (
+from accelbench_analysis.outputs.report.claim_matrix import (
     cause_text,
     evaluate_matrix,
     flipping_factors,
     matrix_frame,
     within_noise,
 )
-from accelbench_analysis.outputs.claims import CLAIMS, FAILS, HOLDS
+from accelbench_analysis.outputs.report.claims import CLAIMS, FAILS, HOLDS
 
 CLAIM = {c.id: c for c in CLAIMS}
 TABLE4 = ("stanford-bunny", "igea", "stanford-dragon", "happy-buddha-100k")

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from synthetic import BVH, KD, LBVH, row, write_csv
 
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.outputs.claim_matrix import evaluate_matrix
-from accelbench_analysis.outputs.claim_verdicts import (
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.report.claim_matrix import evaluate_matrix
+from accelbench_analysis.outputs.report.claim_verdicts import (
     FAILS,
     HOLDS,
     SUMMARY_ROWS,
@@ -16,7 +16,7 @@ from accelbench_analysis.outputs.claim_verdicts import (
     summary_markdown,
     verdicts_frame,
 )
-from accelbench_analysis.outputs.claims import CLAIMS, ReportSource, evaluate
+from accelbench_analysis.outputs.report.claims import CLAIMS, ReportSource, evaluate
 
 CLAIM = {c.id: c for c in CLAIMS}
 

@@ -53,7 +53,21 @@ def test_claims_md_has_every_claim(everything):
     text = (everything / "tables" / "claims.md").read_text()
     for cid in ("5.1-b", "5.2-c", "5.3-a", "6-d"):
         assert f"| {cid} |" in text
-    assert "do not support: 5.1-b, 5.3-b" in text
+    assert "do not support: 5.1-b, 5.1-k, 5.3-b" in text
+
+
+def test_one_claims_summary_in_claims_md_report_md_and_the_page(everything):
+    claims = (everything / "tables" / "claims.md").read_text().splitlines()
+    start = next(i for i, x in enumerate(claims) if x.startswith("Our default renders are unshaded"))
+    end = next(i for i, x in enumerate(claims) if x.startswith("| 6-"))  # the matrix's last rows
+    block = "\n".join(claims[start:end])
+    assert block in (everything / "REPORT.md").read_text()
+    page = (everything / "index.html").read_text()
+    for line in claims[start:end]:
+        if line.startswith(("| holds |", "| within noise", "| not comparable |")):
+            label, default, faithful = (c.strip() for c in line.strip("|").split("|"))
+            html = f'<td>{label}</td>\n<td class="num">{default}</td>\n<td class="num">{faithful}</td>'
+            assert html in page, label
 
 
 def test_bad_csv_exits_2_naming_columns(tmp_path, capsys):

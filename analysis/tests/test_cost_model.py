@@ -1,6 +1,6 @@
-"""The cost model of render time (outputs/cost_model.py): the fit recovers a known floor and
-cost per test, the floored source replaces exactly the floor, and the claims notes that
-read the ablation rows (complete trees, what N is) and the ordered traversal."""
+"""The cost model of render time (outputs/report/cost_model.py): the fit recovers a known floor
+and cost per test, each sweep is fitted alone and the pooled residuals split by sweep, and
+the table notes that read the claims-only rows (complete trees, what N is)."""
 
 import pandas as pd
 import pytest
@@ -60,47 +60,30 @@ class Sweep:
 TESTS = {s: 1e6 * (i + 1) ** 2 for i, s in enumerate(cm.SWEEPS["maxPrims"] + cm.SWEEPS["maxDepth"])}
 
 
-def test_floored_source_swaps_our_floor_for_the_reports_in_tests_worth():
-    report = Sweep(9.0, 0.2e-6, TESTS)  # floor: 45M tests' worth
-    ours = Sweep(0.05, 5e-9, TESTS)  # floor: 10M tests' worth
-    fr, fo = cm.fit_all(report, cl.Missing), cm.fit_all(ours, cl.Missing)
-    assert set(fr) == {"maxPrims", "maxDepth", "Table 2"}
-    floored = cm.FlooredSource(ours, fo, fr)
-    s = "maxDepth=10"
-    # render' = b_ours * (tests + a_report / b_report): our cost per test, the report's floor.
-    assert floored.get(cm.SWEEP_MODEL, "kdtree", "render", s) == pytest.approx(5e-9 * (TESTS[s] + 45e6))
-    # Everything else is ours, unchanged.
-    assert floored.get(cm.SWEEP_MODEL, "kdtree", "prim_tests", s) == TESTS[s]
-    assert floored.get(cm.SWEEP_MODEL, "kdtree", "build", s) == 1.0
-    # A sweep that cannot be fitted on one side gives no floored source.
-    with pytest.raises(ValueError):
-        cm.FlooredSource(ours, {"maxPrims": fo["maxPrims"]}, fr)
-    rows = cm.cost_model_rows(list(fr.values()) + list(fo.values()))
-    assert list(rows.columns) == list(cm.CSV_COLUMNS)
-    assert len(rows) == 2 * (3 + 4 + 7)
+class Shifted(Sweep):
+    """The depth sweep measured 5 s slower than the maxPrims sweep's line."""
+
+    def get(self, model, structure, metric, setting="default"):
+        v = super().get(model, structure, metric, setting)
+        return v + 5.0 if metric == "render" and setting in cm.SWEEPS["maxDepth"] else v
 
 
-def test_the_floor_decides_a_ratio_claim():
-    # 5.1-d, "maxPrims 1 -> 100 raises render time ~1.2x": with a negligible floor our ratio
-    # is the ratio of tests; with the report's floor in tests' worth it compresses to ~1.2x.
-    tests = dict(TESTS, **{"maxPrims=1": 1e6, "maxPrims=10": 2e6, "maxPrims=100": 12e6})
-    ours, report = Sweep(0.001, 5e-9, tests), Sweep(20.0, 0.4e-6, tests)  # report floor 50M
-    claim = next(c for c in cl.CLAIMS if c.id == "5.1-d")
-    assert cl.evaluate(claim, ours).verdict == cl.FAILS
-    floored = cm.FlooredSource(ours, cm.fit_all(ours, cl.Missing), cm.fit_all(report, cl.Missing))
-    assert cl.evaluate(claim, floored).verdict == cl.HOLDS  # (50M + 12M) / (50M + 1M) = 1.22
-
-
-def test_ordered_traversal_verdict_is_noted_where_it_differs():
-    c = cl.Claim("t-1", "5.3", "kd-tree renders fastest", lambda src: (True, "x"))
-    r = cl.ClaimRow(c, cl.Finding(cl.HOLDS, "r"), cl.Finding(cl.HOLDS, "ours"))
-    r.verdict = cl.HOLDS
-    cl.note_traversal(r, cl.Finding(cl.FAILS, "BVH 0.27 < kd-tree 0.32"))
-    assert r.ordered is not None and "holds only with the report's traversal" in r.reason
-    assert "BVH 0.27 < kd-tree 0.32" in r.reason
-    same = cl.ClaimRow(c, cl.Finding(cl.HOLDS, "r"), cl.Finding(cl.HOLDS, "ours"))
-    cl.note_traversal(same, cl.Finding(cl.HOLDS, "ours"))
-    assert same.ordered is None and same.reason == ""
+def test_each_sweep_is_fitted_alone_and_a_pooled_fit_splits_by_sweep():
+    src = Shifted(9.0, 0.2e-6, TESTS)
+    fits = cm.fit_all(src, cl.Missing)
+    assert set(fits) == {"maxPrims", "maxDepth"}  # no pooled fit
+    assert fits["maxPrims"].fit.a == pytest.approx(9.0) and fits["maxDepth"].fit.a == pytest.approx(14.0)
+    assert all(f.fit.r2 == pytest.approx(1.0) for f in fits.values())
+    pooled = cm.pooled_residuals(src, cl.Missing)
+    assert pooled["maxPrims"] < -0.5 and pooled["maxDepth"] > 0.5  # the 5 s shift, split
+    text = "\n".join(cm.cost_model_lines(fits, fits, pooled))
+    assert "split by sweep" in text and "Table 2 sweep" not in text
+    rows = cm.cost_model_rows(list(fits.values()))
+    assert list(rows.columns) == list(cm.CSV_COLUMNS) and set(rows["sweep"]) == {"maxPrims", "maxDepth"}
+    assert len(rows) == 3 + 4  # each point once, labelled by its sweep
+    # A sweep with a missing point is not fitted, and no pooled residuals are claimed.
+    cut = Sweep(9.0, 0.2e-6, {k: v for k, v in TESTS.items() if k != "maxDepth=5"})
+    assert set(cm.fit_all(cut, cl.Missing)) == {"maxPrims"} and cm.pooled_residuals(cut, cl.Missing) == {}
 
 
 def test_complete_trees_note_reads_the_ablation_rows():
@@ -143,62 +126,6 @@ def test_complete_trees_note_reads_the_ablation_rows():
     assert "sah" not in text  # only median-split rows
     # No complete tree in the report's numbers: no note.
     assert note_complete_trees(report_nums[report_nums["model"] == "trees"], ["trees"], abl) is None
-
-
-def test_an_ablation_on_another_model_fits_its_own_floor(tmp_path, report_nums):
-    # The floor ablation at the report's Table 2 settings reads the kd-tree sweep of
-    # bunny-35947 (b_e 0, primary rays, mailboxes) for the report's bunny, fits our floor on
-    # those rows, and replays them with the report's floor in tests' worth.
-    from synthetic import KD, row, write_csv
-
-    from accelbench_analysis.inputs.load import load_results
-
-    settings = {"maxPrims=1": (1, "auto"), "maxPrims=10": (10, "auto"), "maxPrims=100": (100, "auto")}
-    settings.update({f"maxDepth={d}": (1, str(d)) for d in (5, 10, 28, 100)})
-    a, b = 0.01, 5e-9
-    rows = []
-    for i, (mp, md) in enumerate(settings.values()):
-        t = 1e6 * (i + 1) ** 2
-        params = dict(KD, build="nlogn", max_prims=str(mp), max_depth=md, empty_bonus="0", mailbox="true")
-        rows.append(
-            row(
-                "bunny-35947",
-                "kdtree",
-                params,
-                build=0.1,
-                render=a + b * t,
-                prim_tests=t,
-                config="ablations-primary",
-            )
-        )
-        plain = dict(KD, build="nlogn", max_prims=str(mp), max_depth=md, mailbox="false")
-        rows.append(
-            row(
-                "stanford-bunny",
-                "kdtree",
-                plain,
-                build=0.2,
-                render=1.0 + i,
-                prim_tests=1e5 * (i + 1),
-                config="table2",
-            )
-        )
-    results = load_results([write_csv(tmp_path / "t2.csv", rows)])
-    abl = next(x for x in cl.ABLATIONS if x.cost_model and x.models)
-    assert abl.describe().endswith("on bunny-35947 for bunny")
-    fits = cl.sweep_fits(results, report_nums)
-    src = abl.source(results, report_nums, fits)
-    report_floor = fits[0]["maxDepth"].fit.floor_tests
-    t5 = 1e6 * 4**2  # maxDepth=5 is the fourth setting
-    assert src.get("stanford-bunny", "kdtree", "render", "maxDepth=5") == pytest.approx(
-        b * (t5 + report_floor)
-    )
-    assert src.get("stanford-bunny", "kdtree", "build", "maxDepth=5") == 0.1
-    # The plain floor ablation reads the table's bunny rows.
-    plain = next(x for x in cl.ABLATIONS if x.cost_model and not x.models)
-    assert (
-        plain.source(results, report_nums, fits).get("stanford-bunny", "kdtree", "build", "maxDepth=5") == 0.2
-    )
 
 
 def test_what_n_note_reads_the_kd_tree_at_table_3s_settings_only(tmp_path, report_nums):

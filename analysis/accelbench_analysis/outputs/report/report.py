@@ -10,7 +10,8 @@ from ...inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
 from ...inputs.schema import FP_MODE_COLUMN, Results
 from ...mapping.formatting import md_escape
 from ..figures.figures import FIGURES, Skipped
-from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow, reference_ablation_text, summary_line
+from .claim_verdicts import summary_with_matrix
+from .claims_output import ClaimsResult, plain_statements
 from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
 
 TABLE_CAPTIONS = {
@@ -63,53 +64,32 @@ def stand_in_lines() -> list[str]:
     return out
 
 
-def claims_lines(rows: list[ClaimRow] | None) -> list[str]:
-    if not rows:
-        return ["- [The report's claims, checked](tables/claims.md)"]
-    n = {v: sum(r.ours.verdict == v for r in rows) for v in (HOLDS, FAILS, NOT_COMPARABLE)}
-    out = [
-        f"- [The report's claims, checked](tables/claims.md) ([CSV](tables/claims.csv)): each "
-        f"claim of sections 5.1-6 evaluated on the report's numbers and on ours, with a class "
-        f"and a measured reason for each that does not hold. Ours: **{n[HOLDS]} hold, "
-        f"{n[FAILS]} do not hold, {n[NOT_COMPARABLE]} not comparable**. {summary_line(rows)}"
+def claims_lines(result: ClaimsResult | None) -> list[str]:
+    """The claims' link in the tables list."""
+    link = "- [The report's claims, checked](tables/claims.md)"
+    if result is None:
+        return [link]
+    return [
+        link + " ([CSV](tables/claims.csv); every claim under every setting: "
+        "[tables/claims_factors.csv](tables/claims_factors.csv), [heat map](figures/claims_factors.png))"
     ]
-    fails = [r for r in rows if r.ours.verdict == FAILS]
-    if fails:
-        out.append(
-            "  Not holding here: "
-            + "; ".join(
-                f"{r.claim.id} {md_escape(r.claim.text)} [{r.cls}: {md_escape(r.reason)}]" for r in fails
-            )
-            + "."
-        )
-    dependent = [r for r in rows if r.machine_dependent]
-    if dependent:
-        out.append(
-            "  Machine-dependent (the verdict differs on the committed reference run): "
-            + "; ".join(
-                f"{r.claim.id} (here {r.ours.verdict}, reference run {r.reference.verdict}: "
-                + (
-                    "within this run's timing spread, so noise)"
-                    if r.flip_within_noise
-                    else "beyond this run's timing spread)"
-                )
-                for r in dependent
-            )
-            + "."
-        )
-    elif any(r.reference is not None for r in rows):
-        out.append(
-            "  Every claim judged on both has the same verdict here as on the committed reference run."
-        )
-    if any(r.reference is not None for r in rows):
-        out.append("  " + reference_ablation_text(rows))
-    unsupported = [r for r in rows if r.report.verdict == FAILS]
-    if unsupported:
-        out.append(
-            "  Not supported by the report's own numbers: "
-            + "; ".join(f"{r.claim.id} ({md_escape(r.report.evidence)})" for r in unsupported)
-            + "."
-        )
+
+
+def claims_section(result: ClaimsResult | None) -> list[str]:
+    """The one summary of the claims (the same lines as claims.md's), what a reader must
+    know before it, and the claims whose verdict differs on the committed reference run."""
+    if result is None:
+        return []
+    out = ["", "## The report's claims", ""] + plain_statements(result)
+    out += summary_with_matrix(result.rows, result.matrix)
+    if result.reference is not None:
+        dependent = result.machine_dependent()
+        out += [
+            "",
+            "Machine-dependent (holds at default on one run, not on the committed reference run): "
+            + (", ".join(dependent) if dependent else "none")
+            + ".",
+        ]
     return out
 
 
@@ -212,7 +192,7 @@ def comparison_lines(
 def report_markdown(
     results: Results,
     out_dir: Path,
-    claims: list[ClaimRow] | None,
+    claims: ClaimsResult | None,
     figures: dict | None,
     comparison: list[ThreeWay] | None = None,
     reference: Results | None = None,
@@ -239,6 +219,7 @@ def report_markdown(
             out.append(f"- {caption} Not generated yet.")
     out += claims_lines(claims)
     out += ["- [The report's numbers](report/report-tables.csv) as printed ([provenance](report/README.md))."]
+    out += claims_section(claims)
     out += cost_model_section(out_dir)
     out += ["", "## Figures", ""] + figure_lines(out_dir, figures)
     out += beyond_report_lines(out_dir)
@@ -268,7 +249,7 @@ def report_markdown(
 def write_report(
     results: Results,
     out_dir: Path,
-    claims: list[ClaimRow] | None = None,
+    claims: ClaimsResult | None = None,
     figures: dict | None = None,
     comparison: list[ThreeWay] | None = None,
     reference: Results | None = None,

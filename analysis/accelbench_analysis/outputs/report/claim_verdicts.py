@@ -16,13 +16,14 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
-from ..inputs.report_numbers import REPORT_MODEL, TABLE4_MODELS
-from ..inputs.schema import Results
-from ..mapping.settings import DEFAULT, FAITHFUL, SETTINGS
-from ..mapping.spread import Spread
+from ...inputs.report_numbers import REPORT_MODEL, TABLE4_MODELS
+from ...inputs.schema import Results
+from ...mapping.formatting import fmt_sig, md_escape
+from ...mapping.settings import DEFAULT, FAITHFUL, SETTINGS
+from ...mapping.spread import Spread
+from .claim_checks import short
 from .claim_matrix import Matrix, cause_text, matrix_markdown, within_noise
-from .claims import FAILS, HOLDS, NOT_COMPARABLE, Claim, Finding, Missing, short
-from .formatting import fmt_sig, md_escape
+from .claims import FAILS, HOLDS, NOT_COMPARABLE, Claim, Finding, Missing
 
 BY_CONSTRUCTION, WITHIN_NOISE = "by construction", "within noise"
 VERDICTS = (HOLDS, FAILS, WITHIN_NOISE, BY_CONSTRUCTION, NOT_COMPARABLE)

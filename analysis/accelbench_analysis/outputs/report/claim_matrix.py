@@ -11,99 +11,22 @@ factor whose switch flips its faithful verdict, or "no single factor".
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.schema import Results
-from ..mapping.selection import Picker, setting_spec
-from ..mapping.settings import CLAIMS_ONLY_CONFIGS, DEFAULT, FAITHFUL, SETTINGS, Setting
-from ..mapping.spread import Spread, claim_spread
-from . import claims_more  # noqa: F401  (registers its claims)
-from .claims import (
-    CLAIMS,
-    FAILS,
-    HOLDS,
-    NOT_COMPARABLE,
-    STRUCTURE_SHORT,
-    Claim,
-    Finding,
-    Missing,
-    OurSource,
-    evaluate,
-    holds_within,
-)
-from .tables import METRIC, preferred_variant
+from ...inputs.schema import Results
+from ...mapping.settings import DEFAULT, FAITHFUL, SETTINGS, Setting
+from ...mapping.spread import Spread, claim_spread
+from .claims import CLAIMS, FAILS, HOLDS, NOT_COMPARABLE, Claim, Finding, OurSource, evaluate, holds_within
 
 MATRIX_COLUMNS = ("claim", "setting", "value", "verdict")
 NOT_MEASURED = "not measured"
-# Metrics of ours beyond the tables' (the report prints none of these).
-OUR_COLUMN = {"depth": "tree_depth"}
 
 
-class SettingSource(OurSource):
-    """Our numbers at one setting: the rows of its configs, each structure's rows with the
-    setting's parameters (a model's own values replacing the structure's), its model
-    labels. Remembers the (combo_id, metric) pairs a claim read, for its spread."""
-
-    def __init__(self, results: Results, report_nums: pd.DataFrame, setting: Setting):
-        rows = results.rows
-        if "config" in rows:
-            keep = (
-                rows["config"].isin(setting.configs)
-                if setting.configs
-                else ~rows["config"].isin(CLAIMS_ONLY_CONFIGS)
-            )
-            rows = rows[keep]
-        super().__init__(replace(results, rows=rows), report_nums, extra={"": ()})
-        self.results = replace(results, rows=rows)
-        self.picker = Picker(self.results)
-        self.setting = setting
-        present = self.picker.models
-        self.models = {
-            m: next((label for label in labels if label in present), labels[0])
-            for m, labels in setting.models_of().items()
-        }
-        self.read: set[tuple[str, str]] = set()
-        self.models_read: set[str] = set()
-
-    def begin(self) -> None:
-        super().begin()
-        self.read = set()
-        self.models_read = set()
-
-    def get(self, model: str, structure: str, metric: str, setting: str = "default") -> float:
-        if metric == "total":
-            return self.get(model, structure, "build", setting) + self.get(
-                model, structure, "render", setting
-            )
-        self.models_read.add(model)
-        ours = self.model(model)
-        # "threads=N": the structure at the report's setting built on N threads.
-        threads = setting.partition("=")[2] if setting.startswith("threads=") else None
-        spec = setting_spec("default" if threads else setting, structure, self.picker, ours, self.depths)
-        wanted = dict(spec.required)
-        wanted.update(self.setting.params_of(structure, model))
-        if threads:
-            wanted["threads"] = threads
-        spec = replace(spec, required=tuple(wanted.items()))
-        variants = self.picker.variants([ours], spec)
-        variant = wanted.get("traversal") if "traversal" in wanted else preferred_variant(variants)
-        pick = self.picker.pick(ours, spec, variant if variant in variants else None)
-        what = f"{STRUCTURE_SHORT.get(structure, structure)} ({setting}) on {ours}"
-        if not pick.ok:
-            raise Missing(f"{what}: {pick.reason}")
-        v = pick.value(OUR_COLUMN.get(metric) or METRIC[metric].ours)
-        if v is None:
-            raise Missing(f"{what} has no {metric}")
-        self._groups.add(str(pick.row["prov_group"]))
-        self.read.add((str(pick.row.get("combo_id", "")), metric))
-        return v
-
-
-def setting_source(results: Results, report_nums: pd.DataFrame, setting: Setting) -> SettingSource:
-    return SettingSource(results, report_nums, setting)
+def setting_source(results: Results, report_nums: pd.DataFrame, setting: Setting) -> OurSource:
+    return OurSource(results, report_nums, setting)
 
 
 @dataclass
@@ -124,7 +47,7 @@ class Matrix:
     """cells[claim id][setting name]; sources[setting name]."""
 
     cells: dict[str, dict[str, Cell]]
-    sources: dict[str, SettingSource]
+    sources: dict[str, OurSource]
 
     def verdict(self, claim_id: str, setting: str) -> str:
         return self.cells[claim_id][setting].verdict

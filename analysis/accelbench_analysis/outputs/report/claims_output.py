@@ -9,8 +9,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.schema import Results
-from ..mapping.settings import DEFAULT, FAITHFUL, SETTING
+from ...inputs.schema import Results
+from ...mapping.formatting import md_escape
+from ...mapping.settings import DEFAULT, FAITHFUL, SETTING
 from .claim_matrix import Matrix, evaluate_matrix, flipping_factors, setting_source, write_matrix
 from .claim_verdicts import (
     ClaimVerdicts,
@@ -21,8 +22,7 @@ from .claim_verdicts import (
     verdicts_frame,
 )
 from .claims import CLAIMS, FAILS, HOLDS, Finding, Missing, ReportSource, evaluate, tolerance_text
-from .cost_model import cost_model_lines, fit_all, write_cost_model
-from .formatting import md_escape
+from .cost_model import cost_model_lines, fit_all, pooled_residuals, write_cost_model
 
 
 @dataclass
@@ -69,8 +69,7 @@ def plain_statements(result: ClaimsResult) -> list[str]:
 def claims_markdown(result: ClaimsResult, results: Results, report_src: ReportSource) -> str:
     out = ["# The report's claims, checked", ""]
     out += [f"> **Warning:** {md_escape(w)}\n" for w in results.warnings]
-    out += summary_with_matrix(result.rows, result.matrix)
-    out += [""] + plain_statements(result)
+    out += plain_statements(result) + summary_with_matrix(result.rows, result.matrix) + [""]
     out += [
         "Settings: "
         + "; ".join(f"**{s.name}**: {s.factor or 'every reading of the report'}" for s in SETTING.values()),
@@ -78,6 +77,8 @@ def claims_markdown(result: ClaimsResult, results: Results, report_src: ReportSo
         tolerance_text(),
         "",
     ]
+    unsupported = [r.claim.id for r in result.rows if r.report.verdict == FAILS]
+    out += [f"The report's own numbers do not support: {', '.join(unsupported) or 'none'}.", ""]
     dependent = result.machine_dependent()
     if result.reference is not None:
         out += [
@@ -100,7 +101,8 @@ def write_cost_model_files(results: Results, report_nums: pd.DataFrame, out_dir:
     if not report_fits:
         return
     write_cost_model(report_fits, our_fits, out_dir)
-    text = ["# A cost model of render time", ""] + cost_model_lines(report_fits, our_fits)
+    pooled = pooled_residuals(ReportSource(report_nums), Missing)
+    text = ["# A cost model of render time", ""] + cost_model_lines(report_fits, our_fits, pooled)
     (out_dir / "cost_model.md").write_text("\n".join(text) + "\n")
 
 
