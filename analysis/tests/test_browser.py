@@ -101,7 +101,7 @@ def test_run_page_in_chromium(analysed_run):
     pngs = {f"figures/{p.name}" for p in (analysed_run / "figures").glob("*.png")}
     assert set(r.facts["images"]) == pngs and all(r.facts["images"].values()), r.facts["images"]
     specs = {f"figures/{p.name}" for p in (analysed_run / "figures").glob("*.vl.json")}
-    assert len(specs) == 5 and set(r.facts["figures"]) == specs
+    assert len(specs) == 6 and set(r.facts["figures"]) == specs  # claims_factors.vl.json among them
     assert all(n > 0 for n in r.facts["figures"].values()), r.facts["figures"]
     assert r.facts["filters"] == r.facts["tables"] > 10
 
