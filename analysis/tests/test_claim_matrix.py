@@ -106,3 +106,6 @@ def test_a_margin_inside_a_measured_between_process_spread_is_within_noise(tmp_p
     inside, spread = within_noise(m, res, CLAIM["5.2-a"], "default")
     assert inside and spread.value > 0.16 and "between 2 measurements" in spread.how
     assert claim_spread(res, [("lbvh-bunny", "nodes")]).value == 0  # counts are exact
+    # Any build time of this run may move as far as the run's widest gap shows.
+    other_combo = claim_spread(res, [("igea-bvh", "build")])
+    assert other_combo.value > 0.16 and "widest gap" in other_combo.how
