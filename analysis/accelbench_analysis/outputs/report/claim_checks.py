@@ -413,7 +413,7 @@ def tolerance_text() -> str:
     lo12, hi12 = approx_range(1.2)
     lo2, hi2 = approx_range(2)
     return (
-        f"Tolerances (accelbench_analysis/claims.py): '~N x' holds when the measured factor "
+        f"Tolerances (outputs/report/claim_checks.py): '~N x' holds when the measured factor "
         f"lies within a factor {APPROX_FACTOR} of N and keeps at least "
         f"{APPROX_MIN_EFFECT:.0%} of the claimed effect in log terms (~1.2x accepts "
         f"{fmt_sig(lo12)}-{fmt_sig(hi12)}x, ~2x accepts {fmt_sig(lo2)}-{fmt_sig(hi2)}x); "

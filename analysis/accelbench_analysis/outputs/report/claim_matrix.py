@@ -52,9 +52,6 @@ class Matrix:
     def verdict(self, claim_id: str, setting: str) -> str:
         return self.cells[claim_id][setting].verdict
 
-    def spread(self, results: Results, claim_id: str, setting: str) -> Spread:
-        return claim_spread(results, self.cells[claim_id][setting].read)
-
 
 def evaluate_matrix(results: Results, report_nums: pd.DataFrame, claims: list[Claim] | None = None) -> Matrix:
     cells: dict[str, dict[str, Cell]] = {c.id: {} for c in claims or CLAIMS}
