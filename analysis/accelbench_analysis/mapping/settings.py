@@ -48,9 +48,6 @@ class Setting:
                 base.update(ps)
         return tuple(base.items())
 
-    def models_of(self) -> dict[str, tuple[str, ...]]:
-        return dict(self.models)
-
 
 def _with(
     params: tuple[tuple[str, Params], ...], structure: str, **values: str
@@ -124,5 +121,3 @@ SETTINGS: list[Setting] = [
     ),
 ]
 SETTING = {s.name: s for s in SETTINGS}
-# The settings of the matrix that switch one factor back (not the labelled variants).
-FACTOR_SETTINGS = [s for s in SETTINGS if s.factor and s.name != DEFAULT and not s.by_construction]
