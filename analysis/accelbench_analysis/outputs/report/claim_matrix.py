@@ -17,7 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from ...inputs.schema import Results
-from ...mapping.settings import DEFAULT, FAITHFUL, SETTINGS, Setting
+from ...mapping.settings import DEFAULT, FAITHFUL, SETTING, SETTINGS, Setting
 from ...mapping.spread import Spread, claim_spread
 from .claims import CLAIMS, FAILS, HOLDS, NOT_COMPARABLE, Claim, Finding, OurSource, evaluate, holds_within
 
@@ -103,7 +103,8 @@ def cause_text(matrix: Matrix, claim_id: str) -> str:
     if f not in (HOLDS, FAILS):
         return "not judged at the faithful setting"
     if flips:
-        return "flipped by " + ", ".join(flips)
+        cited = [SETTING[n].evidence for n in flips if SETTING[n].evidence]
+        return "flipped by " + ", ".join(flips) + "".join(f" ({e})" for e in cited)
     if d in (HOLDS, FAILS) and d != f:
         return "no single factor (default and faithful differ; no one switch flips it)"
     judged = {c.verdict for c in at.values()} - {NOT_COMPARABLE}

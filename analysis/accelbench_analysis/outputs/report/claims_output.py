@@ -72,7 +72,12 @@ def claims_markdown(result: ClaimsResult, results: Results, report_src: ReportSo
     out += plain_statements(result) + summary_with_matrix(result.rows, result.matrix) + [""]
     out += [
         "Settings: "
-        + "; ".join(f"**{s.name}**: {s.factor or 'every reading of the report'}" for s in SETTING.values()),
+        + "; ".join(
+            f"**{s.name}**: {s.factor or 'every reading of the report'}"
+            + (f" ({s.evidence})" if s.evidence else "")
+            for s in SETTING.values()
+        )
+        + ". The faithful setting's readings and their evidence: configs/faithful.yaml, docs/decisions.md.",
         "",
         tolerance_text(),
         "",
