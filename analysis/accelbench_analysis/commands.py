@@ -4,8 +4,8 @@ it wrote (the command line prints it) or an exit code; bad input raises one of B
 
 {check,tables,claims,figures,report,all} read harness CSVs (`Sources`); the others are
 `regress` (the CI regression check), `grid` / `grid-halve` (parameter grid search),
-`scaling`, `cost-images`, `robustness` (the extreme-case catalogue's verdicts), `html`
-and `history`."""
+`scaling`, `cost-images`, `robustness` (the extreme-case catalogue's verdicts), `html`,
+`compare` (two runs side by side) and `history`."""
 
 from __future__ import annotations
 
@@ -220,6 +220,31 @@ def html(run_dirs: list[Path]) -> list[Path]:
     from .outputs.pages.run_page import write_run_page
 
     return [write_run_page(d) for d in run_dirs]
+
+
+def compare(a: Path, b: Path, out: Path | None = None, fail_above: float | None = None) -> int:
+    """Run B against run A (run directories or results CSVs): prints the Markdown, writes
+    OUT/compare.md and OUT/compare.html when OUT is given. Exit 1 when --fail-above is given
+    and a trace time changed by more than that ratio (B/A), else 0."""
+    from .outputs.ci.compare import compare_markdown, compare_runs, load_run, worst_ratio
+    from .outputs.pages.markdown_html import to_html
+    from .outputs.pages.page import page, write_page
+
+    result = compare_runs(load_run(a), load_run(b), str(a), str(b))
+    text = compare_markdown(result)
+    print(text, end="")
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "compare.md").write_text(text)
+        write_page(out / "compare.html", page(f"accelbench: {b} against {a}", to_html(text)))
+        print(f"wrote {out / 'compare.md'} and {out / 'compare.html'}", file=sys.stderr)
+    if fail_above is not None and worst_ratio(result) > fail_above:
+        print(
+            f"compare: a trace time changed by {worst_ratio(result):.3f}x, above {fail_above:g}",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
 
 
 def history(results: Path = Path("results"), out: Path | None = None, repo: Path = Path(".")) -> int:
