@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from synthetic import BVH, EMBREE, row, write_csv
+from synthetic import BVH, EMBREE, PROVENANCE, row, write_csv
 
 from accelbench_analysis.cli import main
 from accelbench_analysis.outputs.figures.figures import structure_frame
@@ -240,6 +240,24 @@ def test_history_one_row_per_commit_combination_and_measure(machine):
     order = h.drop_duplicates("commit").set_index("commit")["commit_order"]
     assert order[first[:7]] < order[second[:7]]
     assert set(h["subject"]) == {"first change", "second change"}
+
+
+def test_history_keeps_machines_apart(machine):
+    """A run of the first commit on another CPU is its own series, never merged into the
+    first machine's median, and its counts are no step of the first machine's."""
+    repo, results, first, second = machine
+    rows = bvh_and_embree(first, "2024-01-05T00:00:00Z", 130, 4.0)
+    for r in rows:
+        r["prov"]["cpu"] = "Other CPU"
+    main_run(results, "20240105T000000Z-other", rows, "2024-01-05")
+    h = run_history(repo, results)
+    ratio = h[(h["accel"] == "bvh") & (h["measure"] == "trace_ratio_to_embree") & (h["commit"] == first[:7])]
+    by_cpu = ratio.set_index("cpu")["value"]
+    assert by_cpu["Other CPU"] == pytest.approx(8.0)
+    assert by_cpu[PROVENANCE["cpu"]] == pytest.approx(3.0)  # as without the other machine
+    assert ratio["series"].nunique() == 2
+    steps = h[h["step"] & (h["cpu"] == "Other CPU")]
+    assert steps.empty  # its only commit: nothing before it on that machine
 
 
 def test_a_count_that_changes_is_a_step_at_that_commit_only(machine):
