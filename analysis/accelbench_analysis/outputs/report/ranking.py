@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import pandas as pd
 
 from ...inputs.schema import RENDER_SETTING_COLUMNS, Results, parse_params
-from ...mapping.formatting import fmt_sig, md_table
+from ...mapping.formatting import fmt_sig, md_table, note_item
 
 BASELINE = "embree"
 RANKING_DOC = "tables/ranking.md"
@@ -33,7 +33,7 @@ class Ratio:
         if not self.value == self.value:
             return "—"
         if self.lo == self.lo and self.hi == self.hi:
-            return f"{fmt_sig(self.value, 3)} [{fmt_sig(self.lo, 2)}–{fmt_sig(self.hi, 2)}]"
+            return f"{fmt_sig(self.value, 3)} [{fmt_sig(self.lo, 3)}–{fmt_sig(self.hi, 3)}]"
         return fmt_sig(self.value, 3)
 
 
@@ -95,12 +95,14 @@ def ratios(results: Results) -> pd.DataFrame:
 
 
 def _shown_setting(r: pd.DataFrame) -> pd.DataFrame:
-    """Per structure, the rows of the setting measured on the most workloads (ties: the
-    first parameters text)."""
-    reach = r.groupby(["structure", "params"])["workload"].nunique().reset_index()
-    reach = reach.sort_values(["structure", "workload", "params"], ascending=[True, False, True])
-    keep = reach.drop_duplicates("structure")
-    return r.merge(keep[["structure", "params"]], on=["structure", "params"])
+    """Per structure and workload, one row: of the structure's settings measured there, the
+    one measured on the most workloads in the run (ties: the first parameters text), so a
+    structure keeps one setting wherever it can."""
+    reach = r.groupby(["structure", "params"])["workload"].nunique().rename("reach").reset_index()
+    ordered = r.merge(reach, on=["structure", "params"]).sort_values(
+        ["structure", "workload", "reach", "params"], ascending=[True, True, False, True]
+    )
+    return ordered.drop_duplicates(["structure", "workload"]).drop(columns="reach")
 
 
 def _geomean(values: list[float]) -> float:
@@ -113,8 +115,8 @@ def ranking_table(r: pd.DataFrame) -> tuple[list[str], list[list[str]], list[str
     trace column per workload and one build column per scene. Returns header, rows and
     notes (settings not shown, rows without a ratio)."""
     shown = _shown_setting(r)
-    workloads = list(dict.fromkeys(shown["workload"]))
-    models = list(dict.fromkeys(shown["model"]))
+    workloads = list(dict.fromkeys(r["workload"]))
+    models = list(dict.fromkeys(r["model"]))
     rows = []
     for structure, g in shown.groupby("structure", sort=False):
         trace = {w: x["trace"].iloc[0] for w, x in g.groupby("workload")}
@@ -129,19 +131,21 @@ def ranking_table(r: pd.DataFrame) -> tuple[list[str], list[list[str]], list[str
         rows.append((score, structure, cells))
     rows.sort(key=lambda x: (not x[0] == x[0], x[0], x[1]))
     header = [
-        "rank",
         "structure",
-        *[f"trace ×Embree: {w}" for w in workloads],
-        *[f"build ×Embree: {m}" for m in models],
+        "rank",
+        *[f"trace: {w}" for w in workloads],
+        *[f"build: {m}" for m in models],
     ]
-    table = [[str(i + 1) if s == s else "—", name, *cells] for i, (s, name, cells) in enumerate(rows)]
+    table = [[name, str(i + 1) if s == s else "—", *cells] for i, (s, name, cells) in enumerate(rows)]
     notes = []
-    hidden = r.merge(shown[["structure", "params"]].drop_duplicates(), how="left", indicator=True)
-    hidden = hidden[hidden["_merge"] == "left_only"]
-    for structure, g in hidden.groupby("structure", sort=False):
+    settings = r.groupby("structure", sort=False)["params"].nunique()
+    several = settings[settings > 1]
+    if not several.empty:
         notes.append(
-            f"{structure}: shown at its setting measured most widely; {g['params'].nunique()} other "
-            f"setting(s) in [the full ranking]({RANKING_DOC})."
+            "Measured at several settings: "
+            + ", ".join(f"{name} {n}" for name, n in several.items())
+            + "; each cell shows, of those measured there, the one measured most widely (every "
+            f"setting: {RANKING_DOC}, under More of this run)."
         )
     if not r["has_baseline"].any():
         notes.append(
@@ -159,13 +163,14 @@ def ranking_markdown(results: Results) -> list[str]:
     return [
         "## Ranking against Embree",
         "",
-        "Each structure's trace time (per scene and ray set) and build time (per scene) divided "
-        "by Embree's in this run, with the 95% interval of the ratio; below 1 is faster than "
-        "Embree. Ranked by the geometric mean of the trace ratios.",
+        "Each structure's trace time (per scene and ray set: `trace: SCENE · RAYS`) and build "
+        "time (per scene: `build: SCENE`) divided by Embree's in this run, with the 95% interval "
+        "of the ratio; below 1 is faster than Embree. Ranked by the geometric mean of the trace "
+        "ratios.",
         "",
-        *md_table(header, table, align="ll"),
+        *md_table(header, table, align="lr"),
         "",
-        *[f"- {n}" for n in notes],
+        *[note_item(n) for n in notes],
     ]
 
 
