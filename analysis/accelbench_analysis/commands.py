@@ -101,6 +101,8 @@ def load(src: Sources) -> Loaded:
         reference, _ = report_rows(reference, own_image=is_ablation(reference.rows))
     # Ablation rows are judged by the claims only: the tables and figures show the run at
     # the report's settings.
+    # A run of thread scaling only is ranked at its thread counts (one column each).
+    ranked = ranked if not ranked.measured_rows().empty else everything
     return Loaded(src, everything, without_ablations(results), results, reference, report_nums, ranked)
 
 

@@ -178,6 +178,8 @@ def full_ranking_markdown(results: Results) -> str:
     """tables/ranking.md: every setting of every structure, per workload, ranked."""
     r = ratios(results)
     out = ["# Every structure and setting against Embree", ""]
+    if r.empty:
+        return "\n".join(out + ["This run measured no structure on a scene.", ""])
     for workload, g in r.groupby("workload", sort=False):
         g = g.assign(key=[t.value for t in g["trace"]]).sort_values(["key", "structure"], na_position="last")
         out += [f"## {workload}", ""]
