@@ -316,3 +316,11 @@ def test_the_files_beside_a_results_file_are_not_results_of_their_own(machine):
     assert "left out" not in (results / "history" / "index.html").read_text()
     runs = (results / "index.html").read_text()
     assert "run-1.csv" in runs and "run-1.inputs.csv" not in runs
+
+
+def test_a_note_starting_with_a_hash_is_no_heading():
+    from accelbench_analysis.mapping.formatting import note_item
+    from accelbench_analysis.outputs.pages.markdown_html import to_html
+
+    text = to_html("Notes:\n\n" + note_item("#int. tests: ours are primitive tests") + "\n")
+    assert "<h" not in text and "<li>#int. tests: ours" in text
