@@ -18,7 +18,8 @@ FRESH       ?=
 # renders the analysis's HTML pages in the browser test (headless, no network).
 DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
   libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
-  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev valgrind clang-format \
+  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev libtinygltf-dev valgrind \
+  clang-format \
   python3 python3-venv python3-pip chromium
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)

@@ -1,7 +1,7 @@
 """The command line: python -m accelbench_analysis {check,tables,claims,figures,report,all}
 CSV... [--out DIR], plus `regress` (the CI regression check), `grid` / `grid-halve`
 (parameter grid search), `scaling`, `cost-images`, `robustness` (the extreme-case
-catalogue's verdicts), `html`, `history` and `reproduce` (the main job: measure into a run
+catalogue's verdicts), `html`, `history`, `compare` and `reproduce` (the main job: measure into a run
 directory, then `all` over it).
 
 The one parser of the package: each subcommand's arguments become one typed call of
@@ -64,6 +64,7 @@ def parser() -> argparse.ArgumentParser:
     add_robustness(sub)
     add_html(sub)
     add_history(sub)
+    add_compare(sub)
     add_reproduce(sub)
     return p
 
@@ -108,6 +109,28 @@ def add_history(sub) -> None:
     s.add_argument("--out", type=Path, help="default: RESULTS/history/")
     s.add_argument(
         "--repo", type=Path, default=Path("."), help="the git checkout that orders commits (default: .)"
+    )
+
+
+def add_compare(sub) -> None:
+    from .outputs.ci.compare import ALPHA, MIN_CHANGE
+
+    s = sub.add_parser(
+        "compare",
+        help="run B against run A: medians, B/A with an interval, a Mann-Whitney U test per combination",
+        description="Per combination measured in both (same machine and ISA; others are never "
+        "compared): both medians of trace and build time, B/A with an interval, the U test's "
+        f"p over the .reps.csv repetitions; a time is changed when p < {ALPHA:g} and B/A "
+        f"lies beyond {MIN_CHANGE:.0%}. Counts that differ are listed apart.",
+    )
+    s.add_argument("a", type=Path, help="run A: a run directory or a results CSV")
+    s.add_argument("b", type=Path, help="run B: a run directory or a results CSV")
+    s.add_argument("--out", type=Path, help="write OUT/compare.md and OUT/compare.html")
+    s.add_argument(
+        "--fail-above",
+        type=float,
+        metavar="RATIO",
+        help="exit 1 when a trace time changed with B/A above RATIO (for CI)",
     )
 
 
@@ -316,6 +339,7 @@ HANDLERS = {
     "robustness": lambda a: printed(commands.robustness(a.csv, a.out)),
     "html": lambda a: printed(commands.html(a.run_dir)),
     "history": lambda a: commands.history(a.results, a.out, a.repo),
+    "compare": lambda a: commands.compare(a.a, a.b, a.out, a.fail_above),
     "reproduce": lambda a: run_reproduce(a),
 }
 

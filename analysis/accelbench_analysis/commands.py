@@ -4,8 +4,8 @@ it wrote (the command line prints it) or an exit code; bad input raises one of B
 
 {check,tables,claims,figures,report,all} read harness CSVs (`Sources`); the others are
 `regress` (the CI regression check), `grid` / `grid-halve` (parameter grid search),
-`scaling`, `cost-images`, `robustness` (the extreme-case catalogue's verdicts), `html`
-and `history`."""
+`scaling`, `cost-images`, `robustness` (the extreme-case catalogue's verdicts), `html`,
+`compare` (two runs side by side) and `history`."""
 
 from __future__ import annotations
 
@@ -71,7 +71,16 @@ class Loaded:
     with_ablations: Results
     reference: Results | None
     report_nums: pd.DataFrame
+    ranked: Results  # every measured row but the thread scaling's: the ranking REPORT.md opens with
     written: list[Path] = field(default_factory=list)
+
+    @property
+    def of_the_report(self) -> bool:
+        """Whether the run measured the report's models: only then are its tables, claims and
+        three-way comparison written."""
+        from .outputs.report.report import report_models_measured
+
+        return report_models_measured(self.results)
 
 
 def load(src: Sources) -> Loaded:
@@ -83,8 +92,8 @@ def load(src: Sources) -> Loaded:
     report_nums = load_report_numbers(src.report_numbers)
     reference = load_reference_run(src.reference_run, src.csvs)
     warn(everything)
-    results, left_out = without_thread_scaling(everything)
-    results, notes = report_rows(results, own_image=is_ablation(results.rows))
+    ranked, left_out = without_thread_scaling(everything)
+    results, notes = report_rows(ranked, own_image=is_ablation(ranked.rows))
     for note in left_out + notes:
         print(f"note: {note}", file=sys.stderr)
     if reference is not None:  # compared like with like: the same workload
@@ -92,7 +101,9 @@ def load(src: Sources) -> Loaded:
         reference, _ = report_rows(reference, own_image=is_ablation(reference.rows))
     # Ablation rows are judged by the claims only: the tables and figures show the run at
     # the report's settings.
-    return Loaded(src, everything, without_ablations(results), results, reference, report_nums)
+    # A run of thread scaling only is ranked at its thread counts (one column each).
+    ranked = ranked if not ranked.measured_rows().empty else everything
+    return Loaded(src, everything, without_ablations(results), results, reference, report_nums, ranked)
 
 
 def load_reference_run(run_dir: Path | None, csvs: list[Path]) -> Results | None:
@@ -163,10 +174,9 @@ def write_report_of(data: Loaded, out: Path, claims, figures, comparison) -> lis
     from .outputs.pages.run_page import write_run_page
     from .outputs.report.report import write_report
 
-    copy_report_numbers(data.src.report_numbers, out)
-    report = write_report(
-        data.results, out, claims, figures, comparison, data.reference, data.src.reference_run
-    )
+    if data.of_the_report:
+        copy_report_numbers(data.src.report_numbers, out)
+    report = write_report(data.results, out, claims, figures, comparison, data.reference, data.ranked)
     return [report, write_run_page(out)]
 
 
@@ -190,6 +200,8 @@ def figures(src: Sources, out: Path) -> list[Path]:
 def report(src: Sources, out: Path) -> list[Path]:
     """OUT/REPORT.md linking what exists, and OUT/index.html showing it."""
     data = load(src)
+    if not data.of_the_report:
+        return write_report_of(data, out, None, None, None)
     _, claim_rows = write_claims_of(data, out)
     path, comparison = write_comparison_of(data, out)
     return [path] + write_report_of(data, out, claim_rows, None, comparison)
@@ -202,11 +214,17 @@ def analyse_all(src: Sources, out: Path) -> list[Path]:
 
     data = load(src)
     written = write_workloads(data.everything, out)
-    written += write_tables_of(data, out)
-    path, claim_rows = write_claims_of(data, out)
-    written.append(path)
-    path, comparison = write_comparison_of(data, out)
-    written.append(path)
+    claim_rows = comparison = None
+    if data.of_the_report:  # the report's tables, claims and comparison have rows to show
+        written += write_tables_of(data, out)
+        path, claim_rows = write_claims_of(data, out)
+        written.append(path)
+        path, comparison = write_comparison_of(data, out)
+        written.append(path)
+    elif not data.results.case_rows().empty:
+        from .outputs.report.robustness import write_robustness
+
+        written.append(write_robustness(data.results, out / "tables"))
     figure_paths, figure_results = write_figures_of(data, out)
     written += figure_paths
     return written + write_report_of(data, out, claim_rows, figure_results, comparison)
@@ -220,6 +238,31 @@ def html(run_dirs: list[Path]) -> list[Path]:
     from .outputs.pages.run_page import write_run_page
 
     return [write_run_page(d) for d in run_dirs]
+
+
+def compare(a: Path, b: Path, out: Path | None = None, fail_above: float | None = None) -> int:
+    """Run B against run A (run directories or results CSVs): prints the Markdown, writes
+    OUT/compare.md and OUT/compare.html when OUT is given. Exit 1 when --fail-above is given
+    and a trace time changed by more than that ratio (B/A), else 0."""
+    from .outputs.ci.compare import compare_markdown, compare_runs, load_run, worst_ratio
+    from .outputs.pages.markdown_html import to_html
+    from .outputs.pages.page import page, write_page
+
+    result = compare_runs(load_run(a), load_run(b), str(a), str(b))
+    text = compare_markdown(result)
+    print(text, end="")
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "compare.md").write_text(text)
+        write_page(out / "compare.html", page(f"accelbench: {b} against {a}", to_html(text)))
+        print(f"wrote {out / 'compare.md'} and {out / 'compare.html'}", file=sys.stderr)
+    if fail_above is not None and worst_ratio(result) > fail_above:
+        print(
+            f"compare: a trace time changed by {worst_ratio(result):.3f}x, above {fail_above:g}",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
 
 
 def history(results: Path = Path("results"), out: Path | None = None, repo: Path = Path(".")) -> int:

@@ -136,3 +136,24 @@ def test_history_and_runs_pages_in_chromium(analysed_run, tmp_path):
     r = render(runs, PROBE)
     assert_clean(r, runs)
     assert r.facts["tables"] == 1
+
+
+# Where the first screen's parts end: the ranking's table and the claims' count table.
+FIRST_SCREEN = """(() => {
+  const table = (id) => {
+    const h = document.getElementById(id);
+    let e = h && h.nextElementSibling;
+    while (e && !(e.matches("div.table-wrap") || e.querySelector("table.data"))) e = e.nextElementSibling;
+    return e ? e.getBoundingClientRect().bottom + window.scrollY : -1;
+  };
+  return {ranking: table("ranking-against-embree"), claims: table("the-report-s-claims"),
+          sections: Array.from(document.querySelectorAll("main h2")).map((h) => h.textContent)};
+})()"""
+
+
+def test_the_ranking_and_the_claims_counts_are_on_the_first_screen(analysed_run):
+    r = render(analysed_run / "index.html", FIRST_SCREEN, width=1400, height=1400)
+    assert r.errors == []
+    assert 0 < r.facts["ranking"] < r.facts["claims"] <= 1400, r.facts
+    assert r.facts["sections"][:2] == ["Ranking against Embree", "The report's claims"]
+    assert len(r.facts["sections"]) == len(set(r.facts["sections"]))  # no section twice

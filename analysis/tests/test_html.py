@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-from synthetic import BVH, EMBREE, row, write_csv
+from synthetic import BVH, EMBREE, PROVENANCE, row, write_csv
 
 from accelbench_analysis.cli import main
 from accelbench_analysis.outputs.figures.figures import structure_frame
@@ -242,6 +242,24 @@ def test_history_one_row_per_commit_combination_and_measure(machine):
     assert set(h["subject"]) == {"first change", "second change"}
 
 
+def test_history_keeps_machines_apart(machine):
+    """A run of the first commit on another CPU is its own series, never merged into the
+    first machine's median, and its counts are no step of the first machine's."""
+    repo, results, first, second = machine
+    rows = bvh_and_embree(first, "2024-01-05T00:00:00Z", 130, 4.0)
+    for r in rows:
+        r["prov"]["cpu"] = "Other CPU"
+    main_run(results, "20240105T000000Z-other", rows, "2024-01-05")
+    h = run_history(repo, results)
+    ratio = h[(h["accel"] == "bvh") & (h["measure"] == "trace_ratio_to_embree") & (h["commit"] == first[:7])]
+    by_cpu = ratio.set_index("cpu")["value"]
+    assert by_cpu["Other CPU"] == pytest.approx(8.0)
+    assert by_cpu[PROVENANCE["cpu"]] == pytest.approx(3.0)  # as without the other machine
+    assert ratio["series"].nunique() == 2
+    steps = h[h["step"] & (h["cpu"] == "Other CPU")]
+    assert steps.empty  # its only commit: nothing before it on that machine
+
+
 def test_a_count_that_changes_is_a_step_at_that_commit_only(machine):
     repo, results, first, second = machine
     h = run_history(repo, results)
@@ -298,3 +316,11 @@ def test_the_files_beside_a_results_file_are_not_results_of_their_own(machine):
     assert "left out" not in (results / "history" / "index.html").read_text()
     runs = (results / "index.html").read_text()
     assert "run-1.csv" in runs and "run-1.inputs.csv" not in runs
+
+
+def test_a_note_starting_with_a_hash_is_no_heading():
+    from accelbench_analysis.mapping.formatting import note_item
+    from accelbench_analysis.outputs.pages.markdown_html import to_html
+
+    text = to_html("Notes:\n\n" + note_item("#int. tests: ours are primitive tests") + "\n")
+    assert "<h" not in text and "<li>#int. tests: ours" in text

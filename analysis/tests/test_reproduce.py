@@ -206,6 +206,10 @@ def test_every_invocation_measures_into_a_new_run_directory(tmp_path, capfd):
     rc, first = reproduce(tiny_job(tmp_path), NOW)
     assert rc == 0
     assert csv_rows(first / "csv" / "tiny.csv") == 2 and csv_rows(first / "csv" / "second.csv") == 2
+    # Google Benchmark's JSON beside each CSV, for google/benchmark's tools/compare.py.
+    for name in ("tiny", "second"):
+        gb = json.loads((first / "csv" / f"{name}.json").read_text())
+        assert gb["context"] and len({b["run_name"] for b in gb["benchmarks"]}) == 4  # build, render x 2
     meta = run_json(first)
     assert meta["complete"] and meta["job"] == {"configs": ["tiny.yaml", "second.yaml"], "tag": ""}
     assert meta["provenance"]["git_sha"] == load_results([first / "csv" / "tiny.csv"]).rows["git_sha"].iloc[0]
@@ -529,10 +533,13 @@ def test_three_way_values_and_ratios(tmp_path, report_nums):
         )
         == 0
     )
+    # REPORT.md links the comparison once; the three values and ratios are there.
     report = (out / "REPORT.md").read_text()
-    assert "| Stanford bunny | BVH (median) | " + f"{report_bvh:.3g}" + " | 2.00 | 1.00 |" in report
-    assert "Reference CPU" in report
-    assert "| Stanford bunny | kd-tree | " in (out / "tables" / "comparison.md").read_text()
+    assert report.count("](tables/comparison.md)") == 1
+    comparison = (out / "tables" / "comparison.md").read_text()
+    assert "| Stanford bunny | BVH (median) | " + f"{report_bvh:.3g}" + " | 2.00 | 1.00 |" in comparison
+    assert "Reference CPU" in comparison
+    assert "| Stanford bunny | kd-tree | " in comparison
 
 
 def test_reference_run_claims_skip_its_ray_set_rows(tmp_path):

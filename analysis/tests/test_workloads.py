@@ -244,7 +244,7 @@ def test_all_writes_and_links_them_and_keeps_the_tables(realistic_csv, tmp_path)
     for rel in ("tables/table2.md", "tables/table4.md", "tables/table5.md"):
         assert (mixed / rel).read_text() == (alone / rel).read_text(), rel
     report = (mixed / "REPORT.md").read_text()
-    beyond = report[report.index("## Beyond the report") :]
+    beyond = report[report.index("## More of this run") :]
     for rel in (
         "tables/ray_sets.md",
         "tables/ray_set_ranking.md",

@@ -12,9 +12,9 @@
 namespace accelbench {
 
 struct RunInput {
-    std::string kind;    // "config", "model" or "rays"
-    std::string sha256;  // config, mesh or ray file: the file's; registry model: its entry's
-    std::string name;    // config: its name; model: its label; rays: the file as written
+    std::string kind;    // "config", "model", "rays" or "reader" (a model file another library reads)
+    std::string sha256;  // config, mesh or ray file: the file's; registry model: its entry's; reader: of its name
+    std::string name;  // config: its name; model: its label; rays: the file as written; reader: "LABEL read by READER"
     bool operator==(const RunInput&) const = default;
 };
 using RunInputs = std::vector<RunInput>;

@@ -29,7 +29,12 @@ LoadedModel load_model(const ModelSpec& spec, const ModelRegistry& registry, con
             light = entry->light;
             break;
         }
-        case ModelSpec::Kind::Path: m.scene = load_mesh(spec.resolved_path); break;
+        case ModelSpec::Kind::Path: {
+            MeshLoadInfo info;
+            m.scene = load_mesh(spec.resolved_path, &info);
+            if (!camera) camera = info.camera;  // a glTF's own view, when the config gives none
+            break;
+        }
         case ModelSpec::Kind::Case: {
             auto c = std::make_shared<const RobustnessCase>(make_robustness_case(spec.name));
             m.scene = c->scene;

@@ -78,7 +78,7 @@ void add_ray_sets(LoadedModel& model, const RenderSettings& render, const RaySet
 void put_loaded_model(WireWriter& w, const LoadedModel& model);
 LoadedModel take_loaded_model(WireReader& r, const ModelSpec& spec);
 
-// The view: the config's camera, else the registry's or procedural scene's own, else
+// The view: the config's camera, else the registry's, procedural scene's or glTF file's own, else
 // Camera::fit for the image's aspect. The light: the registry's or procedural scene's,
 // else default_light for that view. Throws std::runtime_error (file missing, checksum
 // mismatch, bad mesh) naming the model.

@@ -8,6 +8,7 @@
 #include <regex>
 #include <set>
 
+#include "accelbench/scene/mesh_io.h"
 #include "csv/csv.h"
 #include "csv/results.h"
 #include "plan/loaded_model.h"
@@ -71,7 +72,13 @@ RunInputs inputs_of(const Config& config, const ModelRegistry& registry) {
     RunInputs inputs = {{"config", sha256_file(config.path), config.name}};
     std::set<std::string> ray_files;
     for (const ModelSpec& m : config.models) {
-        if (m.kind == ModelSpec::Kind::Path) inputs.push_back({"model", sha256_file(m.resolved_path), m.label});
+        if (m.kind == ModelSpec::Kind::Path) {
+            inputs.push_back({"model", sha256_file(m.resolved_path), m.label});
+            // A file another library reads says which (and its version) in the record of
+            // its rows' inputs; our own readers are the code's, which git_sha records.
+            if (const std::string reader = mesh_reader(m.resolved_path); reader != "accelbench")
+                inputs.push_back({"reader", sha256_hex(reader), m.label + " read by " + reader});
+        }
         if (m.kind == ModelSpec::Kind::Registry)
             if (const ModelEntry* entry = registry.find(m.name))
                 inputs.push_back({"model", registry_entry_sha256(*entry), m.label});

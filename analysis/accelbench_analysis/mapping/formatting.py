@@ -88,6 +88,12 @@ def md_escape(text: str) -> str:
     return text.replace("|", "\\|")
 
 
+def note_item(note: str) -> str:
+    """A note as a Markdown list item. A note may begin with the report's own words
+    ("#int. tests", "#Primitives"): a leading "#" is escaped, or the item would be a heading."""
+    return "- " + ("\\" + note if note.startswith("#") else note)
+
+
 _TEX = {
     "\\": r"\textbackslash{}",
     "&": r"\&",
@@ -135,7 +141,7 @@ def to_markdown(t: TableDoc) -> str:
             out.append("| " + " | ".join(t.cell_text(c, False) for c in r) + " |")
     if t.notes:
         out += ["", "Notes:", ""]
-        out += [f"- {n}" for n in t.notes]
+        out += [note_item(n) for n in t.notes]
     return "\n".join(out) + "\n"
 
 

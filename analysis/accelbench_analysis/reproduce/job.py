@@ -148,13 +148,33 @@ class Progress:
         print(self.line(done), file=sys.stderr, flush=True)
 
 
+def benchmark_json(out_csv: Path) -> Path:
+    """Where the harness writes Google Benchmark's JSON beside NAME.csv, for google/benchmark's
+    tools/compare.py: NAME.json. A continued run's process writes only what it measures, so
+    each continuation has a file of its own (NAME.part-2.json, ...), never half of NAME.json."""
+    stem = out_csv.name[: -len(".csv")]
+    path, part = out_csv.with_name(f"{stem}.json"), 1
+    while path.exists():
+        part += 1
+        path = out_csv.with_name(f"{stem}.part-{part}.json")
+    return path
+
+
 def run_config(accelbench: Path, config: Path, out_csv: Path, progress: Progress, done_elsewhere: int) -> int:
     """One config through the harness into out_csv (continued when it has rows). Its lines
     pass through; after a line, when the CSV has gained a row since the job's progress line
     was last shown, the line is shown again (the harness prints a line as each combination
     starts, so the job's line follows each per-combination line, whatever their format)."""
     resume = out_csv.is_file() and out_csv.stat().st_size > 0
-    cmd = [str(accelbench), "run", str(config), "--out", str(out_csv)] + (["--resume"] if resume else [])
+    cmd = [
+        str(accelbench),
+        "run",
+        str(config),
+        "--out",
+        str(out_csv),
+        f"--benchmark_out={benchmark_json(out_csv)}",
+    ]
+    cmd += ["--resume"] if resume else []
     print(f"== {config.stem} -> {out_csv}{' (continuing)' if resume else ''}", file=sys.stderr, flush=True)
     proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True, bufsize=1)
     assert proc.stderr is not None

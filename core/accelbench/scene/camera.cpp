@@ -58,9 +58,12 @@ CameraRays::CameraRays(const Camera& camera, int width, int height) : eye_(camer
     const Vec3 up = cross(right, forward);
 
     // The image plane sits at distance 1 in front of the eye; its half-height is
-    // tan(fov/2) and its half-width follows from the pixel aspect ratio (square pixels).
+    // tan(fov/2) and its half-width follows from the view's aspect ratio (the image's,
+    // square pixels, unless the camera declares its own).
+    if (!(camera.aspect >= 0.0f) || !std::isfinite(camera.aspect))
+        throw std::invalid_argument("CameraRays: the camera's aspect must be 0 (the image's) or positive");
     const float half_h = std::tan(0.5f * camera.fov_deg * kDegToRad);
-    const float half_w = half_h * float(width) / float(height);
+    const float half_w = half_h * (camera.aspect > 0.0f ? camera.aspect : float(width) / float(height));
     corner_ = forward - right * half_w + up * half_h;
     right_ = right * (2.0f * half_w / float(width));
     down_ = up * (-2.0f * half_h / float(height));

@@ -10,6 +10,10 @@ struct Camera {
     Vec3 look_at{0, 0, 0};
     Vec3 up{0, 1, 0};
     float fov_deg = 45.0f;  // vertical field of view
+    // Width over height of the field of view; 0 (the default): the image's, so pixels are
+    // square. A glTF camera may declare its own (aspectRatio), which then holds whatever
+    // the image's size.
+    float aspect = 0.0f;
 
     // The default view of a model: looks at the centre of `bounds` along `direction`
     // from just far enough that the bounding sphere fills the vertical field of view, so

@@ -43,12 +43,17 @@ std::string file_kind(fs::file_type type) {
 Scene parse_mesh(std::string_view bytes, const std::string& format, const std::string& shown_as,
                  MeshLoadInfo* info_out) {
     FlatMesh mesh;
+    std::optional<Camera> camera;
+    const bool gltf = format == "gltf" || format == "glb";
     try {
         if (format == "obj") read_obj(bytes, mesh);
         else if (format == "ply") read_ply(bytes, mesh);
         else if (format == "off") read_off(bytes, mesh);
         else if (format == "stl") read_stl(bytes, mesh);
-        else throw MeshError("unsupported format '" + format + "' (supported: obj ply off stl)");
+        else if (gltf) {
+            const std::string folder = fs::path(shown_as).parent_path().string();
+            camera = read_gltf(bytes, format == "glb", folder.empty() ? "." : folder, mesh);
+        } else throw MeshError("unsupported format '" + format + "' (supported: obj ply off stl gltf glb)");
     } catch (const MeshError& e) {
         fail(shown_as, e.what());
     }
@@ -63,12 +68,32 @@ Scene parse_mesh(std::string_view bytes, const std::string& format, const std::s
     scene.finalize();  // cannot fail: every index and vertex was checked
     if (info_out) {
         info_out->format = format;
+        info_out->reader = mesh_reader(shown_as);
+        info_out->camera = camera;
         info_out->file_faces = mesh.faces;
         info_out->polygons = mesh.polygons;
         info_out->triangles = scene.triangle_count();
         info_out->vertices = scene.vertex_count();
     }
     return scene;
+}
+
+std::string mesh_format(const std::string& path, bool* compressed) {
+    // "name.ply.gz" -> compressed, format "ply".
+    fs::path inner = fs::path(path).filename();
+    const bool gz = lowercase(inner.extension().string()) == ".gz";
+    if (gz) inner = inner.stem();
+    if (compressed) *compressed = gz;
+    std::string format = lowercase(inner.extension().string());
+    if (!format.empty()) format.erase(0, 1);
+    for (const char* known : {"obj", "ply", "off", "stl", "gltf", "glb"})
+        if (format == known) return format;
+    return "";
+}
+
+std::string mesh_reader(const std::string& path) {
+    const std::string format = mesh_format(path);
+    return format == "gltf" || format == "glb" ? gltf_reader() : "accelbench";
 }
 
 Scene load_mesh(const std::string& path, MeshLoadInfo* info_out) {
@@ -78,14 +103,10 @@ Scene load_mesh(const std::string& path, MeshLoadInfo* info_out) {
     if (!fs::is_regular_file(status)) fail(path, "not a regular file (" + file_kind(status.type()) + ")");
     if (!std::ifstream(path, std::ios::binary)) fail(path, "file cannot be opened for reading");
 
-    // "name.ply.gz" -> compressed, format "ply".
-    fs::path inner = fs::path(path).filename();
-    const bool compressed = lowercase(inner.extension().string()) == ".gz";
-    if (compressed) inner = inner.stem();
-    std::string format = lowercase(inner.extension().string());
-    if (!format.empty()) format.erase(0, 1);
-    if (format != "obj" && format != "ply" && format != "off" && format != "stl")
-        fail(path, "unsupported file extension (supported: .obj .ply .off .stl, each optionally .gz)");
+    bool compressed = false;
+    const std::string format = mesh_format(path, &compressed);
+    if (format.empty())
+        fail(path, "unsupported file extension (supported: .obj .ply .off .stl .gltf .glb, each optionally .gz)");
 
     const std::string bytes = compressed ? gunzip(path) : read_file(path);
     MeshLoadInfo info;

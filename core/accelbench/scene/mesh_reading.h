@@ -1,6 +1,7 @@
 // What the mesh readers share (internal to scene/, not part of the interface): the
 // error a reader throws, the words-and-numbers helpers, and the flat mesh every reader
-// fills. One reader per format: mesh_obj.cpp, mesh_ply.cpp, mesh_off.cpp, mesh_stl.cpp;
+// fills. One reader per format: mesh_obj.cpp, mesh_ply.cpp, mesh_off.cpp, mesh_stl.cpp,
+// mesh_gltf.cpp;
 // mesh_gzip.cpp inflates a .gz; mesh_io.cpp picks the reader.
 #pragma once
 
@@ -12,6 +13,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -226,6 +228,9 @@ void read_obj(std::string_view text, FlatMesh& mesh);
 void read_ply(std::string_view bytes, FlatMesh& mesh);
 void read_off(std::string_view text, FlatMesh& mesh);
 void read_stl(std::string_view bytes, FlatMesh& mesh);
+// glTF (`binary`: a .glb container); external buffers are read from `folder` only. Returns
+// the first perspective camera of the default scene, placed (mesh_gltf.cpp).
+std::optional<Camera> read_gltf(std::string_view bytes, bool binary, const std::string& folder, FlatMesh& mesh);
 
 // The decompressed bytes of the gzip file at `path`, every member in a row; refuses
 // (through fail) a file that is not gzip, corrupt or truncated data, bytes after the last

@@ -14,8 +14,9 @@ collected.csv holds every row ever collected (one per source file, timestamp and
 combination), and each `history` adds the rows on disk that it does not hold yet. Delete
 results/history/ to forget.
 
-results/history/history.csv: one row per commit x combination x measure (the median over
-the rows of that commit; n, min and max say how many and how far apart), commits in
+results/history/history.csv: one row per commit x machine x combination x measure (the
+median over the rows of that commit on that machine, `cpu` and `isa`, never over two
+machines; n, min and max say how many and how far apart), commits in
 commit order (git's topological order; commits git does not know after them by time; a
 dirty tree right after its commit). A count that differs from the previous commit's is
 marked as a step."""
@@ -53,6 +54,9 @@ MEASURES = [*RATIOS, *TIMES, *COUNTS]
 # A combination: the same structure, parameters, model and rays, whichever config measured it.
 SETTINGS = ["ray_set", "render_threads", *[c for c in RENDER_SETTING_COLUMNS if c != "render_threads"]]
 COMBINATION = ["model", "accel", "params", *SETTINGS]
+# Rows of two machines (or two instruction sets of one) are never one median: each keeps
+# its own series, and a count's step is against the same machine's previous commit.
+MACHINE = ["cpu", "isa"]
 PROVENANCE = ["git_sha", "git_dirty", "cpu", "compiler", "build_type", "isa", "embree_version", "embree_isa"]
 SOURCE = ["kind", "run", "file", "config", "timestamp"]
 
@@ -227,6 +231,8 @@ def series_labels(df: pd.DataFrame) -> pd.Series:
         varying = [k for k in keys if len({d.get(k, "") for d in dicts.values()}) > 1]
         names = {t: ", ".join(f"{k}={dicts[t].get(k, '')}" for k in varying) for t in texts}
         label[g.index] = g["params"].map(names)
+    if df[MACHINE].drop_duplicates().shape[0] > 1:
+        label = label + " · " + df["cpu"] + " (" + df["isa"] + ")"
     rays = ~df["ray_set"].isin(["", "camera"])
     label = label.where(~rays, label + " · ray set " + df["ray_set"])
     image = df["image_width"] != ""
@@ -238,12 +244,13 @@ def series_labels(df: pd.DataFrame) -> pd.Series:
 
 def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:
     """One row per commit x combination x measure, in commit order; count steps marked.
-    configs, runs, cpus: what measured the combination at that commit."""
+    configs, runs: what measured the combination at that commit; cpu and isa: where (each
+    machine its own row)."""
     if collected.empty:
         return pd.DataFrame(columns=["commit", "measure", "value"])
     # Aggregated per commit and combination first (a few thousand groups, not one per
     # measure too), then one row per measure.
-    keys = ["git_sha", "git_dirty", *COMBINATION, "structure"]
+    keys = ["git_sha", "git_dirty", *MACHINE, *COMBINATION, "structure"]
     g = collected.groupby(keys, sort=False)
     stats = [
         getattr(g[MEASURES], how)().reset_index().melt(id_vars=keys, var_name="measure", value_name=name)
@@ -254,15 +261,14 @@ def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:
     joined = g.agg(
         configs=("config", lambda v: ";".join(sorted(set(v)))),
         runs=("run", lambda v: ";".join(sorted(set(v)))),
-        cpus=("cpu", lambda v: ";".join(sorted(set(v)))),
         first_measured=("timestamp", "min"),
         last_measured=("timestamp", "max"),
     ).reset_index()
     out = out.merge(joined, on=keys, how="left")
     out = out.merge(commit_table(collected, repo), on=["git_sha", "git_dirty"], how="left")
     out["series"] = series_labels(out)
-    out = out.sort_values([*COMBINATION, "measure", "commit_order"]).reset_index(drop=True)
-    prev = out.groupby([*COMBINATION, "measure"])["value"].shift()
+    out = out.sort_values([*MACHINE, *COMBINATION, "measure", "commit_order"]).reset_index(drop=True)
+    prev = out.groupby([*MACHINE, *COMBINATION, "measure"])["value"].shift()
     out["step"] = out["measure"].isin(COUNTS) & prev.notna() & (out["value"] != prev)
     cols = [
         "commit",
@@ -285,7 +291,7 @@ def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:
         "step",
         "configs",
         "runs",
-        "cpus",
+        *MACHINE,
         "first_measured",
         "last_measured",
     ]

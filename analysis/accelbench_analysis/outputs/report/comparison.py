@@ -115,7 +115,8 @@ def _fmt(metric: str, v) -> str:
     return fmt_sig(v) if metric in TIME_METRICS else fmt_count(v)
 
 
-def metric_table(rows: list[ThreeWay], metric: str) -> list[str]:
+def metric_table(rows: list[ThreeWay], metric: str, with_reference: bool = True) -> list[str]:
+    """One metric's cells; the reference run's two columns only when one was given."""
     body = [
         [
             r.model,
@@ -129,13 +130,20 @@ def metric_table(rows: list[ThreeWay], metric: str) -> list[str]:
         for r in rows
         if r.metric == metric
     ]
+    if not with_reference:
+        keep = [i for i, h in enumerate(HEADER) if "reference" not in h]
+        return (
+            md_table([HEADER[i] for i in keep], [[b[i] for i in keep] for b in body], align="ll")
+            if body
+            else []
+        )
     return md_table(HEADER, body, align="ll") if body else []
 
 
 def reference_text(reference: Results | None, reference_dir: Path | None) -> str:
     if reference is None:
         where = f" ({reference_dir}/csv has none of this run's CSVs)" if reference_dir else ""
-        return f"No committed reference run to compare with{where}: its column is empty."
+        return f"No committed reference run to compare with{where}: this run beside the report only."
     g = reference.groups
     desc = "; ".join(
         f"commit {x.fields['git_sha'][:12]}"
@@ -164,7 +172,7 @@ def comparison_markdown(
         "nodes": METRIC["nodes"].label,
     }
     for m in metrics or TIME_METRICS + COUNT_METRICS:
-        table = metric_table(rows, m)
+        table = metric_table(rows, m, with_reference=reference is not None)
         if table:
             out += [f"### {labels[m]}", ""] + table + [""]
     if not rows:

@@ -1,6 +1,10 @@
-"""A run's REPORT.md (results/reference/, results/runs/<run>/): one page that says where the
-numbers come from, sets them beside the report's and the reference run's, and links the
-tables, the claims and the figures, each with a one-line caption."""
+"""A run's REPORT.md (results/reference/, results/runs/<run>/, any run of any scenes): it
+opens with the answer the run gives (each structure against Embree on each scene and ray
+set, ranked), then the claims' counts when the report's models were measured, the figures
+the data allow, and last where the numbers come from. The report's tables and claims are a
+section only when the run measured the report's models; the three-way comparison only when
+a reference run is given. Every document is linked once, so the page (run_page.py) shows
+each once."""
 
 from __future__ import annotations
 
@@ -10,9 +14,11 @@ from ...inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
 from ...inputs.schema import FP_MODE_COLUMN, Results
 from ...mapping.formatting import md_escape
 from ..figures.figures import FIGURES, Skipped
-from .claim_verdicts import summary_with_matrix
+from .claim_verdicts import summary_markdown
+from .claim_matrix import matrix_markdown
 from .claims_output import ClaimsResult, plain_statements
-from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
+from .comparison import ThreeWay
+from .ranking import RANKING_DOC, full_ranking_markdown, ranking_markdown
 
 TABLE_CAPTIONS = {
     "table2": "Table 2: kd-tree maxPrims and maxDepth sweeps on the Stanford bunny.",
@@ -21,6 +27,31 @@ TABLE_CAPTIONS = {
     "table5": "Table 5: the complex scenes (procedural forest and city); with a 'relative to BVH' table.",
 }
 REGENERATE = "make reproduce-tables"
+
+
+REPORT_SECTION = "The report's tables and claims"
+REPORT_SECTION_ANCHOR = "#the-report-s-tables-and-claims"  # run_page's slug of the heading
+
+
+def report_models_measured(results: Results) -> bool:
+    """Whether the run measured any of the report's models (or their stand-ins): only then
+    do its tables and claims have rows to show."""
+    ours = {name for m in REPORT_MODELS for name in m.ours}
+    return bool(ours & set(results.rows["model"]))
+
+
+def provenance_line(results: Results) -> str:
+    """The one line the report opens with: machine, commit, ISA and render threads, named as
+    what they are (several provenance groups: their count, detailed at the end)."""
+    if results.mixed:
+        return f"**{len(results.groups)} builds or machines** (see [where these numbers come from](#where-these-numbers-come-from))."
+    f = results.groups[0].fields
+    threads = sorted({f"{t:g}" for t in results.rows["render_threads"].dropna()})
+    dirty = " (dirty tree)" if f["git_dirty"] == "true" else ""
+    return (
+        f"**Machine:** {md_escape(f['cpu'])} · **commit** `{f['git_sha'][:12]}`{dirty} · **ISA** `{f['isa']}` "
+        f"(Embree's kernels `{f['embree_isa']}`) · **render threads:** {', '.join(threads) or '—'}"
+    )
 
 
 def provenance_lines(results: Results) -> list[str]:
@@ -64,6 +95,21 @@ def stand_in_lines() -> list[str]:
     return out
 
 
+def claims_count_lines(result: ClaimsResult | None) -> list[str]:
+    """The claims' counts near the top (the one summary's count table), linking to the
+    matrix and the claims one by one in the report's section."""
+    if result is None or not result.rows:
+        return []
+    return [
+        "",
+        "## The report's claims",
+        "",
+        *summary_markdown(result.rows),
+        f"The matrix of every claim under every setting, and why each does not hold: "
+        f"[{REPORT_SECTION}]({REPORT_SECTION_ANCHOR}) and [the claims one by one](tables/claims.md).",
+    ]
+
+
 def claims_lines(result: ClaimsResult | None) -> list[str]:
     """The claims' link in the tables list."""
     link = "- [The report's claims, checked](tables/claims.md)"
@@ -76,12 +122,12 @@ def claims_lines(result: ClaimsResult | None) -> list[str]:
 
 
 def claims_section(result: ClaimsResult | None) -> list[str]:
-    """The one summary of the claims (the same lines as claims.md's), what a reader must
-    know before it, and the claims whose verdict differs on the committed reference run."""
+    """What a reader must know before the verdicts, the factor matrix (the counts stand at
+    the top), and the claims whose verdict differs on the committed reference run."""
     if result is None:
         return []
-    out = ["", "## The report's claims", ""] + plain_statements(result)
-    out += summary_with_matrix(result.rows, result.matrix)
+    out = ["", "### Every claim under every setting", ""] + plain_statements(result)
+    out += ["The matrix (✓ holds, ✗ does not hold, – not comparable):", ""] + matrix_markdown(result.matrix)
     if result.reference is not None:
         dependent = result.machine_dependent()
         out += [
@@ -106,24 +152,31 @@ def cost_model_section(out_dir: Path) -> list[str]:
     return ["", "## Cost model", ""] + body
 
 
-def figure_lines(out_dir: Path, figures: dict | None) -> list[str]:
+def figure_lines(out_dir: Path, figures: dict | None, say_skipped: bool = True) -> list[str]:
+    """A line per figure drawn; with say_skipped (a run of the report's models), also why a
+    figure of the report's study was not drawn."""
     out = []
     for name, (caption, _) in FIGURES.items():
         rel = f"figures/{name}.png"
         result = (figures or {}).get(name)
         if isinstance(result, Skipped):
-            out.append(f"- {caption}: not drawn, {result.reason}.")
+            if say_skipped:
+                out.append(f"- {caption}: not drawn, {result.reason}.")
         elif (out_dir / rel).is_file():
             out.append(f"- [{caption}]({rel})")
-        else:
+        elif say_skipped:
             out.append(f"- {caption}: not generated yet (`python -m accelbench_analysis figures ...`).")
     return out
 
 
 def beyond_report_lines(out_dir: Path) -> list[str]:
     """Links to the scaling and cost-image outputs (written by the `scaling` and
-    `cost-images` commands) when they exist in out_dir."""
+    `cost-images` commands) when they exist in out_dir, and the full ranking."""
     out = []
+    if (out_dir / RANKING_DOC).is_file():
+        out.append(
+            f"- [Every structure at every setting against Embree]({RANKING_DOC}), per scene and ray set, ranked."
+        )
     if (out_dir / "figures" / "scaling.png").is_file():
         out.append(
             "- [Build and render time against triangles, log-log, with fitted slopes per "
@@ -166,14 +219,13 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
             f"tests per pixel for each structure beside the shaded image — where each "
             f"structure spends its work."
         )
-    return ["", "## Beyond the report", ""] + out if out else []
+    return ["", "## More of this run", ""] + out if out else []
 
 
-def comparison_lines(
-    comparison: list[ThreeWay] | None, results: Results, reference: Results | None, reference_dir: Path | None
-) -> list[str]:
-    """The times of the three-way comparison inline; every metric in tables/comparison.md."""
-    if comparison is None:
+def comparison_lines(comparison: list[ThreeWay] | None, reference: Results | None) -> list[str]:
+    """The three-way comparison (tables/comparison.md), linked once; only when a reference
+    run was given and holds rows like this run's."""
+    if comparison is None or reference is None:
         return []
     out = [
         "",
@@ -182,50 +234,39 @@ def comparison_lines(
         "Per structure and model: the report's number, this run's, the committed reference "
         "run's, and this/report, this/reference. A time ratio this/reference near 1 means "
         "this machine reproduces ours; compare the report by orderings (its machine and "
-        "implementation were much slower). The counts (primitive tests, nodes), which must "
-        "equal the reference run's: [tables/comparison.md](tables/comparison.md).",
-        "",
+        "implementation were much slower). Every metric, the counts (primitive tests, nodes) too, which must "
+        "equal the reference run's: [the comparison](tables/comparison.md).",
     ]
-    return out + comparison_markdown(comparison, results, reference, reference_dir, metrics=TIME_METRICS)[:-1]
+    return out
 
 
-def report_markdown(
-    results: Results,
-    out_dir: Path,
-    claims: ClaimsResult | None,
-    figures: dict | None,
-    comparison: list[ThreeWay] | None = None,
-    reference: Results | None = None,
-    reference_dir: Path | None = None,
-) -> str:
+def report_section(out_dir: Path, claims: ClaimsResult | None, warnings: list[str]) -> list[str]:
+    """The report's tables and claims: only for a run of the report's models."""
     out = [
-        "# accelbench results",
         "",
-        'A reproduction of the report "Implementation and Analysis of Acceleration Data '
-        'Structures in Ray Tracing" (Freiburg 2022): its Tables 2, 4 and 5 and the claims '
-        "of its sections 5.1-6, measured again, plus structures it did not have (binned-SAH "
-        "BVH, Embree).",
+        f"## {REPORT_SECTION}",
+        "",
+        *[f"> **Note:** {md_escape(w)}\n" for w in warnings],
+        'This run measured the models of the report "Implementation and Analysis of Acceleration '
+        'Data Structures in Ray Tracing" (Freiburg 2022): its Tables 2, 4 and 5 and the claims of '
+        "its sections 5.1-6, measured again, beside structures it did not have (binned-SAH BVH, "
+        "Embree).",
+        "",
+        "Stand-ins:",
+        "",
+        *stand_in_lines(),
+        "",
+        "Tables and claims:",
         "",
     ]
-    out += [f"> **Warning:** {md_escape(w)}\n" for w in results.warnings]
-    out += ["## Where these numbers come from", ""] + provenance_lines(results)
-    out += comparison_lines(comparison, results, reference, reference_dir)
-    out += ["", "## Stand-ins", ""] + stand_in_lines()
-    out += ["", "## Tables", ""]
     for name, caption in TABLE_CAPTIONS.items():
         if (out_dir / "tables" / f"{name}.md").is_file():
             out.append(f"- [{caption}](tables/{name}.md) ([LaTeX](tables/{name}.tex))")
-        else:
-            out.append(f"- {caption} Not generated yet.")
     out += claims_lines(claims)
     out += ["- [The report's numbers](report/report-tables.csv) as printed ([provenance](report/README.md))."]
-    out += claims_section(claims)
-    out += cost_model_section(out_dir)
-    out += ["", "## Figures", ""] + figure_lines(out_dir, figures)
-    out += beyond_report_lines(out_dir)
     out += [
         "",
-        "## Reading the comparison",
+        "Reading the comparison:",
         "",
         f"- The report measured on another machine ({REPORT_MACHINE}) with a much slower "
         f"implementation: compare orderings and ratios (the 'relative to BVH' tables and "
@@ -235,6 +276,37 @@ def report_markdown(
         "side by side and check both facts in their notes.",
         '- Our "#int. tests" are primitive tests summed over all rays (primary + shadow); '
         "the report does not define its count.",
+    ]
+    return out + claims_section(claims) + cost_model_section(out_dir)
+
+
+def report_markdown(
+    results: Results,
+    out_dir: Path,
+    claims: ClaimsResult | None,
+    figures: dict | None,
+    comparison: list[ThreeWay] | None = None,
+    reference: Results | None = None,
+    ranked: Results | None = None,
+) -> str:
+    """`ranked`: the rows the ranking shows (every measured row of the run but the thread
+    scaling's); `results` those of the report's workload, which the figures drew."""
+    ranked = ranked if ranked is not None else results
+    out = [f"# accelbench results: {md_escape(out_dir.resolve().name)}", "", provenance_line(results), ""]
+    out += [f"> **Warning:** {md_escape(w)}\n" for w in ranked.warnings]
+    out += ranking_markdown(ranked)
+    measured = report_models_measured(results)
+    if measured:
+        out += claims_count_lines(claims)
+    drawn = figure_lines(out_dir, figures, say_skipped=measured)
+    out += ["", "## Figures", ""] + drawn if drawn else []
+    out += beyond_report_lines(out_dir)
+    if measured:
+        # What choosing the report's workload left out (report_rows) concerns its tables only.
+        out += report_section(out_dir, claims, [w for w in results.warnings if w not in ranked.warnings])
+    out += comparison_lines(comparison, reference)
+    out += ["", "## Where these numbers come from", ""] + provenance_lines(results)
+    out += [
         "",
         "## Regenerate",
         "",
@@ -253,9 +325,11 @@ def write_report(
     figures: dict | None = None,
     comparison: list[ThreeWay] | None = None,
     reference: Results | None = None,
-    reference_dir: Path | None = None,
+    ranked: Results | None = None,
 ) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "tables").mkdir(exist_ok=True)
+    (out_dir / RANKING_DOC).write_text(full_ranking_markdown(ranked if ranked is not None else results))
     path = out_dir / "REPORT.md"
-    path.write_text(report_markdown(results, out_dir, claims, figures, comparison, reference, reference_dir))
+    path.write_text(report_markdown(results, out_dir, claims, figures, comparison, reference, ranked))
     return path
