@@ -1,0 +1,1 @@
+"""Parameter grid search: grid configs and the ranking of their candidates."""

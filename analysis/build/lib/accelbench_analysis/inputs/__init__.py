@@ -1,0 +1,1 @@
+"""What is read: the harness CSVs and their contract (schema), the report's numbers."""

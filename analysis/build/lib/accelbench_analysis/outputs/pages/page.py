@@ -1,0 +1,106 @@
+"""The HTML shell every page of the analysis shares (a run's index.html, results/index.html,
+results/history/index.html): one self-contained file that opens from file:// with no
+network. Its style sheet and script (sortable, filterable tables; Vega-Lite figures) come
+from assets/ beside this file; Vega, Vega-Lite and vega-embed are inlined from the
+vl-convert-python package (analysis/requirements.txt pins it), never fetched from a CDN;
+PNGs are embedded as data: URIs.
+
+A table of class `data` gets a filter box and sortable headers; a `<div class="vega">`
+followed by a `<script type="application/json" class="vega-spec">` is drawn with
+vegaEmbed. When every figure is drawn, the page sets `data-charts="ready"` on <html>
+(or "failed" after a console error), which the browser test waits for."""
+
+from __future__ import annotations
+
+import base64
+import html
+import json
+from functools import lru_cache
+from pathlib import Path
+
+ASSETS = Path(__file__).resolve().parent / "assets"
+DOCTYPE = "<!DOCTYPE html>"
+
+
+@lru_cache(maxsize=1)
+def vega_bundle() -> str:
+    """Vega, Vega-Lite and vega-embed as one classic script that sets window.vegaEmbed.
+    vl-convert builds it from the copies inside the package (about 0.9 MB, 2 s the first
+    time in a process)."""
+    import vl_convert
+
+    return vl_convert.javascript_bundle()
+
+
+def inline_script(code: str) -> str:
+    # "</script" inside a script would close the element early; "<\/" reads the same in JS.
+    return "<script>" + code.replace("</script", "<\\/script") + "</script>"
+
+
+def json_script(value, css_class: str) -> str:
+    """A JSON document inside the page, read by page.js (JSON.parse of its text)."""
+    text = json.dumps(value, separators=(",", ":"), allow_nan=False)
+    return f'<script type="application/json" class="{css_class}">' + text.replace("</", "<\\/") + "</script>"
+
+
+def png_data_uri(path: Path) -> str:
+    return "data:image/png;base64," + base64.b64encode(path.read_bytes()).decode("ascii")
+
+
+def vega_figure(spec: dict, source: str) -> str:
+    """An interactive figure: where page.js draws `spec`; `source` names the file it came from."""
+    return f'<div class="vega" data-source="{html.escape(source)}"></div>' + json_script(spec, "vega-spec")
+
+
+def data_table(head: list[str], rows: list[str]) -> str:
+    """A sortable, filterable table: header texts, and rows already written as <tr>...</tr>."""
+    cells = "".join(f"<th>{html.escape(h)}</th>" for h in head)
+    return (
+        f'<div class="table-wrap"><table class="data"><thead><tr>{cells}</tr></thead>'
+        f"<tbody>{''.join(rows)}</tbody></table></div>"
+    )
+
+
+def write_page(path: Path, text: str) -> Path:
+    """Replaces the file at once: a browser never opens half a page."""
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(text)
+    tmp.replace(path)
+    return path
+
+
+def page(
+    title: str, body: str, *, nav: list[tuple[str, str]] = (), charts: bool = False, note: str = ""
+) -> str:
+    """The whole document. nav: (anchor, label) for the side bar; charts: inline the Vega
+    bundle (only pages with interactive figures carry its 0.9 MB)."""
+    links = "".join(f'<li><a href="#{html.escape(a)}">{html.escape(label)}</a></li>' for a, label in nav)
+    side = f'<nav class="toc"><p class="toc-title">On this page</p><ul>{links}</ul></nav>' if nav else ""
+    scripts = (inline_script(vega_bundle()) if charts else "") + inline_script(
+        (ASSETS / "page.js").read_text()
+    )
+    return "\n".join(
+        [
+            DOCTYPE,
+            '<html lang="en" data-charts="pending">',
+            "<head>",
+            '<meta charset="utf-8">',
+            '<meta name="viewport" content="width=device-width, initial-scale=1">',
+            # No request may leave the page: the figures and scripts are inline, links stay local.
+            '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; '
+            "img-src data:; style-src 'unsafe-inline'; script-src 'unsafe-inline' 'unsafe-eval'\">",
+            f"<title>{html.escape(title)}</title>",
+            f"<style>{(ASSETS / 'page.css').read_text()}</style>",
+            "</head>",
+            "<body>",
+            side,
+            '<main class="content">',
+            f'<p class="page-note">{note}</p>' if note else "",
+            body,
+            "</main>",
+            scripts,
+            "</body>",
+            "</html>",
+            "",
+        ]
+    )
