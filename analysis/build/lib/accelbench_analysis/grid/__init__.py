@@ -1,1 +1,0 @@
-"""Parameter grid search: grid configs and the ranking of their candidates."""

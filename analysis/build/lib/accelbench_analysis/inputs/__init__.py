@@ -1,1 +1,0 @@
-"""What is read: the harness CSVs and their contract (schema), the report's numbers."""
