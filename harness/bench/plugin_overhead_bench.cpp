@@ -92,9 +92,9 @@ bool measure(const std::string& name, const ModelRegistry& registry, int rounds)
         ratio.push_back(tb / ta);
     }
     const double r = median(ratio);
-    std::printf("%-18s %9zu %7zu %11.2f %11.2f %8.4f %8.4f  %s\n", name.c_str(), rays.primary.size() + rays.shadow.size(),
-                rays.primary_batch_end.size() + rays.shadow_batch_end.size(), 1e3 * median(a), 1e3 * median(b),
-                median(b) / median(a), r, r <= 1.03 ? "met" : "NOT met");
+    std::printf("%-18s %9zu %7zu %11.2f %11.2f %8.4f %8.4f  %s\n", name.c_str(),
+                rays.primary.size() + rays.shadow.size(), rays.primary_batch_end.size() + rays.shadow_batch_end.size(),
+                1e3 * median(a), 1e3 * median(b), median(b) / median(a), r, r <= 1.03 ? "met" : "NOT met");
     return true;
 }
 

@@ -14,7 +14,8 @@
 namespace accelbench {
 namespace {
 
-void expect_peer_agrees(const char* file, const std::vector<std::pair<const char*, std::map<std::string, std::string>>>& runs) {
+void expect_peer_agrees(const char* file,
+                        const std::vector<std::pair<const char*, std::map<std::string, std::string>>>& runs) {
     const std::string path = std::string(ACCELBENCH_PEER_PLUGIN_DIR) + "/" + file;
     if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not built: ../shared/peers lacks its library";
     load_plugin_file(path);
@@ -27,9 +28,10 @@ void expect_peer_agrees(const char* file, const std::vector<std::pair<const char
             std::string what = std::string(name) + " on " + kind;
             for (const auto& [k, v] : params) what += " " + k + "=" + v;
             const test::Agreement a = test::compare_with_embree(scene, *accel, rays);
-            std::printf("[peer agreement] %s: %zu rays, %zu hit/miss mismatches, %zu prim mismatches, %zu ties, "
-                        "%zu shadow mismatches\n",
-                        what.c_str(), a.rays, a.mismatched_hit, a.mismatched_prim, a.ties, a.mismatched_occlusion);
+            std::printf(
+                "[peer agreement] %s: %zu rays, %zu hit/miss mismatches, %zu prim mismatches, %zu ties, "
+                "%zu shadow mismatches\n",
+                what.c_str(), a.rays, a.mismatched_hit, a.mismatched_prim, a.ties, a.mismatched_occlusion);
             EXPECT_EQ(a.mismatched_hit, 0u) << what;
             EXPECT_EQ(a.mismatched_prim, 0u) << what;
             EXPECT_EQ(a.mismatched_occlusion, 0u) << what;
@@ -38,11 +40,12 @@ void expect_peer_agrees(const char* file, const std::vector<std::pair<const char
 }
 
 TEST(PeerPlugins, TinybvhAgreesWithEmbree) {
-    expect_peer_agrees("tinybvh.so", {{"tinybvh_bvh", {}},
-                                      {"tinybvh_bvh", {{"builder", "hq"}}},
-                                      {"tinybvh_bvh4", {}},
-                                      {"tinybvh_bvh8", {}},
-                                      {"tinybvh_bvh8", {{"builder", "hq"}}}});
+    expect_peer_agrees("tinybvh.so",
+                       {{"tinybvh_bvh", {}},
+                        {"tinybvh_bvh", {{"builder", "hq"}}},
+                        {"tinybvh_bvh4", {}},
+                        {"tinybvh_bvh8", {}},
+                        {"tinybvh_bvh8", {{"builder", "hq"}}}});
 }
 
 TEST(PeerPlugins, BvhV2AgreesWithEmbree) {

@@ -24,6 +24,7 @@
 #ifndef ACCELBENCH_PLUGIN_H
 #define ACCELBENCH_PLUGIN_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -133,6 +134,13 @@ typedef struct accelbench_build_stats {
     const double* extra_values;
 } accelbench_build_stats;
 
+/* Every figure unknown: what build_stats starts from (the harness passes it so filled). */
+static inline accelbench_build_stats accelbench_unknown_build_stats(void) {
+    accelbench_build_stats s = {ACCELBENCH_UNKNOWN_COUNT, ACCELBENCH_UNKNOWN_COUNT, ACCELBENCH_UNKNOWN_COUNT,
+                                ACCELBENCH_UNKNOWN_COUNT, NAN, NAN, 0, NULL, NULL};
+    return s;
+}
+
 /* A structure's instance, defined by the plugin. */
 typedef struct accelbench_structure accelbench_structure;
 
@@ -167,8 +175,8 @@ typedef struct accelbench_structure_desc {
      * (a miss as accelbench_hit says). counters is NULL, or count entries to add each
      * ray's counts to. A ray that is not finite, has a zero direction or a NaN bound is a
      * miss. */
-    void (*closest_hits)(const accelbench_structure* s, const accelbench_ray* rays, accelbench_hit* hits, uint64_t count,
-                         accelbench_ray_counters* counters);
+    void (*closest_hits)(const accelbench_structure* s, const accelbench_ray* rays, accelbench_hit* hits,
+                         uint64_t count, accelbench_ray_counters* counters);
     /* Whether anything lies within [tmin, tmax) of each ray: occluded[i] = 1 or 0. */
     void (*any_hits)(const accelbench_structure* s, const accelbench_ray* rays, uint8_t* occluded, uint64_t count,
                      accelbench_ray_counters* counters);

@@ -49,9 +49,9 @@ accelbench_structure* create(const accelbench_param_value* p, uint32_t, char* er
         std::snprintf(error, error_size, "out of memory");
         return nullptr;
     }
-    s->quality = std::strcmp(p[0].enum_value, "low") == 0  ? Builder::Quality::Low
-        : std::strcmp(p[0].enum_value, "medium") == 0 ? Builder::Quality::Medium
-                                                      : Builder::Quality::High;
+    s->quality = std::strcmp(p[0].enum_value, "low") == 0 ? Builder::Quality::Low
+        : std::strcmp(p[0].enum_value, "medium") == 0     ? Builder::Quality::Medium
+                                                          : Builder::Quality::High;
     s->threads = p[1].int_value;
     s->max_leaf_size = p[2].int_value;
     s->robust = p[3].bool_value != 0;
@@ -134,7 +134,7 @@ void any_hits(const accelbench_structure* handle, const accelbench_ray* rays, ui
 
 void build_stats(const accelbench_structure* handle, accelbench_build_stats* stats) {
     const Structure& s = self(handle);
-    *stats = peer_plugin::unknown_stats();
+    *stats = accelbench_unknown_build_stats();
     if (s.tris.empty()) return;
     uint64_t leaves = 0;
     for (const Node& node : s.bvh.nodes) leaves += node.is_leaf() ? 1 : 0;

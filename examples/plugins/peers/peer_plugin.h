@@ -32,9 +32,4 @@ int guarded(char* error, size_t error_size, F&& f) {
     }
 }
 
-inline accelbench_build_stats unknown_stats() {
-    return {ACCELBENCH_UNKNOWN_COUNT, ACCELBENCH_UNKNOWN_COUNT, ACCELBENCH_UNKNOWN_COUNT, ACCELBENCH_UNKNOWN_COUNT,
-            NAN, NAN, 0, nullptr, nullptr};
-}
-
 }  // namespace peer_plugin

@@ -8,8 +8,8 @@
 #include <tiny_bvh.h>
 
 #include <cstring>
-#include <type_traits>
 #include <memory>
+#include <type_traits>
 #include <vector>
 
 #include "peer_plugin.h"
@@ -143,13 +143,13 @@ void any_hits(const accelbench_structure* handle, const accelbench_ray* rays, ui
 template <class Layout>
 void build_stats(const accelbench_structure* handle, accelbench_build_stats* stats) {
     const Structure<Layout>& s = self<Layout>(handle);
-    *stats = peer_plugin::unknown_stats();
+    *stats = accelbench_unknown_build_stats();
     if constexpr (std::is_same_v<Layout, tinybvh::BVH>) {
         if (s.vertices.empty() || s.bvh.usedNodes == 0) return;
         stats->nodes = uint64_t(s.bvh.NodeCount());
         stats->leaves = uint64_t(s.bvh.LeafCount());
-        stats->memory_bytes = uint64_t(s.bvh.usedNodes) * sizeof(tinybvh::BVH::BVHNode) +
-            uint64_t(s.bvh.idxCount) * sizeof(uint32_t);
+        stats->memory_bytes =
+            uint64_t(s.bvh.usedNodes) * sizeof(tinybvh::BVH::BVHNode) + uint64_t(s.bvh.idxCount) * sizeof(uint32_t);
     } else {
         stats->memory_bytes = uint64_t(s.bvh.usedBlocks) * 16;  // its 16-byte blocks of nodes and triangles
     }
@@ -193,9 +193,9 @@ const accelbench_structure_desc kStructures[] = {
 
 #define PEER_TEXT(x) #x
 #define PEER_VERSION(major, minor, sub) "tinybvh " PEER_TEXT(major) "." PEER_TEXT(minor) "." PEER_TEXT(sub)
-const accelbench_plugin kPlugin = {
-    ACCELBENCH_PLUGIN_ABI_VERSION,
-    PEER_VERSION(TINY_BVH_VERSION_MAJOR, TINY_BVH_VERSION_MINOR, TINY_BVH_VERSION_SUB), kStructures, 3};
+const accelbench_plugin kPlugin = {ACCELBENCH_PLUGIN_ABI_VERSION,
+                                   PEER_VERSION(TINY_BVH_VERSION_MAJOR, TINY_BVH_VERSION_MINOR, TINY_BVH_VERSION_SUB),
+                                   kStructures, 3};
 
 }  // namespace
 

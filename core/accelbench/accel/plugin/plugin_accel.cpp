@@ -62,15 +62,7 @@ public:
     }
 
     BuildStats build_stats() const override {
-        accelbench_build_stats s{ACCELBENCH_UNKNOWN_COUNT,
-                                 ACCELBENCH_UNKNOWN_COUNT,
-                                 ACCELBENCH_UNKNOWN_COUNT,
-                                 ACCELBENCH_UNKNOWN_COUNT,
-                                 NAN,
-                                 NAN,
-                                 0,
-                                 nullptr,
-                                 nullptr};
+        accelbench_build_stats s = accelbench_unknown_build_stats();
         desc_.build_stats(handle_, &s);
         auto count = [](uint64_t v) { return v == ACCELBENCH_UNKNOWN_COUNT ? std::nullopt : std::optional(v); };
         auto real = [](double v) { return std::isfinite(v) ? std::optional(v) : std::nullopt; };
