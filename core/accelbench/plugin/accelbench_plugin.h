@@ -136,8 +136,15 @@ typedef struct accelbench_build_stats {
 
 /* Every figure unknown: what build_stats starts from (the harness passes it so filled). */
 static inline accelbench_build_stats accelbench_unknown_build_stats(void) {
-    accelbench_build_stats s = {ACCELBENCH_UNKNOWN_COUNT, ACCELBENCH_UNKNOWN_COUNT, ACCELBENCH_UNKNOWN_COUNT,
-                                ACCELBENCH_UNKNOWN_COUNT, NAN, NAN, 0, NULL, NULL};
+    accelbench_build_stats s = {ACCELBENCH_UNKNOWN_COUNT,
+                                ACCELBENCH_UNKNOWN_COUNT,
+                                ACCELBENCH_UNKNOWN_COUNT,
+                                ACCELBENCH_UNKNOWN_COUNT,
+                                NAN,
+                                NAN,
+                                0,
+                                NULL,
+                                NULL};
     return s;
 }
 
