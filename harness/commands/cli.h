@@ -4,6 +4,7 @@
 // holds the table of subcommands.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,10 @@ int models_command(int argc, char** argv);
 int provenance_command(int argc, char** argv);
 int columns_command(int argc, char** argv);
 int convert_csv_command(int argc, char** argv);
+
+// `--plugin PATH` (run, list, render): loads each plugin into the registry; on a refusal
+// prints "accelbench COMMAND: plugin PATH: problem" and returns 2, the exit code.
+std::optional<int> load_plugins(const char* command, const std::vector<std::string>& paths);
 
 // NAME (registry), PATH (a mesh file) or procedural:KIND[,k=v...], loaded the way the
 // harness loads a config's model (load_model: the registry's or procedural scene's own

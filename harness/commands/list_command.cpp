@@ -15,14 +15,22 @@ namespace accelbench {
 
 int list_command(int argc, char** argv) {
     bool structures = false;
+    std::string plugin;
+    std::vector<std::string> plugins;
     Args args("list",
-              "usage: accelbench list [--structures]\n"
+              "usage: accelbench list [--structures] [--plugin PATH ...]\n"
               "  the accelerators with their parameters (type, default, range), the procedural scenes\n"
               "  with theirs, and the robustness cases with their requirements\n"
               "  --structures: one line per registered structure, in registry order, for scripts:\n"
-              "  name, tab, label at the defaults, tab, whether it counts traversal (yes/no)\n",
+              "  name, tab, label at the defaults, tab, whether it counts traversal (yes/no)\n"
+              "  --plugin PATH: also the structures of this plugin (accelbench_plugin.h); repeatable\n",
               argc, argv);
-    if (auto code = args.walk([&] { structures = args.flag("--structures") || args.unknown(); })) return *code;
+    const auto each = [&] {
+        if (args.value("--plugin", plugin)) plugins.push_back(plugin);
+        else structures = args.flag("--structures") || args.unknown();
+    };
+    if (auto code = args.walk(each)) return *code;
+    if (auto code = load_plugins("list", plugins)) return *code;
     if (structures) {
         for (const auto& info : accelerator_registry())
             std::printf("%s\t%s\t%s\n", info.name.c_str(),
@@ -51,6 +59,8 @@ int list_command(int argc, char** argv) {
         const ParamSet defaults = resolve_params(info.name, info.params, {});
         std::printf("  %s — %s (label: %s)\n", info.name.c_str(), info.description.c_str(),
                     info.label(defaults).c_str());
+        if (info.plugin)
+            std::printf("    from plugin %s, version %s\n", info.plugin->file.c_str(), info.plugin->version.c_str());
         print_params(info.params);
     }
     std::printf("\nprocedural scenes (--model procedural:KIND,k=v,...):\n");

@@ -30,6 +30,8 @@ const char* kRenderUsage =
     "usage: accelbench render --model NAME|PATH|procedural:KIND[,k=v...] --accel NAME\n"
     "         [--param k=v ...] [--out img.png] [--width W] [--height H] [--spp N]\n"
     "         [--no-light] [--threads N] [--fp-mode ieee|ftz_daz] [--cost-out PREFIX]\n"
+    "         [--plugin PATH ...]\n"
+    "--plugin PATH loads the structures of a plugin (accelbench_plugin.h), so --accel can name them\n"
     "--cost-out PREFIX writes PREFIX-node_visits.png, PREFIX-prim_tests.png (heatmaps, inferno,\n"
     "each scaled to its own maximum) and PREFIX-cost.csv (per-pixel values)\n";
 
@@ -72,7 +74,8 @@ LoadedModel resolve_model(const std::string& text, const ModelRegistry& registry
 }
 
 int render_command(int argc, char** argv) {
-    std::string model, accel_name, out, cost_out, param, fp_mode;
+    std::string model, accel_name, out, cost_out, param, fp_mode, plugin;
+    std::vector<std::string> plugins;
     std::map<std::string, std::string> params;
     TraceRequest req;
     req.counts = CountMode::Totals;
@@ -86,6 +89,8 @@ int render_command(int argc, char** argv) {
             } catch (const ParamError& e) {
                 throw ArgError(e.what());
             }
+        } else if (args.value("--plugin", plugin)) {
+            plugins.push_back(plugin);
         } else if (args.flag("--no-light")) {
             r.light = false;
         } else if (!(args.value("--model", model) || args.value("--accel", accel_name) || args.value("--out", out) ||
@@ -97,6 +102,7 @@ int render_command(int argc, char** argv) {
     };
     if (auto code = args.walk(each)) return *code;
     if (model.empty() || accel_name.empty()) return args.error("--model and --accel are required");
+    if (auto code = load_plugins("render", plugins)) return *code;
     if (!fp_mode.empty()) {
         const auto mode = parse_fp_mode(fp_mode);
         const std::vector<std::string> names(fp_mode_names().begin(), fp_mode_names().end());

@@ -34,6 +34,8 @@ const char* kRunUsage =
     "                        --out: the newest results/runs/<name>-*.csv of this shard)\n"
     "  --shard I/N           run only shard I (0-based) of N, chosen by a hash of each combination;\n"
     "                        default from SLURM_ARRAY_TASK_ID / SLURM_ARRAY_TASK_COUNT\n"
+    "  --plugin PATH         load the structures of a plugin (accelbench_plugin.h); repeatable, like\n"
+    "                        the config's `plugins:`\n"
     "  --in-process          measure in this process (no fork: for debuggers and profilers; a time\n"
     "                        limit is then checked only between repetitions, and a crash ends the run)\n"
     "  --show-repetitions    print every repetition, not only Google Benchmark's aggregates\n"
@@ -97,7 +99,8 @@ int run(const RunOptions& opt) {
 int run_command(int argc, char** argv) {
     RunOptions opt;
     std::vector<std::string> configs;
-    std::string shard;
+    std::string shard, plugin;
+    std::vector<std::string> plugins;
     Args args("run", kRunUsage, argc, argv);
     const auto each = [&] {
         const std::string& a = args.current();
@@ -107,6 +110,7 @@ int run_command(int argc, char** argv) {
         else if (args.flag("--in-process")) opt.in_process = true;
         else if (args.flag("--show-repetitions")) opt.show_repetitions = true;
         else if (args.value("--out", opt.out) || args.value("--instructions", opt.callgrind_out)) return;
+        else if (args.value("--plugin", plugin)) plugins.push_back(plugin);
         else if (args.value("--shard", shard)) opt.shard = parse_shard(shard);
         else if (args.value("--benchmark_out", opt.json_out)) return;
         else if (a.rfind("--benchmark_out_format=", 0) == 0) {
@@ -127,6 +131,7 @@ int run_command(int argc, char** argv) {
         return args.error(e.what());
     }
     if (configs.empty()) return args.error("no config given");
+    if (auto code = load_plugins("run", plugins)) return *code;
     opt.config_path = configs[0];
     if (!opt.callgrind_out.empty() && !opt.dry_run && !running_on_valgrind())
         return args.error(

@@ -133,8 +133,10 @@ Config load_config(const std::string& path, const ModelRegistry& models) {
     // `grid:` belongs to the analysis's grid search (analysis/README.md): accepted, unread.
     Fields top(r.c, root, "",
                {"name", "description", "repetitions", "warmup", "timeout_s", "errors", "render", "ray_sets", "rays",
-                "models", "accelerators", "skip", "grid"});
+                "models", "accelerators", "skip", "grid", "plugins"});
     if (!top.ok()) throw ConfigError(r.c.issues);
+    // Before `accelerators`, which may name the plugins' structures.
+    if (auto* e = top.find("plugins")) read_plugins(r, e->value);
     read_run_settings(r, top);
     r.cfg.render.shading = false;  // timing measures tracing; shading costs every structure the same
     if (auto* e = top.find("render")) read_render(r, e->value);

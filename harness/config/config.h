@@ -109,6 +109,9 @@ struct Config {
     // `render.threads` as a list (or "1..nproc"): each count is a combination of its own
     // (thread scaling); a single count gives one entry, equal to render.threads.
     std::vector<int> thread_counts = {1};
+    // `plugins`: the shared libraries loaded (resolved paths), whose structures are in the
+    // registry from then on.
+    std::vector<std::string> plugins;
     std::vector<ModelSpec> models;
     std::vector<AcceleratorSpec> accelerators;
     std::vector<SkipRule> skip;
@@ -122,6 +125,11 @@ inline constexpr uint64_t kMaxReferenceRays = uint64_t(1) << 25;  // 33,554,432:
 // A ray set's rays and answers: the ray, the reference's hit and the measurement's.
 inline constexpr uint64_t kRaySetBytesPerRay = sizeof(Ray) + 2 * sizeof(Hit);  // 64
 inline constexpr uint64_t kMaxRaySetBytes = uint64_t(1) << 31;                 // 2 GiB: 33,554,432 rays
+
+// Loads the structure plugin at `path` (`--plugin PATH`, `plugins:`) into the accelerator
+// registry, with its file's SHA-256 for the rows' provenance. Throws std::runtime_error,
+// one line naming the file and the problem.
+void load_plugin_file(const std::string& path);
 
 // Reads and validates the config at `path` against the accelerator registry, the
 // procedural scene registry and the model registry. Throws ConfigError listing every

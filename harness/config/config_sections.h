@@ -38,6 +38,7 @@ struct ConfigReader {
 
 // ---- the sections --------------------------------------------------------------------
 
+void read_plugins(ConfigReader& r, const YAML::Node& n);   // plugins_section.cpp
 void read_render(ConfigReader& r, const YAML::Node& n);    // render_section.cpp
 void read_ray_sets(ConfigReader& r, const YAML::Node& n);  // render_section.cpp
 // `rays: {file: ...}`, top-level or a model's: the ray file, read once per path.

@@ -99,6 +99,9 @@ const ColumnSpec kMeasuredColumns[] = {
     {"isa", ColumnKind::Text, "", "provenance: vector extensions compiled in"},
     {"embree_isa", ColumnKind::Text, "",
      "provenance: instruction set of the kernels Embree runs (its run-time choice)"},
+    {"plugin_file", ColumnKind::Text, "", "provenance: the plugin's shared library (empty: compiled in)"},
+    {"plugin_sha256", ColumnKind::Text, "", "provenance: SHA-256 of the plugin's file"},
+    {"plugin_version", ColumnKind::Text, "", "provenance: the plugin's own version string"},
 };
 
 // Measured and global columns that once had the name of a parameter (the limit and the
@@ -136,18 +139,20 @@ const char* column_kind_name(ColumnKind kind) {
 std::vector<ColumnSpec> result_column_table() {
     std::vector<ColumnSpec> t(std::begin(kIdentificationColumns), std::end(kIdentificationColumns));
     // Every accelerator's parameters, in registry then declaration order, each once; the
-    // text names the structures that have it.
+    // text names the structures that have it. A plugin's parameters are in `params` only,
+    // so that the header is this build's whatever plugins a run loads.
     std::map<std::string, size_t> at;  // parameter name -> its entry in t
     for (const auto& info : accelerator_registry())
-        for (const auto& p : info.params) {
-            if (auto it = at.find(p.name); it != at.end()) {
-                std::string& text = t[it->second].text;
-                text.insert(text.find(':'), ", ").insert(text.find(':'), info.name);
-                continue;
+        if (!info.plugin)
+            for (const auto& p : info.params) {
+                if (auto it = at.find(p.name); it != at.end()) {
+                    std::string& text = t[it->second].text;
+                    text.insert(text.find(':'), ", ").insert(text.find(':'), info.name);
+                    continue;
+                }
+                at.emplace(p.name, t.size());
+                t.push_back({p.name, ColumnKind::Parameter, "", "parameter of " + info.name + ": " + p.help});
             }
-            at.emplace(p.name, t.size());
-            t.push_back({p.name, ColumnKind::Parameter, "", "parameter of " + info.name + ": " + p.help});
-        }
     t.insert(t.end(), std::begin(kMeasuredColumns), std::end(kMeasuredColumns));
     return t;
 }
@@ -213,15 +218,21 @@ struct AddedColumn {
 constexpr AddedColumn kAddedColumns[] = {
     {"fp_mode", "shading", "ieee"},
     {"embree_isa", "isa", "unknown"},
+    // Plugins came later than every older row: those rows are all of structures compiled in.
+    {"plugin_file", "embree_isa", ""},
+    {"plugin_sha256", "plugin_file", ""},
+    {"plugin_version", "plugin_sha256", ""},
 };
 
 // The added columns `header` lacks (those whose predecessor it has).
 std::vector<AddedColumn> missing_added_columns(const std::vector<std::string>& header) {
+    std::set<std::string> have(header.begin(), header.end());  // with the columns added so far
     std::vector<AddedColumn> missing;
     for (const AddedColumn& c : kAddedColumns)
-        if (std::find(header.begin(), header.end(), c.after) != header.end() &&
-            std::find(header.begin(), header.end(), c.name) == header.end())
+        if (have.count(c.after) && !have.count(c.name)) {
             missing.push_back(c);
+            have.insert(c.name);
+        }
     return missing;
 }
 

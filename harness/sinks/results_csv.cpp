@@ -25,9 +25,18 @@ Row identification_row(const Config& config, const CombinationResult& result) {
     // timed together (`camera`, whether from the camera or a ray file: see ray_source).
     if (!judged) r["ray_set"] = c.ray_set ? std::string(ray_set_name(*c.ray_set)) : "camera";
     r["accel"] = c.accel;
-    if (const AcceleratorInfo* info = find_accelerator(c.accel)) r["label"] = info->label(c.params);
+    const AcceleratorInfo* info = find_accelerator(c.accel);
+    if (info) r["label"] = info->label(c.params);
     r["params"] = c.params.canonical();
-    for (const auto& [k, v] : c.params.items()) r[param_column(k)] = v;
+    // A plugin's parameters have no columns of their own (result_column_table): `params`
+    // holds them, and the plugin_* columns say where the structure came from.
+    if (info && info->plugin) {
+        r["plugin_file"] = info->plugin->file;
+        r["plugin_sha256"] = info->plugin->sha256;
+        r["plugin_version"] = info->plugin->version;
+    } else {
+        for (const auto& [k, v] : c.params.items()) r[param_column(k)] = v;
+    }
     if (!model.rays && !judged) {
         r["image_width"] = std::to_string(config.render.width);
         r["image_height"] = std::to_string(config.render.height);

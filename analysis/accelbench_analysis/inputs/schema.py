@@ -141,6 +141,10 @@ PROVENANCE_IDENTITY = [
 # either existed load with "unknown".
 ISA_COLUMN = "isa"
 EMBREE_ISA_COLUMN = "embree_isa"
+# Where a structure loaded from a plugin came from (the harness's --plugin / `plugins:`):
+# its shared library, the file's SHA-256 and the plugin's own version; empty for structures
+# compiled in, and in files written before plugins existed.
+PLUGIN_COLUMNS = ["plugin_file", "plugin_sha256", "plugin_version"]
 
 # The results CSV's columns other than the parameters' (which sit between `params` and
 # `status`, one per parameter name of the registry), in the harness's order, with their kind
@@ -201,6 +205,7 @@ RESULT_CSV_COLUMNS: list[tuple[str, str]] = [
     ("timestamp", "text"),
     (ISA_COLUMN, "text"),
     (EMBREE_ISA_COLUMN, "text"),
+    *[(c, "text") for c in PLUGIN_COLUMNS],
 ]
 
 # Build types whose timings are representative (the Makefile builds RelWithDebInfo).
@@ -581,6 +586,8 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     for col in (ISA_COLUMN, EMBREE_ISA_COLUMN):
         if col not in df.columns:
             df[col] = "unknown"
+    for col in PLUGIN_COLUMNS:
+        df[col] = df[col].fillna("").astype(str) if col in df.columns else ""
     for col in PROVENANCE_IDENTITY + ["timestamp"]:
         df[col] = df[col].astype(str).str.strip()
     return df

@@ -98,6 +98,14 @@ public:
     }
 };
 
+// Where a structure loaded from a plugin came from (accel/plugin/plugin_accel.h): every
+// CSV row of it records these (plugin_file, plugin_sha256, plugin_version).
+struct PluginSource {
+    std::string file;     // the shared library, as given to --plugin or `plugins:`
+    std::string sha256;   // of the file's bytes
+    std::string version;  // the plugin's own version string
+};
+
 // What the factory and the harness know of a structure: its name, its declared
 // parameters and how to make one. Each structure's static info() returns it; only the
 // registry (accel/registry.cpp) lists them all.
@@ -127,6 +135,9 @@ struct AcceleratorInfo {
     // bound it: robustness cases hold the structure to it. Empty: no bound of its own.
     std::function<std::optional<uint64_t>(const ParamSet&)> depth_limit =
         [](const ParamSet&) -> std::optional<uint64_t> { return std::nullopt; };
+    // Set for a structure from a plugin (its role is `plugin`); empty for ours and the
+    // baselines, which are compiled in.
+    std::optional<PluginSource> plugin = std::nullopt;
 };
 
 // A label that does not depend on the parameters.

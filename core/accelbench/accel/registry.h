@@ -19,6 +19,13 @@ namespace accelbench {
 
 const std::vector<AcceleratorInfo>& accelerator_registry();
 
+// Loads the plugin at `path` (accel/plugin/plugin_accel.h) and appends its structures, so
+// that they are found, listed and run like ours; `sha256` is the file's, for the rows'
+// provenance. A file loaded already is not loaded again. Throws PluginError (one line,
+// naming the file): a plugin that cannot be loaded, or a structure name the registry has
+// (built in or from another plugin). Call before looking structures up: entries move.
+void register_plugin(const std::string& path, const std::string& sha256);
+
 // nullptr if there is no accelerator of that name.
 const AcceleratorInfo* find_accelerator(std::string_view name);
 
