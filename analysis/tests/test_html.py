@@ -52,10 +52,15 @@ def test_every_table_and_figure_of_the_run_is_on_its_page_once(analysed_run, pag
     assert "tables/ray_sets.md" in docs and "figures/cost-stanford-bunny.png" in pngs
     for d in docs:
         assert shown.count(d) == 1, d
+    # A figure is shown once: as its Vega-Lite specification where it has one, else its PNG.
+    interactive = {p for p in pngs if (analysed_run / p.replace(".png", ".vl.json")).is_file()}
+    assert interactive, "no figure has a specification"
     for p in pngs:
-        assert el.attr("data-source", "img").count(p) == 1, p
+        assert el.attr("data-source", "figure").count(p) == 1, p
+        assert el.attr("data-source", "img").count(p) == (p not in interactive), p
     images = [s for s in el.attr("src", "img")]
-    assert len(images) == len(pngs) and all(s.startswith("data:image/png;base64,") for s in images)
+    assert len(images) == len(pngs) - len(interactive)
+    assert all(s.startswith("data:image/png;base64,") for s in images)
     for name in SPECS:
         assert (analysed_run / "figures" / f"{name}.vl.json").is_file(), name
         assert f"figures/{name}.vl.json" in el.attr("data-source", "div"), name
