@@ -303,3 +303,37 @@ def test_the_files_beside_a_results_file_are_not_results_of_their_own(machine):
     assert "left out" not in (results / "history" / "index.html").read_text()
     runs = (results / "index.html").read_text()
     assert "run-1.csv" in runs and "run-1.inputs.csv" not in runs
+
+
+def colour_scales(node) -> list[dict]:
+    """Every colour scale with a domain in a Vega-Lite specification."""
+    found = []
+    if isinstance(node, dict):
+        scale = node.get("color", {}).get("scale", {}) if isinstance(node.get("color"), dict) else {}
+        if "domain" in scale and "range" in scale:
+            found.append(dict(zip(scale["domain"], scale["range"])))
+        for v in node.values():
+            found += colour_scales(v)
+    elif isinstance(node, list):
+        for v in node:
+            found += colour_scales(v)
+    return found
+
+
+def test_every_structure_has_one_colour_and_label_in_every_figure(analysed_run):
+    """The page's specifications (from which the PNGs are rendered too): a structure is
+    drawn under the structure table's label and in the same colour wherever it appears."""
+    from accelbench_analysis.mapping.structures import table_labels
+
+    colours: dict[str, set[str]] = {}
+    for spec in sorted((analysed_run / "figures").glob("*.vl.json")):
+        for scale in colour_scales(json.loads(spec.read_text())):
+            for label, colour in scale.items():
+                colours.setdefault(label, set()).add(colour)
+    # The table's structures keep their places whatever else a figure draws; a setting shown
+    # beside its structure ("Embree [robust=true]") takes a place after them, per figure.
+    known = set(table_labels())
+    drawn = {label for label in colours if label in known}
+    assert len(drawn) >= 4, sorted(colours)
+    assert {label: c for label, c in colours.items() if label in known and len(c) > 1} == {}
+    assert not [label for label in colours if label.startswith(("wbvh", "bvh ", "embree"))], sorted(colours)
