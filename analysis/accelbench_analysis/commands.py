@@ -20,10 +20,11 @@ from .grid.grid_config import GridConfigError
 from .inputs.load import load_results
 from .inputs.report_numbers import DEFAULT_REPORT_NUMBERS, load_report_numbers
 from .inputs.schema import ContractError, Results
+from .mapping.structures import StructureTableError
 
 EXIT_BAD_INPUT = 2
 # What a command raises on input it cannot use: the command line prints it and exits 2.
-BAD_INPUT = (ContractError, GridConfigError, ValueError, FileNotFoundError)
+BAD_INPUT = (ContractError, GridConfigError, StructureTableError, ValueError, FileNotFoundError)
 
 
 @dataclass(frozen=True)

@@ -204,6 +204,65 @@ SAH = {"split": "sah", "max_prims": "4", "max_depth": "64", "bins": "16", "threa
 EMBREE = {"threads": "1", "quality": "medium", "robust": "false"}
 
 
+def error_counts(rng, accel: str) -> dict:
+    """A row's error columns: a few wrong answers for ours (more for the kd-tree), none for
+    Embree's answers."""
+    errs = {
+        "false_misses": int(rng.poisson(3 if accel == "kdtree" else 1)),
+        "false_hits": int(rng.poisson(0.5)),
+        "prim_mismatches": int(rng.poisson(2)),
+        "t_err_ulp_p50": 0,
+        "t_err_ulp_max": int(rng.integers(1, 8)),
+        "nan_results": 0,
+        "image_rmse": 0.001,
+        "hole_pixels": 0,
+    }
+    if accel == "embree":
+        errs.update(false_misses=0, false_hits=0, prim_mismatches=0)
+    return errs
+
+
+def table2_rows(rng, jitter) -> list[dict]:
+    """Table 2's kd-tree sweeps on the bunny (max_prims, then max_depth)."""
+    rows = []
+    tri = MODELS["stanford-bunny"][0]
+    for mp in ("1", "2", "4", "10", "30", "100"):
+        p = dict(KD, max_prims=mp)
+        f = float(mp)
+        rows.append(
+            row(
+                "stanford-bunny",
+                "kdtree",
+                p,
+                config="table2",
+                build=0.15 / (1 + 0.3 * math.log10(f)) * jitter(),
+                render=0.35 * (1 + 0.08 * math.log10(f) ** 2) * jitter(),
+                nodes=int(5.5 * tri / f**1.2),
+                prim_tests=int(4 * 457200 * f**0.9),
+                node_visits=int(45 * 457200 / (1 + math.log10(f))),
+                errors={"false_misses": int(rng.poisson(2)), "false_hits": 0},
+            )
+        )
+    for d in ("5", "10", "15", "20", "28", "40", "100"):
+        p = dict(KD, max_depth=d)
+        dd = min(float(d), 29.0)
+        rows.append(
+            row(
+                "stanford-bunny",
+                "kdtree",
+                p,
+                config="table2",
+                build=0.01 + 0.14 * dd / 29 * jitter(),
+                render=0.33 * (1 + 40 * math.exp(-dd / 3.0)) * jitter(),
+                nodes=int(min(2**dd, 5.5 * tri)),
+                prim_tests=int(4 * 457200 * (1 + 3000 * math.exp(-dd / 2.2))),
+                node_visits=int(45 * 457200 * dd / 29),
+                errors={"false_misses": int(rng.poisson(2)), "false_hits": 0},
+            )
+        )
+    return rows
+
+
 def realistic_rows(seed: int = 7, with_errors: bool = True) -> list[dict]:
     """A plausible full run: Tables 4/5 structures on six models, Table 2 sweeps on the
     bunny, noise from a fixed seed. Orderings follow the report's findings loosely."""
@@ -253,18 +312,7 @@ def realistic_rows(seed: int = 7, with_errors: bool = True) -> list[dict]:
                         else int(tri * (0.6 if split == "sah" else 5.5))
                     )
                 )
-                errs = {
-                    "false_misses": int(rng.poisson(3 if accel == "kdtree" else 1)),
-                    "false_hits": int(rng.poisson(0.5)),
-                    "prim_mismatches": int(rng.poisson(2)),
-                    "t_err_ulp_p50": 0,
-                    "t_err_ulp_max": int(rng.integers(1, 8)),
-                    "nan_results": 0,
-                    "image_rmse": 0.001,
-                    "hole_pixels": 0,
-                }
-                if accel == "embree":
-                    errs.update(false_misses=0, false_hits=0, prim_mismatches=0)
+                errs = error_counts(rng, accel)
                 rows.append(
                     row(
                         model,
@@ -279,42 +327,7 @@ def realistic_rows(seed: int = 7, with_errors: bool = True) -> list[dict]:
                         config="table5" if "procedural" in model else "table4",
                     )
                 )
-    # Table 2: kd-tree sweeps on the bunny.
-    tri = MODELS["stanford-bunny"][0]
-    for mp in ("1", "2", "4", "10", "30", "100"):
-        p = dict(KD, max_prims=mp)
-        f = float(mp)
-        rows.append(
-            row(
-                "stanford-bunny",
-                "kdtree",
-                p,
-                config="table2",
-                build=0.15 / (1 + 0.3 * math.log10(f)) * jitter(),
-                render=0.35 * (1 + 0.08 * math.log10(f) ** 2) * jitter(),
-                nodes=int(5.5 * tri / f**1.2),
-                prim_tests=int(4 * 457200 * f**0.9),
-                node_visits=int(45 * 457200 / (1 + math.log10(f))),
-                errors={"false_misses": int(rng.poisson(2)), "false_hits": 0},
-            )
-        )
-    for d in ("5", "10", "15", "20", "28", "40", "100"):
-        p = dict(KD, max_depth=d)
-        dd = min(float(d), 29.0)
-        rows.append(
-            row(
-                "stanford-bunny",
-                "kdtree",
-                p,
-                config="table2",
-                build=0.01 + 0.14 * dd / 29 * jitter(),
-                render=0.33 * (1 + 40 * math.exp(-dd / 3.0)) * jitter(),
-                nodes=int(min(2**dd, 5.5 * tri)),
-                prim_tests=int(4 * 457200 * (1 + 3000 * math.exp(-dd / 2.2))),
-                node_visits=int(45 * 457200 * dd / 29),
-                errors={"false_misses": int(rng.poisson(2)), "false_hits": 0},
-            )
-        )
+    rows += table2_rows(rng, jitter)
     rows.append(
         row(
             "stanford-dragon",

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import itertools
-import math
 from pathlib import Path
 
 import numpy as np
@@ -25,8 +24,6 @@ from accelbench_analysis.grid.grid_config import (
 )
 from accelbench_analysis.grid.heatmaps import (
     heatmap_data,
-    marker_position,
-    published_settings,
 )
 from accelbench_analysis.inputs.load import load_results
 from accelbench_analysis.inputs.schema import parse_params
@@ -311,27 +308,6 @@ def test_rows_of_several_workloads_are_refused_not_ranked_together(tmp_path):
     final = write_csv(tmp_path / "final.csv", one, with_errors=True)
     with pytest.raises(GridConfigError, match="the cheap pass measured another workload"):
         analyse(load_results([final]), cfg, load_results([cheap]))
-
-
-def test_marker_positions():
-    assert marker_position(["1", "2", "4", "8"], 4) == 2.0
-    assert marker_position(["1", "2", "4", "8"], 3) == pytest.approx(1 + math.log2(1.5))
-    assert marker_position(["10", "20", "30"], 29) == pytest.approx(1.9)
-    assert marker_position(["10", "20", "30"], 50) is None
-    assert marker_position(["median", "sah"], "sah") == 1.0
-    assert marker_position(["median", "sah"], "mean") is None
-    assert marker_position(["1", "2"], None) is None
-
-
-def test_published_settings():
-    kd = {r.label: r.values for r in published_settings("kdtree", 69451)}
-    assert kd["report"]["max_depth"] == 29 and kd["pbrt-v3"]["max_depth"] == 29
-    assert kd["pbrt-v3"]["isect_cost"] == 80 and kd["report"]["empty_bonus"] == 0.5
-    assert {r.label: r.values for r in published_settings("kdtree", 35947)}["report"]["max_depth"] == 28
-    bvh = {r.label: r for r in published_settings("bvh", 1000)}
-    assert bvh["pbrt-v4"].values == {"split": "sah", "max_prims": 4}
-    assert "255" in bvh["pbrt-v4"].note
-    assert published_settings("embree", 1000) == []
 
 
 # ---- the command line: outputs ---------------------------------------------------------------

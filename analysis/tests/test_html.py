@@ -52,10 +52,15 @@ def test_every_table_and_figure_of_the_run_is_on_its_page_once(analysed_run, pag
     assert "tables/ray_sets.md" in docs and "figures/cost-stanford-bunny.png" in pngs
     for d in docs:
         assert shown.count(d) == 1, d
+    # A figure is shown once: as its Vega-Lite specification where it has one, else its PNG.
+    interactive = {p for p in pngs if (analysed_run / p.replace(".png", ".vl.json")).is_file()}
+    assert interactive, "no figure has a specification"
     for p in pngs:
-        assert el.attr("data-source", "img").count(p) == 1, p
+        assert el.attr("data-source", "figure").count(p) == 1, p
+        assert el.attr("data-source", "img").count(p) == (p not in interactive), p
     images = [s for s in el.attr("src", "img")]
-    assert len(images) == len(pngs) and all(s.startswith("data:image/png;base64,") for s in images)
+    assert len(images) == len(pngs) - len(interactive)
+    assert all(s.startswith("data:image/png;base64,") for s in images)
     for name in SPECS:
         assert (analysed_run / "figures" / f"{name}.vl.json").is_file(), name
         assert f"figures/{name}.vl.json" in el.attr("data-source", "div"), name
@@ -324,3 +329,37 @@ def test_a_note_starting_with_a_hash_is_no_heading():
 
     text = to_html("Notes:\n\n" + note_item("#int. tests: ours are primitive tests") + "\n")
     assert "<h" not in text and "<li>#int. tests: ours" in text
+
+
+def colour_scales(node) -> list[dict]:
+    """Every colour scale with a domain in a Vega-Lite specification."""
+    found = []
+    if isinstance(node, dict):
+        scale = node.get("color", {}).get("scale", {}) if isinstance(node.get("color"), dict) else {}
+        if "domain" in scale and "range" in scale:
+            found.append(dict(zip(scale["domain"], scale["range"])))
+        for v in node.values():
+            found += colour_scales(v)
+    elif isinstance(node, list):
+        for v in node:
+            found += colour_scales(v)
+    return found
+
+
+def test_every_structure_has_one_colour_and_label_in_every_figure(analysed_run):
+    """The page's specifications (from which the PNGs are rendered too): a structure is
+    drawn under the structure table's label and in the same colour wherever it appears."""
+    from accelbench_analysis.mapping.structures import table_labels
+
+    colours: dict[str, set[str]] = {}
+    for spec in sorted((analysed_run / "figures").glob("*.vl.json")):
+        for scale in colour_scales(json.loads(spec.read_text())):
+            for label, colour in scale.items():
+                colours.setdefault(label, set()).add(colour)
+    # The table's structures keep their places whatever else a figure draws; a setting shown
+    # beside its structure ("Embree [robust=true]") takes a place after them, per figure.
+    known = set(table_labels())
+    drawn = {label for label in colours if label in known}
+    assert len(drawn) >= 4, sorted(colours)
+    assert {label: c for label, c in colours.items() if label in known and len(c) > 1} == {}
+    assert not [label for label in colours if label.startswith(("wbvh", "bvh ", "embree"))], sorted(colours)

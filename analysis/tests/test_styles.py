@@ -5,7 +5,7 @@ from synthetic import BVH, KD, LBVH, row, write_csv
 
 from accelbench_analysis.inputs.load import load_results
 from accelbench_analysis.mapping.selection import Picker, label_of
-from accelbench_analysis.mapping.styles import Styles, accel_styles
+from accelbench_analysis.mapping.styles import Styles
 from accelbench_analysis.outputs.figures.figures import structure_frame
 from accelbench_analysis.outputs.report.comparison import three_way
 from accelbench_analysis.outputs.report.tables import build_tables, to_markdown
@@ -46,8 +46,9 @@ def test_an_unknown_structure_is_in_every_table_and_figure_with_its_own_colour(t
     palette = Styles(frame["structure"]).palette()
     assert len(set(palette.values())) == len(palette)  # no two structures share a colour
     assert "#000000" not in palette.values() and "black" not in palette.values()
-    order, colours = accel_styles(["octree", "wbvh", "bvh", "embree"])
-    assert order[:2] == ["bvh", "wbvh"] and len(set(colours.values())) == 4
+    styles = Styles(["octree", "wide BVH (8, SIMD)", "Embree", "BVH (median)"])
+    assert styles.order == ["BVH (median)", "wide BVH (8, SIMD)", "Embree", "octree"]
+    assert styles.colour("Embree") == "#7f7f7f"  # the table's baseline is grey
 
 
 def test_known_structures_keep_their_colour_whatever_else_is_drawn():

@@ -84,11 +84,11 @@ def test_ratio_to_embree_per_set(tmp_path):
     rows = ray_set_rows(load_results([ray_set_csv(tmp_path / "rs.csv")]))
     assert list(rows["ray_set"].cat.categories) == ["primary", "ao"]
     t = ray_set_table(rows).set_index(["structure", "ray_set"])
-    assert t.loc[("bvh", "primary"), "mrays_per_s"] == pytest.approx(2.0)
-    assert t.loc[("bvh", "primary"), "ratio_to_embree"] == pytest.approx(0.5)
-    assert t.loc[("kdtree", "ao"), "ratio_to_embree"] == pytest.approx(0.5)
-    assert t.loc[("bvh", "ao"), "ratio_to_embree"] == pytest.approx(0.25)
-    assert t.loc[("embree", "ao"), "ratio_to_embree"] == pytest.approx(1.0)
+    assert t.loc[("BVH (median)", "primary"), "mrays_per_s"] == pytest.approx(2.0)
+    assert t.loc[("BVH (median)", "primary"), "ratio_to_embree"] == pytest.approx(0.5)
+    assert t.loc[("kd-tree", "ao"), "ratio_to_embree"] == pytest.approx(0.5)
+    assert t.loc[("BVH (median)", "ao"), "ratio_to_embree"] == pytest.approx(0.25)
+    assert t.loc[("Embree", "ao"), "ratio_to_embree"] == pytest.approx(1.0)
 
 
 def test_ratio_to_embree_only_within_one_workload(tmp_path):
@@ -117,8 +117,8 @@ def test_ratio_to_embree_only_within_one_workload(tmp_path):
     path = write_csv(tmp_path / "rs.csv", rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
     t = ray_set_table(ray_set_rows(load_results([path])))
     assert set(t["panel"]) == {"stanford-bunny (render_threads=1)", "stanford-bunny (render_threads=2)"}
-    assert list(t.loc[t["structure"] == "embree", "ratio_to_embree"]) == [1.0, 1.0]
-    assert list(t.loc[t["structure"] == "bvh", "ratio_to_embree"]) == [0.5, 0.5]
+    assert list(t.loc[t["structure"] == "Embree", "ratio_to_embree"]) == [1.0, 1.0]
+    assert list(t.loc[t["structure"] == "BVH (median)", "ratio_to_embree"]) == [0.5, 0.5]
     # Two Embree rows of one workload: the one at Embree's defaults divides.
     rows.append(
         row(
@@ -136,7 +136,7 @@ def test_ratio_to_embree_only_within_one_workload(tmp_path):
     path = write_csv(tmp_path / "rs2.csv", rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
     t = ray_set_table(ray_set_rows(load_results([path])))
     one = t[t["workload"] == "render_threads=1"].set_index("structure")["ratio_to_embree"]
-    assert one["bvh"] == pytest.approx(0.5) and one["embree quality=medium"] == pytest.approx(1.0)
+    assert one["BVH (median)"] == pytest.approx(0.5) and one["Embree [quality=medium]"] == pytest.approx(1.0)
 
 
 def test_ray_sets_at_several_thread_counts_are_said_to_be_in_the_ray_set_table(tmp_path):
@@ -175,29 +175,29 @@ def test_ray_sets_at_several_thread_counts_are_said_to_be_in_the_ray_set_table(t
 def test_ranking_marks_where_the_order_changes(tmp_path):
     rows = ray_set_rows(load_results([ray_set_csv(tmp_path / "rs.csv")]))
     r = ranking(rows).set_index(["structure", "ray_set"])
-    assert [r.loc[(s, "primary"), "rank"] for s in ("embree", "bvh", "kdtree")] == [1, 2, 3]
-    assert [r.loc[(s, "ao"), "rank"] for s in ("embree", "kdtree", "bvh")] == [1, 2, 3]
-    assert not r.loc[("embree", "ao"), "changed"]
-    assert r.loc[("kdtree", "ao"), "changed"] and r.loc[("bvh", "ao"), "changed"]
+    assert [r.loc[(s, "primary"), "rank"] for s in ("Embree", "BVH (median)", "kd-tree")] == [1, 2, 3]
+    assert [r.loc[(s, "ao"), "rank"] for s in ("Embree", "kd-tree", "BVH (median)")] == [1, 2, 3]
+    assert not r.loc[("Embree", "ao"), "changed"]
+    assert r.loc[("kd-tree", "ao"), "changed"] and r.loc[("BVH (median)", "ao"), "changed"]
     assert not r.xs("primary", level="ray_set")["changed"].any()
 
 
 def test_thread_scaling_speedup_and_efficiency(tmp_path):
     ts = thread_scaling_rows(load_results([thread_csv(tmp_path / "ts.csv")]))
     t = ts.set_index(["structure", "render_threads"])
-    assert t.loc[("bvh", 2), "speedup"] == pytest.approx(1.6)
-    assert t.loc[("bvh", 2), "efficiency"] == pytest.approx(0.8)
-    assert t.loc[("embree", 2), "speedup"] == pytest.approx(2.0)
-    assert t.loc[("embree", 2), "efficiency"] == pytest.approx(1.0)
-    assert t.loc[("bvh", 1), "speedup"] == pytest.approx(1.0)
-    assert t.loc[("bvh", 2), "cpu_per_wall"] == pytest.approx(2.0)
+    assert t.loc[("BVH (median)", 2), "speedup"] == pytest.approx(1.6)
+    assert t.loc[("BVH (median)", 2), "efficiency"] == pytest.approx(0.8)
+    assert t.loc[("Embree", 2), "speedup"] == pytest.approx(2.0)
+    assert t.loc[("Embree", 2), "efficiency"] == pytest.approx(1.0)
+    assert t.loc[("BVH (median)", 1), "speedup"] == pytest.approx(1.0)
+    assert t.loc[("BVH (median)", 2), "cpu_per_wall"] == pytest.approx(2.0)
     # The build beside the render: its own speedup over the 1-thread build.
-    assert t.loc[("bvh", 2), "build_speedup"] == pytest.approx(1.875)
-    assert t.loc[("embree", 2), "build_speedup"] == pytest.approx(1.6)
-    assert t.loc[("bvh", 1), "build_speedup"] == pytest.approx(1.0)
+    assert t.loc[("BVH (median)", 2), "build_speedup"] == pytest.approx(1.875)
+    assert t.loc[("Embree", 2), "build_speedup"] == pytest.approx(1.6)
+    assert t.loc[("BVH (median)", 1), "build_speedup"] == pytest.approx(1.0)
     # A build thread count is a parameter that follows the render threads: still one
     # structure per accelerator, not one per count.
-    assert set(ts["structure"]) == {"bvh", "embree"}
+    assert set(ts["structure"]) == {"BVH (median)", "Embree"}
 
 
 def test_thread_scaling_table_and_figure_show_the_build(tmp_path):
@@ -205,13 +205,13 @@ def test_thread_scaling_table_and_figure_show_the_build(tmp_path):
     assert main(["all", str(thread_csv(tmp_path / "ts.csv")), "--out", str(out)]) == 0
     md = (out / "tables" / "thread_scaling.md").read_text()
     assert "| build ms | build speedup |" in md
-    assert "| bvh | 2 | 160.00 | 1.88 | 625.00 |" in md
+    assert "| BVH (median) | 2 | 160.00 | 1.88 | 625.00 |" in md
     csv = pd.read_csv(out / "tables" / "thread_scaling.csv")
     assert {"build_s_median", "build_speedup"} <= set(csv.columns)
     spec = json.loads((out / "figures" / "thread_scaling.vl.json").read_text())
     by = {(v["structure"], v["measure"], v["render_threads"]): v["speedup"] for v in spec["data"]["values"]}
-    assert by[("bvh", "build", 2)] == pytest.approx(1.875)
-    assert by[("bvh", "render", 2)] == pytest.approx(1.6)
+    assert by[("BVH (median)", "build", 2)] == pytest.approx(1.875)
+    assert by[("BVH (median)", "render", 2)] == pytest.approx(1.6)
 
 
 def test_all_writes_and_links_them_and_keeps_the_tables(realistic_csv, tmp_path):

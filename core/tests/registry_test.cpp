@@ -2,6 +2,7 @@
 // analysis need (a label for every parameter setting), and labels tell structures apart.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <optional>
 #include <set>
@@ -24,6 +25,34 @@ TEST(Registry, EveryStructureHasALabelAtItsDefaults) {
         EXPECT_FALSE(label.empty()) << info.name;
         EXPECT_TRUE(labels.insert(label).second) << info.name << " shares its label '" << label << "'";
     }
+}
+
+// Each structure's row of the structure table (`accelbench list --json`, which the analysis
+// reads): a family, variants of declared parameters with accepted values and labels of their
+// own, and one baseline that every ratio is taken against.
+TEST(Registry, EveryStructureHasAFullRowOfTheStructureTable) {
+    int baselines = 0;
+    for (const auto& info : accelerator_registry()) {
+        SCOPED_TRACE(info.name);
+        EXPECT_FALSE(info.table.family.empty());
+        baselines += info.table.role == StructureRole::baseline;
+        std::set<std::string> labels;
+        const auto settings = variant_settings(info);
+        for (const auto& given : settings) {
+            ParamSet set;
+            ASSERT_NO_THROW(set = resolve_params(info.name, info.params, given));
+            labels.insert(info.label(set));
+        }
+        EXPECT_EQ(labels.size(), settings.size()) << "two variants share a label";
+        for (const auto& v : info.table.variants)
+            EXPECT_TRUE(std::any_of(info.params.begin(), info.params.end(),
+                                    [&](const ParamSpec& p) { return p.name == v.param; }))
+                << v.param << " is not a declared parameter";
+    }
+    EXPECT_EQ(baselines, 1);
+    const AcceleratorInfo* bvh = find_accelerator("bvh");
+    ASSERT_NE(bvh, nullptr);
+    EXPECT_EQ(variant_settings(*bvh).size(), 2u);  // median and SAH, two rows of the tables
 }
 
 TEST(Registry, LabelsFollowTheParametersThatMakeAnotherStructure) {

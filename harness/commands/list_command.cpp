@@ -1,9 +1,12 @@
 // `accelbench list`: what a config may name — accelerators with their parameters,
-// procedural scenes with theirs, and the robustness cases with their requirements.
+// procedural scenes with theirs, and the robustness cases with their requirements;
+// `--json`: the structure table the analysis reads.
 #include "commands/args.h"
 #include "commands/cli.h"
+#include "util/text.h"
 
 #include <cstdio>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -13,24 +16,67 @@
 
 namespace accelbench {
 
+namespace {
+
+std::string json_params(const std::map<std::string, std::string>& given) {
+    std::string out;
+    for (const auto& [name, value] : given)
+        out += (out.empty() ? "" : ", ") + json_quoted(name) + ": " + json_quoted(value);
+    return "{" + out + "}";
+}
+
+// The structure table, registry order: per structure its name, label at the defaults,
+// role, family, whether `{name: all}` leaves it out as slow, whether it counts its
+// traversal, and its variants (the given parameters and the label of each).
+void print_structure_table() {
+    std::printf("{\"structures\": [");
+    const char* sep = "\n";
+    for (const auto& info : accelerator_registry()) {
+        std::string variants;
+        for (const auto& given : variant_settings(info))
+            variants += (variants.empty() ? "" : ", ") + std::string("{\"params\": ") + json_params(given) +
+                ", \"label\": " + json_quoted(info.label(resolve_params(info.name, info.params, given))) + "}";
+        std::printf(
+            "%s  {\"name\": %s, \"label\": %s, \"role\": \"%s\", \"family\": %s, \"slow\": %s, "
+            "\"counts_traversal\": %s, \"variants\": [%s]}",
+            sep, json_quoted(info.name).c_str(),
+            json_quoted(info.label(resolve_params(info.name, info.params, {}))).c_str(), to_string(info.table.role),
+            json_quoted(info.table.family).c_str(), info.table.slow ? "true" : "false",
+            info.counts_traversal ? "true" : "false", variants.c_str());
+        sep = ",\n";
+    }
+    std::printf("\n]}\n");
+}
+
+}  // namespace
+
 int list_command(int argc, char** argv) {
-    bool structures = false;
+    bool structures = false, json = false;
     std::string plugin;
     std::vector<std::string> plugins;
     Args args("list",
-              "usage: accelbench list [--structures] [--plugin PATH ...]\n"
+              "usage: accelbench list [--structures | --json] [--plugin PATH ...]\n"
               "  the accelerators with their parameters (type, default, range), the procedural scenes\n"
               "  with theirs, and the robustness cases with their requirements\n"
               "  --structures: one line per registered structure, in registry order, for scripts:\n"
               "  name, tab, label at the defaults, tab, whether it counts traversal (yes/no)\n"
+              "  --json: the structure table as JSON, registry order: name, label, role (ours, baseline,\n"
+              "  reference, plugin), family, slow (left out of {name: all}), counts_traversal, and the\n"
+              "  variants the report's tables show, each with its parameters and label\n"
               "  --plugin PATH: also the structures of this plugin (accelbench_plugin.h); repeatable\n",
               argc, argv);
-    const auto each = [&] {
-        if (args.value("--plugin", plugin)) plugins.push_back(plugin);
-        else structures = args.flag("--structures") || args.unknown();
-    };
-    if (auto code = args.walk(each)) return *code;
+    if (auto code = args.walk([&] {
+            if (args.value("--plugin", plugin)) plugins.push_back(plugin);
+            else if (args.flag("--structures")) structures = true;
+            else if (args.flag("--json")) json = true;
+            else args.unknown();
+        }))
+        return *code;
     if (auto code = load_plugins("list", plugins)) return *code;
+    if (json) {
+        print_structure_table();
+        return 0;
+    }
     if (structures) {
         for (const auto& info : accelerator_registry())
             std::printf("%s\t%s\t%s\n", info.name.c_str(),

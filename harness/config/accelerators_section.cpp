@@ -1,6 +1,8 @@
 // `accelerators:`: each entry one registered structure with its parameter axes, or
-// `{name: all, except: [...], params: {NAME: {...}}}`, every registered structure (registry
-// order) but those excepted, each at its defaults unless `params` gives some.
+// `{name: all, except: [...], params: {NAME: {...}}}`, every structure of the comparison
+// (registry order; not the references, not the slow ones) but those excepted, each with
+// the variants its row of the structure table declares (the BVH's splits, the wide BVH's
+// widths) and at its defaults otherwise, unless `params` gives some.
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -26,7 +28,15 @@ bool known_structure(ConfigReader& r, const YAML::Node& n, const std::string& pa
     return false;
 }
 
-// `except: [NAME, ...]`: registered names, each once.
+// Whether `{name: all}` runs the structure: a structure of the comparison (not a
+// reference) that is not slow. A config names the others to run them.
+bool in_all(const AcceleratorInfo& info) { return info.table.role != StructureRole::reference && !info.table.slow; }
+
+std::string why_not_in_all(const AcceleratorInfo& info) {
+    return info.table.slow ? "slow (O(N) or worse per ray)" : std::string("a ") + to_string(info.table.role);
+}
+
+// `except: [NAME, ...]`: registered names `all` runs, each once.
 std::set<std::string> read_except(ConfigReader& r, const Fields& f) {
     std::set<std::string> except;
     const auto* e = f.find("except");
@@ -34,9 +44,28 @@ std::set<std::string> read_except(ConfigReader& r, const Fields& f) {
     read_list(r.c, e->value, f.child("except"), [&](const YAML::Node& item, const std::string& p) {
         const auto name = read_string(r.c, item, p);
         if (!name || !known_structure(r, item, p, *name)) return;
-        if (!except.insert(*name).second) r.c.error(item, p, "'" + *name + "' is excepted twice");
+        if (const AcceleratorInfo& info = *find_accelerator(*name); !in_all(info))
+            r.c.error(item, p, "'" + *name + "' is not in `all` (" + why_not_in_all(info) + "): nothing to except");
+        else if (!except.insert(*name).second) r.c.error(item, p, "'" + *name + "' is excepted twice");
     });
     return except;
+}
+
+// The axes of one structure in the all form: its declared variants (each value another
+// structure of the tables) unless `params` sets that parameter, then what `params` gives.
+std::vector<ParamAxis> all_form_axes(const AcceleratorInfo& info, std::vector<ParamAxis> given) {
+    std::vector<ParamAxis> axes;
+    for (const StructureVariants& v : info.table.variants) {
+        const bool set = std::any_of(given.begin(), given.end(), [&](const ParamAxis& a) {
+            return std::find(a.names.begin(), a.names.end(), v.param) != a.names.end();
+        });
+        if (set) continue;
+        ParamAxis axis{{v.param}, {}};
+        for (const auto& value : v.values) axis.values.push_back({value});
+        axes.push_back(std::move(axis));
+    }
+    axes.insert(axes.end(), std::make_move_iterator(given.begin()), std::make_move_iterator(given.end()));
+    return axes;
 }
 
 // `{name: all, ...}`: one AcceleratorSpec per registered structure not excepted. Parameter
@@ -54,22 +83,27 @@ bool read_all_form(ConfigReader& r, const Fields& f, const AcceleratorSpec& entr
             } else if (except.count(e.key)) {
                 r.c.error(e.key_node, pf.child(e.key), "'" + e.key + "' is in `except`: it has no parameters to set");
                 ok = false;
+            } else if (const AcceleratorInfo& info = *find_accelerator(e.key); !in_all(info)) {
+                r.c.error(
+                    e.key_node, pf.child(e.key),
+                    "'" + e.key + "' is not in `all` (" + why_not_in_all(info) + "): name it in an entry of its own");
+                ok = false;
             } else {
                 ok &=
                     read_param_axes(r.c, e.value, entry.key_path + "." + e.key, *find_accelerator(e.key), axes[e.key]);
             }
         }
     }
-    if (except.size() == accelerator_registry().size()) {
+    if (except.size() == size_t(std::count_if(accelerator_registry().begin(), accelerator_registry().end(), in_all))) {
         r.c.error(f.find("except")->value, f.child("except"), "every structure is excepted: nothing is left to run");
         ok = false;
     }
     if (!ok) return false;
     for (const AcceleratorInfo& info : accelerator_registry()) {
-        if (except.count(info.name)) continue;
+        if (!in_all(info) || except.count(info.name)) continue;
         AcceleratorSpec a = entry;
         a.name = info.name;
-        a.axes = std::move(axes[info.name]);
+        a.axes = all_form_axes(info, std::move(axes[info.name]));
         a.key_path = entry.key_path + " (all: " + info.name + ")";
         r.cfg.accelerators.push_back(std::move(a));
     }

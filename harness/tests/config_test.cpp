@@ -1,7 +1,9 @@
 // The config loader: a valid config read completely, and every kind of error reported with
 // its file, line, column and key path — all of them at once.
 #include <gtest/gtest.h>
+
 #include <sys/stat.h>
+#include <algorithm>
 
 #include "accelbench/accel/registry.h"
 #include "accelbench/base/param_table.h"
@@ -170,21 +172,25 @@ accelerators: [{name: bvh, params: {max_prims: !!str 4}}]
         << all_issues(tagged);
 }
 
-// `{name: all, except, params}`: every registered structure but those excepted, in registry
-// order, each at its defaults unless `params` gives some; other entries stand beside it.
+// `{name: all, except, params}`: every structure of the comparison (not the references, not
+// the slow) but those excepted, in registry order, each with its declared variants and at its
+// defaults unless `params` gives some; other entries stand beside it.
 TEST_F(ConfigTest, AllMeansEveryRegisteredStructureButThoseExcepted) {
     const Config c = load_config(write("a.yaml", R"(models: [stanford-bunny]
 accelerators:
   - {name: bvh, params: {split: median, max_prims: 1}}
   - name: all
-    except: [bvh, reference]
-    params: {wbvh: {width: [4, 8]}, kdtree: {"[max_prims, max_depth]": [[1, 20], [4, 30]]}}
+    except: [bvh]
+    params: {wbvh: {width: 4}, kdtree: {"[max_prims, max_depth]": [[1, 20], [4, 30]]}}
     repetitions: 2
 )"),
                                  registry());
+    auto in_all = [](const AcceleratorInfo& info) {
+        return info.table.role != StructureRole::reference && !info.table.slow;
+    };
     std::vector<std::string> expected = {"bvh"};
     for (const AcceleratorInfo& info : accelerator_registry())
-        if (info.name != "bvh" && info.name != "reference") expected.push_back(info.name);
+        if (info.name != "bvh" && in_all(info)) expected.push_back(info.name);
     std::vector<std::string> names;
     for (const AcceleratorSpec& a : c.accelerators) names.push_back(a.name);
     EXPECT_EQ(names, expected);
@@ -192,9 +198,9 @@ accelerators:
         SCOPED_TRACE(a.name);
         EXPECT_EQ(a.mark.line, a.name == "bvh" ? 3 : 4);
         EXPECT_EQ(a.repetitions, a.name == "bvh" ? std::nullopt : std::optional<int>(2));
-        if (a.name == "wbvh") {
+        if (a.name == "wbvh") {  // the given width replaces the declared variants
             ASSERT_EQ(a.axes.size(), 1u);
-            EXPECT_EQ(a.axes[0].values, (std::vector<std::vector<std::string>>{{"4"}, {"8"}}));
+            EXPECT_EQ(a.axes[0].values, (std::vector<std::vector<std::string>>{{"4"}}));
         } else if (a.name == "kdtree") {
             ASSERT_EQ(a.axes.size(), 1u);
             EXPECT_EQ(a.axes[0].names, (std::vector<std::string>{"max_prims", "max_depth"}));
@@ -202,10 +208,23 @@ accelerators:
             EXPECT_TRUE(a.axes.empty());
         }
     }
-    // Without `except`, every structure, the reference and brute force included.
+    // Without `except`, every structure of the comparison, each variant its table declares
+    // an axis of its own; brute force (slow) and the reference are left out.
     const Config every =
         load_config(write("b.yaml", "models: [stanford-bunny]\naccelerators: [{name: all}]\n"), registry());
-    EXPECT_EQ(every.accelerators.size(), accelerator_registry().size());
+    EXPECT_EQ(every.accelerators.size(),
+              size_t(std::count_if(accelerator_registry().begin(), accelerator_registry().end(), in_all)));
+    for (const AcceleratorSpec& a : every.accelerators) {
+        SCOPED_TRACE(a.name);
+        EXPECT_NE(a.name, "brute_force");
+        EXPECT_NE(a.name, "reference");
+        const auto& variants = find_accelerator(a.name)->table.variants;
+        ASSERT_EQ(a.axes.size(), variants.size());
+        for (size_t i = 0; i < variants.size(); ++i) {
+            EXPECT_EQ(a.axes[i].names, std::vector<std::string>{variants[i].param});
+            EXPECT_EQ(a.axes[i].values.size(), variants[i].values.size());
+        }
+    }
 }
 
 TEST_F(ConfigTest, AllRefusesUnknownNamesNamingTheKnownOnes) {
@@ -215,9 +234,9 @@ accelerators:
   - {name: all, params: {kdtree: {max_prim: 2}}}
   - {name: kdtree, except: [bvh]}
   - {name: al}
+  - {name: all, except: [brute_force]}
 )"));
-    EXPECT_TRUE(has_issue(e, 3, 26, "accelerators[0].except[0]",
-                          "unknown accelerator 'bhv' (did you mean 'bvh'?) (known: brute_force, bvh"));
+    EXPECT_TRUE(has_issue(e, 3, 26, "accelerators[0].except[0]", "unknown accelerator 'bhv' (did you mean 'bvh'?)"));
     EXPECT_TRUE(has_issue(e, 3, 39, "accelerators[0].except[2]", "'embree' is excepted twice"));
     EXPECT_TRUE(
         has_issue(e, 3, 57, "accelerators[0].params.kdtre", "unknown accelerator 'kdtre' (did you mean 'kdtree'?)"));
@@ -225,10 +244,13 @@ accelerators:
     EXPECT_TRUE(has_issue(e, 4, 35, "accelerators[1].kdtree.max_prim", "did you mean 'max_prims'"));
     EXPECT_TRUE(has_issue(e, 5, 20, "accelerators[2].except", "`except` goes with `name: all`"));
     EXPECT_TRUE(has_issue(e, 6, 12, "accelerators[3].name", "unknown accelerator 'al' (did you mean 'all'?)"));
-    EXPECT_EQ(e.issues().size(), 7u) << all_issues(e);
+    EXPECT_TRUE(has_issue(e, 7, 26, "accelerators[4].except[0]", "'brute_force' is not in `all` (slow"));
+    EXPECT_EQ(e.issues().size(), 8u) << all_issues(e);
 
     std::string every;
-    for (const AcceleratorInfo& info : accelerator_registry()) every += (every.empty() ? "" : ", ") + info.name;
+    for (const AcceleratorInfo& info : accelerator_registry())
+        if (info.table.role != StructureRole::reference && !info.table.slow)
+            every += (every.empty() ? "" : ", ") + info.name;
     const ConfigError none =
         load_error(write("b.yaml", "models: [stanford-bunny]\naccelerators: [{name: all, except: [" + every + "]}]\n"));
     EXPECT_TRUE(has_issue(none, 2, 36, "accelerators[0].except", "every structure is excepted"));
@@ -237,8 +259,7 @@ accelerators:
 // An explicit entry beside `all` that names the same setting is the same combination twice.
 TEST_F(ConfigTest, AllBesideAnEntryOfTheSameStructureRepeatsItsCombinations) {
     const Config c = load_config(
-        write("a.yaml", "models: [stanford-bunny]\naccelerators: [{name: embree}, {name: all, except: [reference]}]\n"),
-        registry());
+        write("a.yaml", "models: [stanford-bunny]\naccelerators: [{name: embree}, {name: all}]\n"), registry());
     try {
         expand(c);
         FAIL() << "expected the repeated embree combination to be refused";

@@ -150,6 +150,48 @@ def _pass_info(results: Results, rows: pd.DataFrame) -> PassInfo:
     )
 
 
+def rejections(
+    cfg: GridConfig, rows: pd.DataFrame, out: pd.DataFrame, notes: list[str]
+) -> tuple[list[list[str]], dict[str, bool]]:
+    """Why each candidate is rejected (a failed run, no time, a constraint exceeded or not
+    measured), and per constraint whether any row could be checked against it; the
+    constraints' columns are added to `out`, what could not be checked to `notes`."""
+    reasons = [[] for _ in range(len(rows))]
+    for i, (status, message) in enumerate(zip(rows["status"], rows["message"])):
+        if status != "ok":
+            reasons[i].append(f"status {status}" + (f": {message}" if message else ""))
+        elif math.isnan(out["objective"].iat[i]):
+            reasons[i].append("no build or render time")
+    checked = {}
+    for col, limit in cfg.constraints.items():
+        values = (
+            pd.to_numeric(rows[col].replace("", np.nan), errors="coerce")
+            if col in rows.columns
+            else pd.Series(np.nan, index=rows.index)
+        )
+        checked[col] = bool(values.notna().any())
+        out[col] = values.values
+        if not checked[col]:
+            why = (
+                "the harness wrote no error columns (run with the reference comparison on)"
+                if col in ERROR_COLUMNS
+                else "the CSV has no such column"
+            )
+            notes.append(
+                f"constraint {col} <= {limit:g} NOT CHECKED: no row has a {col} "
+                f"value; {why}. No candidate was rejected for it."
+            )
+            continue
+        for i, v in enumerate(values):
+            if reasons[i]:
+                continue
+            if pd.isna(v):
+                reasons[i].append(f"{col} not measured")
+            elif v > limit:
+                reasons[i].append(f"{col} = {v:g} > {limit:g}")
+    return reasons, checked
+
+
 def analyse(results: Results, cfg: GridConfig, cheap: Results | None = None) -> GridAnalysis:
     """Ranks the rows of `results`; `cheap` (the first pass of successive halving) adds
     context rows, judged by the same constraints but never ranked (module doc)."""
@@ -206,39 +248,7 @@ def analyse(results: Results, cfg: GridConfig, cheap: Results | None = None) -> 
     for n in names:
         out[PARAM_COL + n] = [d.get(n, "") for d in dicts]
 
-    reasons = [[] for _ in range(len(rows))]
-    for i, (status, message) in enumerate(zip(rows["status"], rows["message"])):
-        if status != "ok":
-            reasons[i].append(f"status {status}" + (f": {message}" if message else ""))
-        elif math.isnan(out["objective"].iat[i]):
-            reasons[i].append("no build or render time")
-    checked = {}
-    for col, limit in cfg.constraints.items():
-        values = (
-            pd.to_numeric(rows[col].replace("", np.nan), errors="coerce")
-            if col in rows.columns
-            else pd.Series(np.nan, index=rows.index)
-        )
-        checked[col] = bool(values.notna().any())
-        out[col] = values.values
-        if not checked[col]:
-            why = (
-                "the harness wrote no error columns (run with the reference comparison on)"
-                if col in ERROR_COLUMNS
-                else "the CSV has no such column"
-            )
-            notes.append(
-                f"constraint {col} <= {limit:g} NOT CHECKED: no row has a {col} "
-                f"value; {why}. No candidate was rejected for it."
-            )
-            continue
-        for i, v in enumerate(values):
-            if reasons[i]:
-                continue
-            if pd.isna(v):
-                reasons[i].append(f"{col} not measured")
-            elif v > limit:
-                reasons[i].append(f"{col} = {v:g} > {limit:g}")
+    reasons, checked = rejections(cfg, rows, out, notes)
     out["reason"] = ["; ".join(r) for r in reasons]
     out["rejected"] = out["reason"] != ""
     out["rank"] = pd.array([pd.NA] * len(out), dtype="Int64")

@@ -180,6 +180,60 @@ def heatmap_data(a: GridAnalysis, model: str, p: str, q: str) -> HeatmapData:
     )
 
 
+def published_marks(ax, a: GridAnalysis, sel: pd.DataFrame, p: str, q: str, xs: list, ys: list) -> list:
+    """The published default settings drawn on a heatmap; their legend handles."""
+    from matplotlib.lines import Line2D
+
+    handles = []
+    triangles = float(sel["triangles"].iloc[0])
+    for mark in published_settings(a.config.accel, triangles):
+        vx, vy = mark.values.get(p), mark.values.get(q)
+        px, py = marker_position(xs, vx), marker_position(ys, vy)
+        where = f"{p}={vx if vx is not None else 'not fixed'}, {q}={vy if vy is not None else 'not fixed'}"
+        star = mark.marker == "*"
+        style = dict(
+            marker=mark.marker,
+            ls="none",
+            mfc=mark.colour if star else "none",
+            mec="black" if star else mark.colour,
+            mew=1.0 if star else 2.0,
+        )
+        if px is not None and py is not None:
+            # Low in the cell, below the cell's number; a star inside a circle when both coincide.
+            ax.plot(px + 0.5, py + MARKER_HEIGHT, ms=8 if star else 12, **style)
+        else:
+            where += " (off this grid)"
+        handles.append(Line2D([], [], ms=9, label=f"{mark.label}: {where}\n  {mark.note}", **style))
+    return handles
+
+
+def remeasured_marks(ax, a: GridAnalysis, data: HeatmapData):
+    """With a cheap pass: the cells holding a re-measured candidate outlined, their final
+    values bold; the legend handle that says so."""
+    from matplotlib.patches import Patch, Rectangle
+
+    for iy, ix in zip(*np.nonzero(data.remeasured.to_numpy())):
+        ax.add_patch(
+            Rectangle((ix + 0.06, iy + 0.06), 0.88, 0.88, fill=False, edgecolor="black", lw=1.2, ls=":")
+        )
+    final_cells = data.source == FINAL
+    for text in ax.texts:  # seaborn's numbers sit at the cell centres
+        x, y = text.get_position()
+        if final_cells.iat[int(y), int(x)]:
+            text.set_fontweight("bold")
+    return Patch(
+        facecolor="none",
+        edgecolor="black",
+        ls=":",
+        label=(
+            f"dotted: holds a candidate re-measured in the final pass "
+            f"({a.final.repetitions_text()}); bold number: the minimum is a final value\n"
+            f"  other numbers: cheap pass ({a.cheap.repetitions_text()}: noisier, and a minimum "
+            f"of noisy values is biased low)"
+        ),
+    )
+
+
 def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     """The objective over (p, q), each cell the minimum over the other parameters among
     accepted rows (heatmap_data); grey cells have no row, hatched ones only rejected rows.
@@ -188,7 +242,6 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     several) can sit below every final value. Published default settings and the best cell are marked."""
     import matplotlib.pyplot as plt
     import seaborn as sns
-    from matplotlib.lines import Line2D
     from matplotlib.patches import Patch, Rectangle
 
     from ..outputs.figures.figures import save_figure, setup
@@ -221,28 +274,7 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
     handles = []
     if a.cheap is not None:
         title += "\nfinal-pass values where re-measured (bold), cheap pass elsewhere"
-        for iy, ix in zip(*np.nonzero(data.remeasured.to_numpy())):
-            ax.add_patch(
-                Rectangle((ix + 0.06, iy + 0.06), 0.88, 0.88, fill=False, edgecolor="black", lw=1.2, ls=":")
-            )
-        final_cells = data.source == FINAL
-        for text in ax.texts:  # seaborn's numbers sit at the cell centres
-            x, y = text.get_position()
-            if final_cells.iat[int(y), int(x)]:
-                text.set_fontweight("bold")
-        handles.append(
-            Patch(
-                facecolor="none",
-                edgecolor="black",
-                ls=":",
-                label=(
-                    f"dotted: holds a candidate re-measured in the final pass "
-                    f"({a.final.repetitions_text()}); bold number: the minimum is a final value\n"
-                    f"  other numbers: cheap pass ({a.cheap.repetitions_text()}: noisier, and a minimum "
-                    f"of noisy values is biased low)"
-                ),
-            )
-        )
+        handles.append(remeasured_marks(ax, a, data))
     ax.set_title(title, fontsize=10)
     for iy, ix in zip(*np.nonzero(data.rejected.to_numpy())):
         ax.add_patch(Rectangle((ix, iy), 1, 1, fill=False, hatch="xxx", edgecolor="#707070", lw=0))
@@ -261,25 +293,7 @@ def heatmap(a: GridAnalysis, model: str, p: str, q: str, path: Path) -> Path:
                 ),
             )
         )
-    triangles = float(sel["triangles"].iloc[0])
-    for mark in published_settings(a.config.accel, triangles):
-        vx, vy = mark.values.get(p), mark.values.get(q)
-        px, py = marker_position(xs, vx), marker_position(ys, vy)
-        where = f"{p}={vx if vx is not None else 'not fixed'}, {q}={vy if vy is not None else 'not fixed'}"
-        star = mark.marker == "*"
-        style = dict(
-            marker=mark.marker,
-            ls="none",
-            mfc=mark.colour if star else "none",
-            mec="black" if star else mark.colour,
-            mew=1.0 if star else 2.0,
-        )
-        if px is not None and py is not None:
-            # Low in the cell, below the cell's number; a star inside a circle when both coincide.
-            ax.plot(px + 0.5, py + MARKER_HEIGHT, ms=8 if star else 12, **style)
-        else:
-            where += " (off this grid)"
-        handles.append(Line2D([], [], ms=9, label=f"{mark.label}: {where}\n  {mark.note}", **style))
+    handles += published_marks(ax, a, sel, p, q, xs, ys)
     if data.rejected.any().any():
         why = [f"{c} > {v:g}" for c, v in a.config.constraints.items()] + ["a failed run"]
         handles.append(

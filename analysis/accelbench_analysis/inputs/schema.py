@@ -485,50 +485,10 @@ def check_settings(df: pd.DataFrame, starts: list[int]) -> list[str]:
     return problems
 
 
-def read_csv(path: str | Path) -> pd.DataFrame:
-    """Reads one harness CSV and checks it against the contract; raises ContractError."""
-    path = Path(path)
-    if not path.is_file():
-        raise ContractError(f"{path}: no such file")
-    if path.name.endswith(".reps.csv"):
-        raise ContractError(
-            f"{path}: this is a per-repetition file; pass the summary CSV "
-            f"beside it (its .reps.csv is read automatically)"
-        )
-    if path.name.endswith(".inputs.csv"):
-        raise ContractError(
-            f"{path}: this is a run's record of its inputs (the sha256 of its config, model and "
-            f"ray files); pass the results CSV beside it"
-        )
-    header = read_header(path)
-    if (old := old_header_message(path, header)) is not None:
-        raise ContractError(old)
-    starts = scan_records(path)
-    names = _rename_param_columns(header)
-    missing = [c for c in REQUIRED_COLUMNS if c not in names]
-    if missing:
-        raise ContractError(f"{path}: missing required columns: {', '.join(missing)}")
-    dups = sorted({n for n in names if names.count(n) > 1})
-    if dups:
-        raise ContractError(f"{path}: duplicate column names: {', '.join(dups)}")
-
-    try:
-        df = pd.read_csv(path, header=0, names=names, dtype=str, keep_default_na=False)
-    except (pd.errors.ParserError, ValueError) as e:
-        raise ContractError(f"{path}: not a well-formed CSV ({e})") from None
-    if df.empty:
-        raise ContractError(f"{path}: no data rows")
-    if "ray_set" not in df.columns:
-        df["ray_set"] = CAMERA_SET
-    df["ray_set"] = df["ray_set"].str.strip().replace("", CAMERA_SET)
-    if FP_MODE_COLUMN not in df.columns:
-        df[FP_MODE_COLUMN] = "ieee"
-    df[FP_MODE_COLUMN] = df[FP_MODE_COLUMN].str.strip()
-    problems = check_settings(df, starts)  # on the text as written
-    problems += to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
-    if "render_cpu_s_median" in df.columns:
-        problems += to_numbers(df, ["render_cpu_s_median"], starts)
-
+def check_text_columns(df: pd.DataFrame, starts: list[int]) -> list[str]:
+    """The columns of words (status, fp_mode, verdict, git_dirty; model, accel and config
+    non-empty; params parsed into param_dict), normalised in place; the problems found."""
+    problems: list[str] = []
     status = df["status"].str.strip().str.lower()
     bad_status = ~status.isin(STATUSES)
     if bad_status.any():
@@ -574,6 +534,54 @@ def read_csv(path: str | Path) -> pd.DataFrame:
             f"{sorted(set(df['git_dirty'][bad]))} on {record_lines(starts, df.index[bad])}"
         )
     df["git_dirty"] = dirty
+    return problems
+
+
+def read_csv(path: str | Path) -> pd.DataFrame:
+    """Reads one harness CSV and checks it against the contract; raises ContractError."""
+    path = Path(path)
+    if not path.is_file():
+        raise ContractError(f"{path}: no such file")
+    if path.name.endswith(".reps.csv"):
+        raise ContractError(
+            f"{path}: this is a per-repetition file; pass the summary CSV "
+            f"beside it (its .reps.csv is read automatically)"
+        )
+    if path.name.endswith(".inputs.csv"):
+        raise ContractError(
+            f"{path}: this is a run's record of its inputs (the sha256 of its config, model and "
+            f"ray files); pass the results CSV beside it"
+        )
+    header = read_header(path)
+    if (old := old_header_message(path, header)) is not None:
+        raise ContractError(old)
+    starts = scan_records(path)
+    names = _rename_param_columns(header)
+    missing = [c for c in REQUIRED_COLUMNS if c not in names]
+    if missing:
+        raise ContractError(f"{path}: missing required columns: {', '.join(missing)}")
+    dups = sorted({n for n in names if names.count(n) > 1})
+    if dups:
+        raise ContractError(f"{path}: duplicate column names: {', '.join(dups)}")
+
+    try:
+        df = pd.read_csv(path, header=0, names=names, dtype=str, keep_default_na=False)
+    except (pd.errors.ParserError, ValueError) as e:
+        raise ContractError(f"{path}: not a well-formed CSV ({e})") from None
+    if df.empty:
+        raise ContractError(f"{path}: no data rows")
+    if "ray_set" not in df.columns:
+        df["ray_set"] = CAMERA_SET
+    df["ray_set"] = df["ray_set"].str.strip().replace("", CAMERA_SET)
+    if FP_MODE_COLUMN not in df.columns:
+        df[FP_MODE_COLUMN] = "ieee"
+    df[FP_MODE_COLUMN] = df[FP_MODE_COLUMN].str.strip()
+    problems = check_settings(df, starts)  # on the text as written
+    problems += to_numbers(df, NUMERIC_COLUMNS, starts, POSITIVE_TIME_COLUMNS)
+    if "render_cpu_s_median" in df.columns:
+        problems += to_numbers(df, ["render_cpu_s_median"], starts)
+
+    problems += check_text_columns(df, starts)
 
     if problems:
         raise ContractError(f"{path}: " + "; ".join(problems))

@@ -52,10 +52,12 @@ class StructureRow:
     label: str
 
 
-def structure_rows(picker: Picker, models: list[str]) -> list[StructureRow]:
+def structure_rows(picker: Picker, models: list[str], report: bool = False) -> list[StructureRow]:
+    """One row per structure, or per traversal variant where its rows have several; of
+    the report's settings (`report`: the report's tables) or of any setting (figures)."""
     rows = []
     for s in picker.structures():
-        variants = picker.variants(models, s.spec)
+        variants = picker.variants(models, s.table_spec if report else s.spec)
         if len(variants) <= 1:
             rows.append(StructureRow(s, None, s.label))
         else:

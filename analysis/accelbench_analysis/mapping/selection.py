@@ -6,12 +6,16 @@ and shadow together, as the report timed them), one render thread, and per model
 the report's 640x480 at one sample where the model has it. The mapping is explicit here and
 nowhere else:
 
-- the report's "default" setting is its Table 3: BVH median split, maxPrims 1, depth 50;
-  LBVH maxPrims 1, depth 50; kd-tree maxPrims 1 with the scene-dependent depth
-  8 + 1.3 log2(N) (pbrt's formula, which the report cites as its Equation 5);
+- the report's "default" setting is its Table 3 (REPORT_SETTINGS): BVH median split,
+  maxPrims 1, depth 50; LBVH maxPrims 1, depth 50; kd-tree maxPrims 1 with the
+  scene-dependent depth 8 + 1.3 log2(N) (pbrt's formula, which the report cites as its
+  Equation 5); the report's cells require it, the figures only prefer it, so a run at
+  a structure's defaults (max_prims=auto) is drawn too;
+- the structures are the structure table's (structures.py, the registry's), one per
+  variant it declares, labelled by it;
 - Table 2's settings vary one kd-tree parameter (maxPrims or maxDepth) on the bunny;
-- our extra structures, the binned-SAH BVH (accel=bvh, split=sah) and Embree, have no
-  report numbers but appear in every table.
+- the table's other structures (the binned-SAH BVH, the wide BVH, Embree) have no report
+  numbers but appear in every table.
 
 Parameters a row does not have at all (its accelerator does not declare them) cannot
 differ and so do not exclude it. Parameters the report does not fix are free; when several
@@ -30,6 +34,7 @@ from dataclasses import dataclass, field, replace
 import pandas as pd
 
 from ..inputs.schema import CAMERA_SET, Results
+from .structures import structure_table, variant_of_row
 
 # The report's renders: 640x480 pixels, one sample each (its section 5), on one thread.
 REPORT_IMAGE = (640, 480, 1)
@@ -164,48 +169,64 @@ class Spec:
 
 @dataclass(frozen=True)
 class Structure:
-    key: str
+    key: str  # the report's name for a structure it measured, else "NAME[ PARAM=VALUE]"
     label: str
-    spec: Spec
+    spec: Spec  # its identity (the table variant's parameters), the report's setting preferred
     report_accel: str | None  # the report's accelerator name; None: no report numbers
+    role: str = "ours"  # the structure table's: ours, baseline, plugin
+    report_spec: Spec | None = None  # the report's setting of it (its Table 3), required
+
+    @property
+    def table_spec(self) -> Spec:
+        """What a cell of the report's tables requires: the report's setting where it has one."""
+        return self.report_spec or self.spec
 
 
-STRUCTURES = [
-    Structure(
-        "bvh",
-        "BVH (median)",
-        Spec("bvh", (("split", "median"), ("max_prims", "1"), ("max_depth", "50"))),
-        "bvh",
-    ),
-    Structure("lbvh", "LBVH", Spec("lbvh", (("max_prims", "1"), ("max_depth", "50"))), "lbvh"),
-    Structure(
-        "kdtree", "kd-tree", Spec("kdtree", (("max_prims", "1"), ("max_depth", AUTO)), KD_PREFERRED), "kdtree"
-    ),
-    Structure("bvh-sah", "BVH (binned SAH)", Spec("bvh", (("split", "sah"),)), None),
-    Structure("wbvh8", "wide BVH (8, SIMD)", Spec("wbvh", (("width", "8"),)), None),
-    Structure("wbvh4", "wide BVH (4, SIMD)", Spec("wbvh", (("width", "4"),)), None),
-    Structure("embree", "Embree", Spec("embree", (), EMBREE_PREFERRED), None),
-]
-STRUCTURE = {s.key: s for s in STRUCTURES}
-# Accelerators that are not structures of the comparison: the double-precision reference
-# every row's errors are measured against, and the O(N) brute force of the tests.
-NOT_STRUCTURES = ("reference", "brute_force")
+# The report's setting of each structure it measured (its Table 3), by the report's name:
+# BVH median split, maxPrims 1, depth 50; LBVH maxPrims 1, depth 50; kd-tree maxPrims 1
+# with the scene-dependent depth. The report's cells require it; every other output
+# prefers it among a structure's rows.
+REPORT_SETTINGS = {
+    "bvh": Spec("bvh", (("split", "median"), ("max_prims", "1"), ("max_depth", "50"))),
+    "lbvh": Spec("lbvh", (("max_prims", "1"), ("max_depth", "50"))),
+    "kdtree": Spec("kdtree", (("max_prims", "1"), ("max_depth", AUTO)), KD_PREFERRED),
+}
+# Free parameters preferred where several rows of one structure fit (beyond one build
+# thread): pbrt's kd-tree costs, which the report used; Embree's defaults.
+PREFERRED = {"kdtree": KD_PREFERRED, "embree": EMBREE_PREFERRED}
 
 
-# The parameters that make two structures of one accelerator different structures (the
-# BVH's split, the wide BVH's width); the others are settings of the same structure.
-IDENTITY_PARAMS = ("split", "width")
+def report_name(accel: str, variant_params: tuple[tuple[str, str], ...]) -> str | None:
+    """The report's name of the structure a table variant is, where the report measured it."""
+    for name, spec in REPORT_SETTINGS.items():
+        if spec.accel == accel and all(p in spec.required for p in variant_params):
+            return name
+    return None
+
+
+def table_structures() -> list[Structure]:
+    """The structures of the comparison (not the references), one per variant, in the
+    structure table's order."""
+    out = []
+    for row in structure_table():
+        if row.role == "reference":
+            continue
+        for v in row.variants:
+            report = report_name(row.name, v.params)
+            key = report or " ".join([row.name] + [f"{k}={val}" for k, val in v.params])
+            prefer = PREFERRED.get(row.name, SINGLE_THREAD)
+            if report is not None:
+                prefer = REPORT_SETTINGS[report].required + prefer
+            spec = Spec(row.name, v.params, prefer)
+            out.append(Structure(key, v.label, spec, report, row.role, REPORT_SETTINGS.get(report)))
+    return out
 
 
 def label_of(accel: str, params: dict[str, str]) -> str:
-    """The label of the first structure (registry order) of this accelerator whose identity
-    parameters the row has; the accelerator's name where none matches."""
-    for st in STRUCTURES:
-        if st.spec.accel == accel and all(
-            params.get(k) == v for k, v in st.spec.required if k in IDENTITY_PARAMS
-        ):
-            return st.label
-    return accel
+    """The structure table's label of a row's structure (the variant its parameters are);
+    the accelerator's name where the table has none."""
+    v = variant_of_row(accel, params)
+    return v.label if v is not None else accel
 
 
 def parse_setting(setting: str) -> tuple[str, str] | None:
@@ -265,16 +286,16 @@ class Picker:
         self._structures: list[Structure] | None = None
 
     def structures(self) -> list[Structure]:
-        """STRUCTURES, then one structure at its defaults for every other accelerator the data
-        holds (a newly registered one appears in every table and figure with no edit here),
-        labelled by the rows' `label` column where the CSV has it, else by its name."""
+        """The structure table's structures of the comparison, then one structure at its
+        defaults for every accelerator the data holds that the table lacks (a plugin not
+        loaded now), labelled by the rows' `label` column where the CSV has it."""
         if self._structures is None:
             self._structures = self._find_structures()
         return self._structures
 
     def _find_structures(self) -> list[Structure]:
-        known = {s.spec.accel for s in STRUCTURES} | set(NOT_STRUCTURES)
-        out = list(STRUCTURES)
+        out = table_structures()
+        known = {r.name for r in structure_table()}
         for accel in dict.fromkeys(self.rows["accel"]) if len(self.rows) else []:
             if accel in known:
                 continue
@@ -287,6 +308,10 @@ class Picker:
             out.append(Structure(accel, label, Spec(accel), None))
             known.add(accel)
         return out
+
+    def structure(self, key: str) -> Structure:
+        """The structure of this key ("bvh": the report's BVH, median split)."""
+        return next(s for s in self.structures() if s.key == key)
 
     def candidates(self, model: str, spec: Spec, variant: str | None = None) -> pd.DataFrame:
         df = self.rows[(self.rows["model"] == model) & (self.rows["accel"] == spec.accel)]
@@ -316,7 +341,13 @@ class Picker:
             r = cands.iloc[0]
             msg = str(r.get("message", "")).strip()
             return Pick(None, r["status"] + (f": {msg}" if msg else ""))
-        score = ok["param_dict"].map(lambda p: sum(1 for k, v in spec.preferred if p.get(k) == v))
+        score = pd.Series(
+            [
+                sum(1 for k, v in spec.preferred if k in p and param_matches(p, tri, k, v))
+                for p, tri in zip(ok["param_dict"], ok["triangles"])
+            ],
+            index=ok.index,
+        )
         best = ok[score == score.max()]
         best = best.sort_values("timestamp", ascending=False, kind="stable")
         chosen = best.iloc[0]
@@ -382,6 +413,8 @@ def setting_spec(setting: str, structure: str, picker: Picker, model: str, depth
     """Our spec for one of the report's settings ("default" or a Table 2 setting)."""
     parsed = parse_setting(setting)
     if parsed is None:
+        if structure in REPORT_SETTINGS:
+            return REPORT_SETTINGS[structure]
         return next(s for s in picker.structures() if s.key == structure).spec
     if structure != "kdtree":
         raise ValueError(f"Table 2 settings apply to the kd-tree only, not {structure}")

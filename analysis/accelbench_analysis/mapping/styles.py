@@ -1,14 +1,15 @@
 """One colour per structure, the same in every figure.
 
 Styles are assigned by order, benchopt-style, never looked up in a hand-kept table that a new
-structure can miss: the analysis's structures (selection.STRUCTURES, the registry's order)
+structure can miss: the structure table's variants (structures.py, the registry's order)
 take the first places, so BVH (median) has the same colour in every figure of every run;
 any other structure the data holds (a newly registered accelerator, a label the analysis
 does not know) takes the next free place in order of first appearance. Every place has its
-own colour, so no structure is drawn in a default black and no two share a colour.
+own colour, so no structure is drawn in a default black and no two share a colour; the
+baseline (the table's role `baseline`, Embree) is grey.
 
-Accelerator names (the error figure's hue, `bvh`, `wbvh`, ...) and workload labels
-("bvh split=sah") are styled through the structure they denote where one matches.
+Every figure colours by the structure table's label of a row ("wide BVH (8, SIMD)"),
+never by accelerator name.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from __future__ import annotations
 import colorsys
 from collections.abc import Iterable
 
-from .selection import STRUCTURES
+from .structures import table_labels
 
 # Matplotlib's tab10 without its grey (kept for Embree, the baseline) and tab20's lighter
 # halves after it: distinct hues first, then the lighter variants.
@@ -40,8 +41,16 @@ _BASE = [
     "#f7b6d2",
     "#dbdb8d",
 ]
-BASELINE, BASELINE_COLOUR = "Embree", "#7f7f7f"
-KNOWN = [s.label for s in STRUCTURES]
+BASELINE_COLOUR = "#7f7f7f"
+
+
+def known_labels() -> list[str]:
+    """The structure table's labels of the comparison's structures, in its order."""
+    return table_labels()
+
+
+def baseline_labels() -> set[str]:
+    return set(table_labels(("baseline",)))
 
 
 def _extra_colour(i: int) -> str:
@@ -59,7 +68,8 @@ def structure_order(labels: Iterable[str]) -> list[str]:
     """The labels present, known structures first in registry order, then the others in
     order of first appearance."""
     seen = list(dict.fromkeys(str(x) for x in labels))
-    return [k for k in KNOWN if k in seen] + [x for x in seen if x not in KNOWN]
+    known = known_labels()
+    return [k for k in known if k in seen] + [x for x in seen if x not in known]
 
 
 class Styles:
@@ -69,31 +79,17 @@ class Styles:
 
     def __init__(self, labels: Iterable[str]):
         self.order = structure_order(labels)
-        coloured = [k for k in KNOWN if k != BASELINE]
+        self.baseline = baseline_labels()
+        coloured = [k for k in known_labels() if k not in self.baseline]
         unknown = iter(range(len(coloured), len(coloured) + len(self.order)))
         self.places = {
             label: coloured.index(label) if label in coloured else next(unknown)
             for label in self.order
-            if label != BASELINE
+            if label not in self.baseline
         }
 
     def colour(self, label: str) -> str:
-        return BASELINE_COLOUR if label == BASELINE else colour_at(self.places[label])
+        return BASELINE_COLOUR if label in self.baseline else colour_at(self.places[label])
 
     def palette(self) -> dict[str, str]:
         return {label: self.colour(label) for label in self.order}
-
-
-def accel_label(accel: str) -> str:
-    """The structure label an accelerator name stands for: the first structure (registry
-    order) built by it; the name itself where none is."""
-    return next((s.label for s in STRUCTURES if s.spec.accel == accel), accel)
-
-
-def accel_styles(accels: Iterable[str]) -> tuple[list[str], dict[str, str]]:
-    """Order and colours for a hue of accelerator names, through the structures they denote."""
-    accels = list(dict.fromkeys(accels))
-    labels = {a: accel_label(a) for a in accels}
-    styles = Styles(labels.values())
-    order = sorted(accels, key=lambda a: styles.order.index(labels[a]))
-    return order, {a: styles.colour(labels[a]) for a in order}

@@ -44,6 +44,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from .. import commands
+from ..mapping.structures import use_accelbench
 from .runs import (
     RUN_JSON,
     ReproduceError,
@@ -311,7 +312,9 @@ def analysis_steps(job: Job, run_dir: Path) -> list[tuple[str, Callable[[], list
 
 
 def analyse(job: Job, run_dir: Path) -> int:
-    """Runs the analysis steps, printing what each wrote; 2 on input it cannot use."""
+    """Runs the analysis steps, printing what each wrote; 2 on input it cannot use. The
+    structure table is the measuring build's."""
+    use_accelbench(job.accelbench)
     for name, step in analysis_steps(job, run_dir):
         print(f"== analysis: {name} -> {run_dir}", file=sys.stderr, flush=True)
         try:
@@ -323,90 +326,83 @@ def analyse(job: Job, run_dir: Path) -> int:
     return 0
 
 
-def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
-    """Runs the job; returns (exit code, run directory). The run is marked complete only
-    when every config measured and the analysis ran. A ReproduceError is a job that cannot
-    go on, with the reason."""
-    now = now or datetime.now(UTC)
+def refusal(job: Job) -> str | None:
+    """Why the job must not start, checked before the harness is asked anything: a dirty
+    tree for the reference run, a missing config, a tag that cannot name a directory, an
+    output path that is not what it should be."""
     if job.require_clean_tree:
         changes = tree_changes(Path.cwd())
         if changes:
-            print(
-                "reproduce: refusing to measure the reference run from a work tree with "
-                "uncommitted changes (its rows would name a commit that is not the code that "
-                "ran); commit or stash them first:\n  " + "\n  ".join(changes),
-                file=sys.stderr,
+            return (
+                "refusing to measure the reference run from a work tree with uncommitted changes "
+                "(its rows would name a commit that is not the code that ran); commit or stash them "
+                "first:\n  " + "\n  ".join(changes)
             )
-            return 2, Path()
     for c in job.configs:
         if not c.is_file():
-            print(f"reproduce: no such config {c}", file=sys.stderr)
-            return 2, Path()
+            return f"no such config {c}"
     if job.tag and not TAG.match(job.tag):
-        print(
-            f"reproduce: --tag {job.tag!r}: a tag is part of a directory name: letters, digits, "
-            f"'_', '-' and '.', not starting with '-' or '.'",
-            file=sys.stderr,
+        return (
+            f"--tag {job.tag!r}: a tag is part of a directory name: letters, digits, "
+            f"'_', '-' and '.', not starting with '-' or '.'"
         )
-        return 2, Path()
     if job.scaling is not None and job.scaling not in job.configs:
         job.configs.append(job.scaling)
     problems = output_problems(job)
     if problems:
-        print("reproduce: nothing measured:\n  " + "\n  ".join(problems), file=sys.stderr)
-        return 2, Path()
-    provenance = build_provenance(job.accelbench)
+        return "nothing measured:\n  " + "\n  ".join(problems)
+    return None
+
+
+def dirty_build(job: Job, provenance: dict[str, str]) -> str | None:
+    """For the reference run: why the build's own provenance makes it unfit."""
     if job.require_clean_tree and provenance.get("git_dirty") != "false":
-        print(
-            f"reproduce: refusing: {job.accelbench} reports git_dirty="
+        return (
+            f"refusing: {job.accelbench} reports git_dirty="
             f"{provenance.get('git_dirty')} for the tree it was built from (when it was built, a "
             f"tracked file outside results/ differed from the commit, or a file git does not track "
-            f"lay under core/ or harness/): commit or remove them and build again",
+            f"lay under core/ or harness/): commit or remove them and build again"
+        )
+    return None
+
+
+def measure(job: Job, run_dir: Path, csvs: list[Path], progress: Progress) -> int:
+    """Every config through the harness into its CSV; the first non-zero exit code."""
+    for i, (config, out_csv) in enumerate(zip(job.configs, csvs)):
+        before = sum(csv_rows(p) for p in csvs[:i])
+        rc = run_config(job.accelbench, config, out_csv, progress, before)
+        if rc != 0:
+            print(
+                f"reproduce: {config} exited with {rc}; {run_dir} stays unfinished (run the "
+                f"job again with the same build to continue it)",
+                file=sys.stderr,
+            )
+            return rc
+    return 0
+
+
+def cost_images(job: Job, run_dir: Path) -> int:
+    """The cost images command, the run directory appended; its exit code."""
+    if not job.cost_images:
+        return 0
+    print("== cost images", file=sys.stderr, flush=True)
+    try:
+        cost = subprocess.run(job.cost_images + [str(run_dir)])
+    except OSError as e:
+        raise ReproduceError(
+            f"cannot run the cost images command {job.cost_images[0]}: {e.strerror}"
+        ) from None
+    if cost.returncode != 0:
+        print(
+            f"reproduce: the cost images ({' '.join(job.cost_images)}) exited with "
+            f"{cost.returncode}; {run_dir} stays unfinished",
             file=sys.stderr,
         )
-        return 2, Path()
-    # Every config through the harness's own checks before anything is written or measured.
-    checked = {c: dry_run(job.accelbench, c) for c in job.configs}
-    inputs = {c.name: checked[c].inputs for c in job.configs}
-    run_dir, meta, foreign = start(job, provenance, inputs, now)
-    csvs = [run_dir / "csv" / f"{c.stem}.csv" for c in job.configs]
-    totals = [checked[c].combinations for c in job.configs]
-    progress = Progress(sum(totals), sum(csv_rows(p) for p in csvs))
-    progress.show(progress.done_before)
-    try:
-        for i, (config, out_csv) in enumerate(zip(job.configs, csvs)):
-            before = sum(csv_rows(p) for p in csvs[:i])
-            rc = run_config(job.accelbench, config, out_csv, progress, before)
-            if rc != 0:
-                print(
-                    f"reproduce: {config} exited with {rc}; {run_dir} stays unfinished (run the "
-                    f"job again with the same build to continue it)",
-                    file=sys.stderr,
-                )
-                return rc, run_dir
-        if job.analyse:
-            if job.cost_images:
-                print("== cost images", file=sys.stderr, flush=True)
-                try:
-                    cost = subprocess.run(job.cost_images + [str(run_dir)])
-                except OSError as e:
-                    raise ReproduceError(
-                        f"cannot run the cost images command {job.cost_images[0]}: {e.strerror}"
-                    ) from None
-                if cost.returncode != 0:
-                    print(
-                        f"reproduce: the cost images ({' '.join(job.cost_images)}) exited with "
-                        f"{cost.returncode}; {run_dir} stays unfinished",
-                        file=sys.stderr,
-                    )
-                    return cost.returncode, run_dir
-            rc = analyse(job, run_dir)
-            if rc != 0:
-                return rc, run_dir
-        meta["complete"] = True
-        meta["finished"] = utc(datetime.now(UTC))
-    finally:
-        record_written(run_dir, meta, foreign)
+    return cost.returncode
+
+
+def finish(job: Job, run_dir: Path, progress: Progress) -> None:
+    """results/latest, the page listing the runs, and the job's last line."""
     if job.latest is not None and job.into is None:
         point_latest(job.latest, run_dir)
     from ..outputs.pages.runs_page import write_runs_page
@@ -418,4 +414,35 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
         + (f" (also {job.latest})" if job.latest is not None and job.into is None else ""),
         file=sys.stderr,
     )
+
+
+def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
+    """Runs the job; returns (exit code, run directory). The run is marked complete only
+    when every config measured and the analysis ran. A ReproduceError is a job that cannot
+    go on, with the reason."""
+    now = now or datetime.now(UTC)
+    why = refusal(job)
+    provenance = build_provenance(job.accelbench) if why is None else {}
+    why = why or dirty_build(job, provenance)
+    if why is not None:
+        print(f"reproduce: {why}", file=sys.stderr)
+        return 2, Path()
+    # Every config through the harness's own checks before anything is written or measured.
+    checked = {c: dry_run(job.accelbench, c) for c in job.configs}
+    inputs = {c.name: checked[c].inputs for c in job.configs}
+    run_dir, meta, foreign = start(job, provenance, inputs, now)
+    csvs = [run_dir / "csv" / f"{c.stem}.csv" for c in job.configs]
+    progress = Progress(sum(checked[c].combinations for c in job.configs), sum(csv_rows(p) for p in csvs))
+    progress.show(progress.done_before)
+    try:
+        rc = measure(job, run_dir, csvs, progress)
+        if rc == 0 and job.analyse:
+            rc = cost_images(job, run_dir) or analyse(job, run_dir)
+        if rc != 0:
+            return rc, run_dir
+        meta["complete"] = True
+        meta["finished"] = utc(datetime.now(UTC))
+    finally:
+        record_written(run_dir, meta, foreign)
+    finish(job, run_dir, progress)
     return 0, run_dir

@@ -112,6 +112,30 @@ struct PluginSource {
 //
 // The capabilities after `create` are what the harness and the tests ask of a structure
 // (never its name); their defaults are those of every structure of ours.
+// What a structure is in the comparison: ours, the baseline every ratio is taken against
+// (Embree), a reference that only checks the others (the errors' ground truth, the brute
+// force of the tests), or a plugin that joined the registry at run time.
+enum class StructureRole { ours, baseline, reference, plugin };
+const char* to_string(StructureRole role);
+
+// A parameter whose values are different structures in the report's tables (the BVH's
+// split, the wide BVH's width): `{name: all}` runs every value, and the analysis shows each
+// as its own row, under the label of those parameters.
+struct StructureVariants {
+    std::string param;
+    std::vector<std::string> values;
+};
+
+// A structure's row of the structure table (`accelbench list --json`), which the analysis
+// reads instead of keeping a list of structures of its own.
+struct StructureEntry {
+    StructureRole role = StructureRole::ours;
+    std::string family{};  // the kind of structure ("BVH", "kd-tree"), for grouping
+    std::vector<StructureVariants> variants{};
+    // O(N) or worse per ray: left out of `{name: all}` (a config names it to run it).
+    bool slow = false;
+};
+
 struct AcceleratorInfo {
     std::string name;
     std::string description;
@@ -138,6 +162,9 @@ struct AcceleratorInfo {
     // Set for a structure from a plugin (its role is `plugin`); empty for ours and the
     // baselines, which are compiled in.
     std::optional<PluginSource> plugin = std::nullopt;
+    // Its row of the structure table; the registry (registry.cpp) sets it, as does whatever
+    // adds a structure at run time.
+    StructureEntry table{};
 };
 
 // A label that does not depend on the parameters.

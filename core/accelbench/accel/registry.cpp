@@ -14,12 +14,36 @@
 
 namespace accelbench {
 
+const char* to_string(StructureRole role) {
+    switch (role) {
+        case StructureRole::ours: return "ours";
+        case StructureRole::baseline: return "baseline";
+        case StructureRole::reference: return "reference";
+        case StructureRole::plugin: return "plugin";
+    }
+    return "?";
+}
+
 namespace {
-// The structures compiled in, then those of plugins in the order they were loaded.
+
+AcceleratorInfo with_entry(AcceleratorInfo info, StructureEntry entry) {
+    info.table = std::move(entry);
+    return info;
+}
+
+// The structure table, in the order the analysis shows it: the report's structures (BVH,
+// LBVH, kd-tree), ours beyond it, the baseline, the references; then the structures of
+// plugins in the order they were loaded.
 std::vector<AcceleratorInfo>& registry_entries() {
+    using enum StructureRole;
     static std::vector<AcceleratorInfo> registry = {
-        BruteForce::info(),     Bvh::info(),  EmbreeAccel::info(), Lbvh::info(), KdTree::info(),
-        ReferenceAccel::info(), Wbvh::info(),
+        with_entry(Bvh::info(), {.family = "BVH", .variants = {{"split", {"median", "sah"}}}}),
+        with_entry(Lbvh::info(), {.family = "BVH"}),
+        with_entry(KdTree::info(), {.family = "kd-tree"}),
+        with_entry(Wbvh::info(), {.family = "wide BVH", .variants = {{"width", {"4", "8"}}}}),
+        with_entry(EmbreeAccel::info(), {.role = baseline, .family = "BVH"}),
+        with_entry(BruteForce::info(), {.role = reference, .family = "none", .slow = true}),
+        with_entry(ReferenceAccel::info(), {.role = reference, .family = "BVH"}),
     };
     return registry;
 }
@@ -38,7 +62,26 @@ void register_plugin(const std::string& path, const std::string& sha256) {
         if (const AcceleratorInfo* other = find_accelerator(info.name))
             throw PluginError("plugin " + path + ": structure '" + info.name + "' is already registered " +
                               (other->plugin ? "by plugin " + other->plugin->file : std::string("(built in)")));
-    for (AcceleratorInfo& info : plugin.structures) registry_entries().push_back(std::move(info));
+    for (AcceleratorInfo& info : plugin.structures) {
+        info.table.role = StructureRole::plugin;
+        if (info.table.family.empty()) info.table.family = "plugin";
+        registry_entries().push_back(std::move(info));
+    }
+}
+
+std::vector<std::map<std::string, std::string>> variant_settings(const AcceleratorInfo& info) {
+    std::vector<std::map<std::string, std::string>> settings = {{}};
+    for (const StructureVariants& v : info.table.variants) {
+        std::vector<std::map<std::string, std::string>> next;
+        for (const auto& s : settings)
+            for (const std::string& value : v.values) {
+                auto with = s;
+                with[v.param] = value;
+                next.push_back(std::move(with));
+            }
+        settings = std::move(next);
+    }
+    return settings;
 }
 
 const AcceleratorInfo* find_accelerator(std::string_view name) {

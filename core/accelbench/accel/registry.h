@@ -2,7 +2,9 @@
 // (`accelbench list`) and the YAML harness validate parameters through it.
 //
 // Adding an accelerator = its file pair, with a static `info()` returning an
-// AcceleratorInfo (accelerator.h), and one line in registry.cpp.
+// AcceleratorInfo (accelerator.h), and one line in registry.cpp giving its row of the
+// structure table (role, family, the variants the report's tables show, slow or not).
+// The registry's order is the table's: the analysis shows structures in it.
 #pragma once
 
 #include <functional>
@@ -25,6 +27,10 @@ const std::vector<AcceleratorInfo>& accelerator_registry();
 // naming the file): a plugin that cannot be loaded, or a structure name the registry has
 // (built in or from another plugin). Call before looking structures up: entries move.
 void register_plugin(const std::string& path, const std::string& sha256);
+
+// The given parameters of each of a structure's table variants: the product of its
+// StructureVariants, in declaration order (one empty setting when it declares none).
+std::vector<std::map<std::string, std::string>> variant_settings(const AcceleratorInfo& info);
 
 // nullptr if there is no accelerator of that name.
 const AcceleratorInfo* find_accelerator(std::string_view name);

@@ -190,6 +190,35 @@ def _count_changed(metric: str, old, new) -> bool:
     return float(old) != float(new)
 
 
+def count_notes(
+    t: Tier, missing: list[str], added: list[str], third_party_changes: list[str], unchecked_errors: set[str]
+) -> None:
+    """Tier 1's notes: combinations missing or new, third-party answers that changed, error
+    columns the baseline lacks."""
+    if missing:
+        t.notes.append(
+            "Missing from this run (a failure: the baseline measured them): " + "; ".join(missing) + "."
+        )
+    if third_party_changes:
+        t.notes.append(
+            f"Changed in the {RATIO_DENOMINATOR} rows (third-party answers, not compared exactly): "
+            + "; ".join(third_party_changes)
+            + "."
+        )
+    if unchecked_errors:
+        t.notes.append(
+            "Error columns not in the baseline, so not compared: "
+            + ", ".join(sorted(unchecked_errors))
+            + ". Update the baseline to cover them."
+        )
+    if added:
+        t.notes.append(
+            "New in this run (not in the baseline; not compared): "
+            + "; ".join(added)
+            + ". Update the baseline to cover them."
+        )
+
+
 def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
     t = Tier(
         "1. Deterministic counts", header=["combination", "metric", "baseline", "current", "current/baseline"]
@@ -238,30 +267,9 @@ def tier_counts(base: dict, cur: dict, name: dict) -> Tier:
                 changed_combos.add(k)
     missing = [k for k in base if k not in cur]
     added = [k for k in cur if k not in base]
-    if missing:
-        t.notes.append(
-            "Missing from this run (a failure: the baseline measured them): "
-            + "; ".join(name[k] for k in missing)
-            + "."
-        )
-    if third_party_changes:
-        t.notes.append(
-            f"Changed in the {RATIO_DENOMINATOR} rows (third-party answers, not compared exactly): "
-            + "; ".join(third_party_changes)
-            + "."
-        )
-    if unchecked_errors:
-        t.notes.append(
-            "Error columns not in the baseline, so not compared: "
-            + ", ".join(sorted(unchecked_errors))
-            + ". Update the baseline to cover them."
-        )
-    if added:
-        t.notes.append(
-            "New in this run (not in the baseline; not compared): "
-            + "; ".join(name[k] for k in added)
-            + ". Update the baseline to cover them."
-        )
+    count_notes(
+        t, [name[k] for k in missing], [name[k] for k in added], third_party_changes, unchecked_errors
+    )
     t.verdict = FAIL if (t.rows or missing) else PASS
     t.summary = (
         f"{len(common)} combinations compared on {len(EXACT_COUNTS) + 1} metrics "

@@ -27,9 +27,9 @@ from ...inputs.report_numbers import REPORT_MODELS, TABLE2_MODEL, our_model, rep
 from ...inputs.schema import Results  # noqa: E402
 from ...mapping.errors import wrong_answers  # noqa: E402
 from ...mapping.metrics import preferred_variant, ratio, structure_rows  # noqa: E402
-from ...mapping.selection import STRUCTURE, Picker, setting_spec  # noqa: E402
-from ...mapping.styles import Styles, accel_styles  # noqa: E402
-from .interactive import build_vs_render_spec, error_pareto_spec, write_spec  # noqa: E402
+from ...mapping.selection import Picker, label_of, setting_spec  # noqa: E402
+from ...mapping.styles import Styles  # noqa: E402
+from .interactive import build_vs_render_spec, error_pareto_spec, write_figure  # noqa: E402
 
 SEED = 0
 NO_MODES = "own (no modes)"  # traversal label of structures without traversal modes
@@ -63,7 +63,8 @@ def model_order(results: Results) -> list[tuple[str, str]]:
 
 
 def structure_frame(results: Results) -> pd.DataFrame:
-    """One tidy row per (model, structure, traversal) at the report's default parameters."""
+    """One tidy row per (model, structure, traversal), the report's setting preferred among a
+    structure's rows (a run at the defaults is drawn too)."""
     picker = Picker(results)
     models = model_order(results)
     srows = structure_rows(picker, [m for m, _ in models])
@@ -130,59 +131,14 @@ def _palette(labels) -> dict[str, str]:
 
 
 def build_vs_render(results: Results, path: Path) -> Path | Skipped:
+    """One point per structure and model, its 95% CIs as rules: one specification, the page's
+    chart and the PNG."""
     df = structure_frame(results)
     df = df.dropna(subset=["build_s_median", "render_s_median"]) if len(df) else df
     if df.empty:
         return Skipped("no ok rows with build and render times at the report's default parameters")
-    setup()
-    styles = Styles(df["structure"])
-    order = styles.order
-    g = sns.relplot(
-        data=df,
-        x="build_s_median",
-        y="render_s_median",
-        hue="structure",
-        hue_order=order,
-        palette=styles.palette(),
-        style="traversal",
-        s=70,
-        col="model",
-        col_wrap=min(3, df["model"].nunique()),
-        height=3.0,
-        aspect=1.15,
-        facet_kws={"sharex": True, "sharey": True},
-    )
-
-    def errorbars(data, **_):
-        ax = plt.gca()
-        for _, r in data.iterrows():
-            ax.errorbar(
-                r["build_s_median"],
-                r["render_s_median"],
-                xerr=[[r["build_s_median"] - r["build_s_ci_lo"]], [r["build_s_ci_hi"] - r["build_s_median"]]],
-                yerr=[
-                    [r["render_s_median"] - r["render_s_ci_lo"]],
-                    [r["render_s_ci_hi"] - r["render_s_median"]],
-                ],
-                fmt="none",
-                ecolor=styles.colour(r["structure"]),
-                elinewidth=1,
-                capsize=2,
-                alpha=0.8,
-            )
-
-    g.map_dataframe(errorbars)
-    g.set(xscale="log", yscale="log")
-    g.set_axis_labels("build time (s, median, 95% CI)", "render time (s)")
-    g.set_titles("{col_name}")
-    for ax in g.axes.flat:
-        plain_log_ticks(ax, "x")
-        plain_log_ticks(ax, "y")
     title = "Build vs render time at the report's default parameters (lower left is better)"
-    g.figure.suptitle(title, y=1.02)
-    save_figure(g, path)
-    write_spec(path, build_vs_render_spec(df, title))
-    return path
+    return write_figure(path, build_vs_render_spec(df, title))
 
 
 # ---- Table 2 sweeps -------------------------------------------------------------------------
@@ -371,14 +327,15 @@ def error_frame(results: Results) -> pd.DataFrame:
     df = rows[rows["status"] == "ok"].dropna(subset=["render_s_median", "false_misses", "false_hits"]).copy()
     df["model"] = df["model"].map(dict(model_order(results)))
     df[WRONG] = wrong_answers(df)
+    df["structure"] = [label_of(a, p) for a, p in zip(df["accel"], df["param_dict"])]
     return df
 
 
 def error_pareto(results: Results, path: Path) -> Path | Skipped:
     """Render time against wrong answers (false misses + false hits + wrong primitives vs
-    the reference) for every timed row, per model. Zero is the common case (watertight
-    structures), so the y axis is symlog (linear through 0 to 1) and a panel whose rows are
-    all zero says so instead of showing a flat line of dots as if it were a trade-off."""
+    the reference) for every timed row, per model, coloured by structure. Zero is the
+    common case (watertight structures), so the y axis is symlog; each structure's Pareto
+    front is dashed and the points nothing beats overall are ringed."""
     if not results.has_error_columns():
         return Skipped(
             "the CSV has no false_misses/false_hits values (the harness's reference comparison had not run)"
@@ -386,89 +343,20 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
     df = error_frame(results)
     if df.empty:
         return Skipped("no ok row has both a render time and error counts")
-    names = dict(model_order(results))
     y = WRONG
-    setup()
-    accels, colours = accel_styles(df["accel"])
-    g = sns.relplot(
-        data=df,
-        x="render_s_median",
-        y=y,
-        hue="accel",
-        hue_order=accels,
-        palette=colours,
-        col="model",
-        col_order=[n for n in names.values() if n in set(df["model"])],
-        col_wrap=min(3, df["model"].nunique()),
-        height=3.0,
-        aspect=1.2,
-        s=40,
-        alpha=0.8,
-        facet_kws={"sharex": False, "sharey": True},
+    colours = Styles(df["structure"]).palette()
+    fronts = pd.concat(
+        [pareto_front(pts, "render_s_median", y) for _, pts in df.groupby(["model", "structure"])]
     )
-    # Each structure's own trade-off over its parameter sets, and the points nothing beats
-    # overall (ringed), per model.
-    fronts = pd.concat([pareto_front(pts, "render_s_median", y) for _, pts in df.groupby(["model", "accel"])])
     df["optimal"] = df.index.isin(
         pd.concat([pareto_front(sub, "render_s_median", y) for _, sub in df.groupby("model")]).index
     )
-    for name, ax in g.axes_dict.items():
-        sub = df[df["model"] == name]
-        for accel, front in fronts[fronts["model"] == name].groupby("accel"):
-            if len(front) > 1:
-                ax.step(
-                    front["render_s_median"],
-                    front[y],
-                    where="post",
-                    color=colours[accel],
-                    lw=1,
-                    ls="--",
-                    alpha=0.9,
-                )
-        best = sub[sub["optimal"]]
-        ax.scatter(
-            best["render_s_median"],
-            best[y],
-            s=120,
-            facecolors="none",
-            edgecolors="black",
-            linewidths=1.2,
-            zorder=5,
-        )
-        if (sub[y] == 0).all():
-            ax.text(
-                0.5,
-                0.92,
-                f"all {len(sub)} rows: 0 wrong answers",
-                transform=ax.transAxes,
-                ha="center",
-                va="top",
-                fontsize=8,
-                bbox={"boxstyle": "round", "facecolor": "white", "alpha": 0.8},
-            )
-    g.set(xscale="log", yscale="symlog")
-    ymax = max(1.0, float(df[y].max()))
-    # symlog's default locator leaves counts between 1 and 10 unlabelled: 0, 1, 2, 5, 10, 20, ...
-    yticks = [0.0] + [m * 10.0**e for e in range(0, 10) for m in (1, 2, 5) if m * 10.0**e <= ymax * 1.6 + 1]
-    for ax in g.axes.flat:
-        ax.set_yscale("symlog", linthresh=1.0)
-        ax.set_ylim(-0.3, ymax * 1.6 + 1)
-        ax.set_yticks(yticks)
-        ax.yaxis.set_major_formatter(mticker.FuncFormatter(lambda v, _: f"{v:g}"))
-        plain_log_ticks(ax, "x")
-    g.set_axis_labels(
-        "render time (s, median)", "false misses + false hits\n+ wrong primitives vs the reference"
-    )
-    g.set_titles("{col_name}")
     zero = ": every row has 0 wrong answers" if (df[y] == 0).all() else ""
     title = (
-        f"Render time vs wrong answers over every parameter set{zero}\n(dashed: each "
+        f"Render time vs wrong answers over every parameter set{zero} (dashed: each "
         "structure's Pareto front; ringed: optimal overall)"
     )
-    g.figure.suptitle(title, y=1.04)
-    save_figure(g, path)
-    write_spec(path, error_pareto_spec(df, fronts, y, title.replace("\n", " "), colours))
-    return path
+    return write_figure(path, error_pareto_spec(df, fronts, y, title, colours))
 
 
 # ---- relative to BVH --------------------------------------------------------------------------
@@ -477,15 +365,15 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
 def relative_frame(results: Results, report_nums: pd.DataFrame) -> pd.DataFrame:
     picker = Picker(results)
     records = []
-    bvh = STRUCTURE["bvh"]
+    bvh = picker.structure("bvh")
     for rm in REPORT_MODELS:
         ours = our_model(rm.key, picker.models)
         label = rm.label + ("\n(stand-in)" if rm.stand_in else "")
-        den = picker.pick(ours, bvh.spec, preferred_variant(picker.variants([ours], bvh.spec)))
+        den = picker.pick(ours, bvh.table_spec, preferred_variant(picker.variants([ours], bvh.table_spec)))
         for s in picker.structures():
             if s.key == "bvh":
                 continue
-            num = picker.pick(ours, s.spec, preferred_variant(picker.variants([ours], s.spec)))
+            num = picker.pick(ours, s.table_spec, preferred_variant(picker.variants([ours], s.table_spec)))
             for phase, col, rcol in (
                 ("build", "build_s_median", "build_s"),
                 ("render", "render_s_median", "render_s"),

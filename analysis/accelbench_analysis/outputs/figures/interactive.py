@@ -1,11 +1,10 @@
-"""Interactive versions of the figures where hovering helps (build vs render, scaling,
-error vs time, ray sets, thread scaling): Vega-Lite specs written beside the PNG as
-figures/NAME.vl.json, which a run's index.html draws.
+"""The Vega-Lite specifications of the figures where hovering helps (build vs render,
+scaling, error vs time, ray sets, thread scaling), written as figures/NAME.vl.json, which
+a run's index.html draws; write_figure renders the PNG from the same specification.
 
-Each spec is made by the figure's own writer from the frame it has just drawn the PNG
-from, with the frame's rows inlined as the spec's data: the two versions cannot disagree,
-and nothing is computed here beyond display labels. Colours are the PNG's (one palette by
-registry order, mapping/styles.py)."""
+Each spec is made by the figure's own writer from its frame, with the frame's rows
+inlined as the spec's data, and nothing is computed here beyond display labels. Colours
+come from one palette in the structure table's order (mapping/styles.py)."""
 
 from __future__ import annotations
 
@@ -13,12 +12,14 @@ import json
 from pathlib import Path
 
 import pandas as pd
+import vl_convert
 
 from ...mapping.styles import Styles
 
 SCHEMA = "https://vega.github.io/schema/vega-lite/v6.json"
 SPEC_SUFFIX = ".vl.json"
 PANEL = {"width": 240, "height": 190}
+PNG_SCALE = 1.5  # pixels per Vega-Lite pixel in the PNGs
 
 
 def spec_path(png: Path) -> Path:
@@ -28,8 +29,18 @@ def spec_path(png: Path) -> Path:
 def write_spec(png: Path, spec: dict) -> Path:
     """figures/NAME.vl.json beside figures/NAME.png."""
     path = spec_path(png)
+    path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(spec, separators=(",", ":"), allow_nan=False))
     return path
+
+
+def write_figure(png: Path, spec: dict) -> Path:
+    """A figure once: its Vega-Lite specification (figures/NAME.vl.json, which the pages
+    embed) and figures/NAME.png rendered from it by vl-convert (REPORT.md's), so the two
+    cannot differ in data, order, colour or label."""
+    write_spec(png, spec)
+    png.write_bytes(vl_convert.vegalite_to_png(spec, scale=PNG_SCALE))
+    return png
 
 
 def records(df: pd.DataFrame, columns: list[str]) -> list[dict]:
@@ -214,12 +225,14 @@ def error_pareto_spec(
     points: pd.DataFrame, fronts: pd.DataFrame, wrong: str, title: str, colours: dict[str, str]
 ) -> dict:
     """error_frame's rows (figures.error_pareto) with `optimal` marking the points nothing
-    beats, and each structure's Pareto front as dashed steps; colours per accelerator."""
+    beats, and each structure's Pareto front as dashed steps; colours per structure (the
+    structure table's label and colour, as in every figure)."""
     data = pd.concat([points.assign(kind="row"), fronts.assign(kind="front")], ignore_index=True)
     data = data.rename(columns={wrong: "wrong"})
     cols = [
         "kind",
         "model",
+        "structure",
         "accel",
         "params",
         "render_s_median",
@@ -230,8 +243,8 @@ def error_pareto_spec(
         "nan_results",
         "optimal",
     ]
-    col = colour("accel", colours, "accelerator")
-    _, opacity = legend_pick("accel")
+    col = colour("structure", colours, "structure")
+    _, opacity = legend_pick("structure")
     x = log("render_s_median", "render time (s, median)")
     y = {
         "field": "wrong",
@@ -241,6 +254,7 @@ def error_pareto_spec(
     }
     tooltip = [
         {"field": "model", "type": "nominal"},
+        {"field": "structure", "type": "nominal"},
         {"field": "accel", "type": "nominal", "title": "accelerator"},
         {"field": "params", "type": "nominal"},
         number("render_s_median", "render (s)"),

@@ -10,18 +10,16 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import matplotlib.ticker as mticker  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from ...inputs.schema import ContractError, Results, record_lines, scan_records, to_numbers  # noqa: E402
 from ...mapping.selection import label_of  # noqa: E402
 from ...mapping.styles import Styles  # noqa: E402
-from .figures import DPI, plain_log_ticks  # noqa: E402
-from .interactive import scaling_spec, write_spec  # noqa: E402
+from .figures import DPI  # noqa: E402
+from .interactive import scaling_spec, write_figure  # noqa: E402
 
 TIMES = {"build_s_median": "build", "render_s_median": "render"}
-FAMILY_MARKERS = ["o", "s", "^", "D", "v"]
 
 
 def scaling_frame(results: Results) -> pd.DataFrame:
@@ -99,56 +97,11 @@ def fit_lines(frame: pd.DataFrame, slopes: pd.DataFrame) -> pd.DataFrame:
     )
 
 
-def _triangles_tick(v: float, _pos) -> str:
-    """10000 -> 10k, 1000000 -> 1M."""
-    if v >= 1e6:
-        return f"{v / 1e6:g}M"
-    return f"{v / 1e3:g}k" if v >= 1e3 else f"{v:g}"
-
-
 def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Path:
-    """Build (left) and render (right) time against triangles, log-log: one colour per
-    structure, one marker per source model, each series with its fitted line and slope
-    (the interactive version beside it: the same points and lines)."""
+    """Build and render time against triangles, log-log: one colour per structure, one
+    marker per source model, each series with its fitted line and slope; one
+    specification, the page's chart and the PNG."""
     lines = fit_lines(frame, slopes)
-    styles = Styles(frame["structure"])
-    structures = styles.order
-    families = sorted(frame["family"].unique())
-    fig, axes = plt.subplots(1, 2, figsize=(12, 6.6), constrained_layout=True)
-    for ax, (col, what) in zip(axes, TIMES.items()):
-        for s in structures:
-            colour = styles.colour(s)
-            for k, fam in enumerate(families):
-                g = frame[(frame["structure"] == s) & (frame["family"] == fam) & (frame[col] > 0)]
-                if g.empty:
-                    continue
-                fit = lines[(lines["structure"] == s) & (lines["family"] == fam) & (lines["time"] == what)]
-                label = f"{s}, {fam}"
-                if not fit.empty:
-                    ax.plot(fit["triangles"], fit["seconds"], "-", color=colour, lw=1.2, alpha=0.8)
-                    label += f": slope {fit['slope'].iloc[0]:.2f}"
-                ax.plot(
-                    g["triangles"],
-                    g[col],
-                    FAMILY_MARKERS[k % len(FAMILY_MARKERS)],
-                    color=colour,
-                    ms=6,
-                    mfc="white" if k else colour,
-                    label=label,
-                )
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("triangles")
-        ax.set_ylabel(f"{what} time, median (s)")
-        ax.set_title(f"{what} time vs triangles (log-log; slope 1 = linear)")
-        ax.grid(True, which="both", alpha=0.3)
-        plain_log_ticks(ax, "y")
-        ax.xaxis.set_major_formatter(mticker.FuncFormatter(_triangles_tick))
-        # Below the axes: inside, the legend would hide the smallest sizes' points.
-        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=DPI, metadata={"Software": None})
-    plt.close(fig)
     points = frame.melt(
         id_vars=["family", "model", "structure", "triangles"],
         value_vars=list(TIMES),
@@ -156,8 +109,8 @@ def scaling_figure(frame: pd.DataFrame, slopes: pd.DataFrame, path: Path) -> Pat
         value_name="seconds",
     )
     points["time"] = points["time"].map(TIMES)
-    write_spec(path, scaling_spec(points[points["seconds"] > 0], lines))
-    return path
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return write_figure(path, scaling_spec(points[points["seconds"] > 0], lines))
 
 
 def slopes_markdown(slopes: pd.DataFrame, files: list[str]) -> str:

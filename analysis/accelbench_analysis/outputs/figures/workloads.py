@@ -25,19 +25,14 @@ from __future__ import annotations
 from dataclasses import replace
 from pathlib import Path
 
-import matplotlib
+import pandas as pd
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import pandas as pd  # noqa: E402
-import seaborn as sns  # noqa: E402
-
-from ...inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results  # noqa: E402
-from ...mapping.formatting import md_escape  # noqa: E402
-from ...mapping.selection import EMBREE_PREFERRED  # noqa: E402
-from .interactive import ray_sets_spec, thread_scaling_spec, write_spec  # noqa: E402
-
-BASELINE = "embree"
+from ...inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results
+from ...mapping.formatting import md_escape
+from ...mapping.selection import EMBREE_PREFERRED, label_of
+from ...mapping.structures import baseline_accels
+from ...mapping.styles import Styles
+from .interactive import ray_sets_spec, thread_scaling_spec, write_figure
 
 
 def _thread_scaling_configs(rows: pd.DataFrame) -> pd.Series:
@@ -68,18 +63,21 @@ def without_thread_scaling(results: Results) -> tuple[Results, list[str]]:
 
 
 def structure_labels(rows: pd.DataFrame) -> pd.Series:
-    """`accel`, plus the parameters that vary among that accelerator's rows
-    (e.g. "bvh split=sah"), so that two variants never share a label. A `threads`
-    parameter follows the render thread count (a workload setting, not the structure's)."""
-    # A copy: a Series over rows["accel"].values would write the labels into `accel`.
-    labels = pd.Series(rows["accel"].to_numpy(copy=True), index=rows.index, dtype=object)
-    for accel, group in rows.groupby("accel"):
+    """The structure table's label of each row's structure ("wide BVH (8, SIMD)"), plus the
+    parameters that vary among the rows of one label ("Embree [robust=true]"), so that two
+    settings never share a label. A `threads` parameter follows the render thread count (a
+    workload setting, not the structure's)."""
+    base = pd.Series(
+        [label_of(a, p) for a, p in zip(rows["accel"], rows["param_dict"])], index=rows.index, dtype=object
+    )
+    labels = base.copy()
+    for _, group in rows.groupby(base):
         dicts = group["param_dict"]
         keys = sorted({k for d in dicts for k in d})
         varying = [k for k in keys if k != "threads" and len({d.get(k) for d in dicts}) > 1]
         for i, d in dicts.items():
             extra = ",".join(f"{k}={d.get(k, '')}" for k in varying)
-            labels[i] = f"{accel} {extra}" if extra else accel
+            labels[i] = f"{base[i]} [{extra}]" if extra else base[i]
     return labels
 
 
@@ -116,7 +114,7 @@ def ray_set_rows(results: Results) -> pd.DataFrame:
 def _baseline_row(group: pd.DataFrame) -> pd.Series | None:
     """Embree's row of one model, set and workload: the only one, else the one at Embree's
     defaults; None when there is none or no single one."""
-    embree = group[group["accel"] == BASELINE]
+    embree = group[group["accel"].isin(baseline_accels())]
     if len(embree) <= 1:
         return None if embree.empty else embree.iloc[0]
     score = embree["param_dict"].map(lambda p: sum(p.get(k) == v for k, v in EMBREE_PREFERRED))
@@ -247,34 +245,9 @@ def ranking_markdown(rank: pd.DataFrame) -> str:
 
 
 def hue_palette(labels: pd.Series) -> dict[str, str]:
-    """Seaborn's default colours for a hue, in order of first appearance (its own choice,
-    written out so that the interactive version draws the same)."""
-    order = list(dict.fromkeys(labels))
-    colours = sns.color_palette(None if len(order) <= 10 else "husl", len(order)).as_hex()
-    return dict(zip(order, colours))
-
-
-def ray_set_figure(rows: pd.DataFrame, path: Path, palette: dict[str, str]) -> Path:
-    g = sns.catplot(
-        data=rows,
-        kind="bar",
-        x="ray_set",
-        y="mrays_per_s",
-        hue="structure",
-        hue_order=list(palette),
-        palette=palette,
-        col="panel",
-        sharey=False,
-        height=3.6,
-        aspect=1.3,
-        errorbar=None,
-    )
-    g.set_axis_labels("ray set", "Mrays/s")
-    g.set_titles("{col_name}")
-    g.figure.suptitle("Mrays/s per ray set, structure and model", y=1.03)
-    g.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(g.figure)
-    return path
+    """The structures' colours (mapping/styles.py, the structure table's order), the same as
+    in every other figure; written out so that the interactive version draws the same."""
+    return Styles(labels).palette()
 
 
 def thread_scaling_rows(results: Results) -> pd.DataFrame:
@@ -353,34 +326,6 @@ def thread_scaling_long(rows: pd.DataFrame) -> pd.DataFrame:
     return pd.concat(both, ignore_index=True)
 
 
-def thread_scaling_figure(rows: pd.DataFrame, path: Path, palette: dict[str, str]) -> Path:
-    g = sns.relplot(
-        data=thread_scaling_long(rows),
-        kind="line",
-        x="render_threads",
-        y="speedup",
-        hue="structure",
-        hue_order=list(palette),
-        palette=palette,
-        row="measure",
-        row_order=["build", "render"],
-        col="model",
-        marker="o",
-        height=3.4,
-        aspect=1.2,
-    )
-    top = rows["render_threads"].max()
-    for ax in g.axes.flat:
-        ax.plot([1, top], [1, top], ls="--", color="grey", lw=1, label="ideal")
-        ax.set_xticks(sorted(rows["render_threads"].unique()))
-    g.set_axis_labels("threads", "speedup over 1 thread")
-    g.set_titles("{row_name}: {col_name}")
-    g.figure.suptitle("Thread scaling of the build and the render (dashed: ideal)", y=1.03)
-    g.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(g.figure)
-    return path
-
-
 def write_workloads(results: Results, out_dir: Path) -> list[Path]:
     """Writes the ray-set and thread-scaling outputs that the rows allow; [] when the
     input has neither kind of row."""
@@ -399,8 +344,7 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
             tables / "ray_sets.md",
             tables / "ray_sets.csv",
             tables / "ray_set_ranking.md",
-            ray_set_figure(rows, figures / "ray_sets.png", palette),
-            write_spec(
+            write_figure(
                 figures / "ray_sets.png", ray_sets_spec(table, list(rows["ray_set"].cat.categories), palette)
             ),
         ]
@@ -430,8 +374,7 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
         written += [
             tables / "thread_scaling.md",
             tables / "thread_scaling.csv",
-            thread_scaling_figure(ts, figures / "thread_scaling.png", hue_palette(ts["structure"])),
-            write_spec(
+            write_figure(
                 figures / "thread_scaling.png",
                 thread_scaling_spec(thread_scaling_long(ts), hue_palette(ts["structure"])),
             ),

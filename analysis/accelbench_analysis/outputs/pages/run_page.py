@@ -83,17 +83,16 @@ class RunPage:
         )
 
     def figure(self, png: Path, caption: str) -> str:
+        """A figure once: its Vega-Lite specification where it has one (the PNG beside it is
+        REPORT.md's), else the PNG."""
         source = self.rel(png)
         img = f'<img src="{png_data_uri(png)}" alt="{html.escape(caption)}" data-source="{html.escape(source)}">'
         spec = spec_path(png)
         if spec.is_file():
-            interactive = vega_figure(json.loads(spec.read_text()), self.rel(spec))
             img = (
                 '<p class="muted">Hover a point for its structure, parameters and values; '
                 "click a legend entry to pick it out.</p>"
-                + interactive
-                + "<details open><summary>The seaborn PNG "
-                f"({html.escape(source)})</summary>{img}</details>"
+                + vega_figure(json.loads(spec.read_text()), self.rel(spec))
             )
         return (
             f'<figure class="figure" id="{self.anchor(png)}" data-source="{html.escape(source)}">'

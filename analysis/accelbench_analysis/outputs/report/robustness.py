@@ -23,8 +23,8 @@ import pandas as pd
 from ...inputs.schema import CASE_PREFIX, Results
 from ...mapping.errors import ERROR_METRIC, NOT_MEASURED, error_text, shown_metrics
 from ...mapping.formatting import fmt_count, fmt_sig, is_missing, md_escape, md_table
+from ...mapping.structures import structure_table
 
-ACCEL_ORDER = ("brute_force", "bvh", "lbvh", "kdtree", "embree", "reference")
 MIB = 1024 * 1024
 PASS, FAIL, NO_ROW = "pass", "**FAIL**", "—"
 
@@ -44,7 +44,9 @@ def case_sort_key(model: str) -> tuple:
 
 
 def accel_sort_key(accel: str) -> tuple:
-    return (ACCEL_ORDER.index(accel) if accel in ACCEL_ORDER else len(ACCEL_ORDER), accel)
+    """The structure table's order (the registry's), accelerators it lacks after it."""
+    order = [r.name for r in structure_table()]
+    return (order.index(accel) if accel in order else len(order), accel)
 
 
 def varying_params(rows: pd.DataFrame) -> dict[str, list[str]]:

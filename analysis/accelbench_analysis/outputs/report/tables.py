@@ -48,7 +48,7 @@ from ...mapping.formatting import (
     to_markdown,
 )
 from ...mapping.metrics import METRIC, METRICS, Metric, StructureRow, preferred_variant, ratio, structure_rows
-from ...mapping.selection import AUTO, STRUCTURE, Pick, Picker, Spec, setting_spec, variant_label
+from ...mapping.selection import AUTO, Pick, Picker, Spec, setting_spec, variant_label
 from .table_notes import (
     model_counts,
     note_bvh_nodes,
@@ -151,22 +151,10 @@ def error_sections(
 # ---- Tables 4 and 5 ---------------------------------------------------------------------
 
 
-def model_table(
-    results: Results,
-    report_nums: pd.DataFrame,
-    number: int,
-    report_models: list[str],
-    ablations: pd.DataFrame | None = None,
-) -> list[TableDoc]:
-    picker = Picker(results)
-    present = picker.models
-    ours = [our_model(rm, present) for rm in report_models]
-    srows = structure_rows(picker, ours)
-    groups = [
-        (REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 3)
-        for rm, o in zip(report_models, ours)
-    ]
-    header = [""] + SUBCOLUMNS * len(report_models)
+def primitive_rows(
+    results: Results, report_nums: pd.DataFrame, number: int, report_models: list[str], ours: list[str]
+) -> list:
+    """The section comparing the report's #Primitives with our triangle and vertex counts."""
     rows: list = [Section("#Primitives (report) vs our counts")]
     for label, idx in (("#triangles (ours)", 0), ("#vertices (ours)", 1)):
         cells = [Cell(label)]
@@ -178,6 +166,26 @@ def model_table(
             rep_v = None if rep.empty else float(rep.iloc[0])
             cells += [Cell(fmt_count(ours_v)), Cell(fmt_count(rep_v)), Cell(fmt_sig(ratio(ours_v, rep_v)))]
         rows.append(cells)
+    return rows
+
+
+def model_table(
+    results: Results,
+    report_nums: pd.DataFrame,
+    number: int,
+    report_models: list[str],
+    ablations: pd.DataFrame | None = None,
+) -> list[TableDoc]:
+    picker = Picker(results)
+    present = picker.models
+    ours = [our_model(rm, present) for rm in report_models]
+    srows = structure_rows(picker, ours, report=True)
+    groups = [
+        (REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 3)
+        for rm, o in zip(report_models, ours)
+    ]
+    header = [""] + SUBCOLUMNS * len(report_models)
+    rows: list = primitive_rows(results, report_nums, number, report_models, ours)
 
     notes: list[str] = []
     embree_missing_counters = False
@@ -189,7 +197,7 @@ def model_table(
             for rm, o in zip(report_models, ours):
                 key = (o, sr.structure.key, sr.variant)
                 if key not in picks:
-                    picks[key] = picker.pick(o, sr.structure.spec, sr.variant)
+                    picks[key] = picker.pick(o, sr.structure.table_spec, sr.variant)
                 pick = picks[key]
                 rep = (
                     report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report)
@@ -198,7 +206,7 @@ def model_table(
                 )
                 cells += triple(pick, metric, rep, tag_of(pick))
                 if (
-                    sr.structure.key == "embree"
+                    sr.structure.role == "baseline"
                     and pick.ok
                     and not metric.timed
                     and is_missing(pick.value(metric.ours))
@@ -238,66 +246,9 @@ def model_table(
     return [main, relative_table(results, report_nums, number, report_models, picker, srows, ours)]
 
 
-def relative_table(
-    results: Results,
-    report_nums: pd.DataFrame,
-    number: int,
-    report_models: list[str],
-    picker: Picker,
-    srows: list[StructureRow],
-    ours: list[str],
-) -> TableDoc:
-    """Times relative to the median-split BVH on the same model: survives a change of machine."""
-    bvh = STRUCTURE["bvh"]
-    bvh_variants = picker.variants(ours, bvh.spec)
+def relative_doc(results: Results, number: int, groups, header, rows, picks, bvh_variants) -> TableDoc:
+    """The relative table's caption and notes around its rows."""
     bvh_default = preferred_variant(bvh_variants)
-
-    def denominator_variant(variant: str | None) -> str | None:
-        # Same traversal as the numerator where the BVH has it, else the report's order.
-        return (
-            variant
-            if variant in bvh_variants and len(bvh_variants) > 1
-            else (bvh_default if len(bvh_variants) > 1 else None)
-        )
-
-    denominators = {
-        (o, v): picker.pick(o, bvh.spec, v)
-        for o in ours
-        for v in {denominator_variant(sr.variant) for sr in srows}
-    }
-    groups = [
-        (REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 2)
-        for rm, o in zip(report_models, ours)
-    ]
-    header = [""] + ["ours", "report"] * len(report_models)
-    picks = {
-        (o, sr.structure.key, sr.variant): picker.pick(o, sr.structure.spec, sr.variant)
-        for sr in srows
-        for o in ours
-    }
-    rows: list = []
-    for metric in (METRIC["build"], METRIC["render"]):
-        rows.append(Section(f"{metric.label} / BVH (median) {metric.label.split(' (')[0].lower()}"))
-        for sr in srows:
-            if sr.structure.key == "bvh":
-                continue
-            cells = [Cell(sr.label)]
-            for rm, o in zip(report_models, ours):
-                pick = picks[(o, sr.structure.key, sr.variant)]
-                den = denominators[(o, denominator_variant(sr.variant))]
-                r_ours = ratio(pick.value(metric.ours), den.value(metric.ours))
-                r_rep = None
-                if sr.structure.report_accel:
-                    r_rep = ratio(
-                        report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report),
-                        report_value(report_nums, rm, "bvh", "default", metric.report),
-                    )
-                tag = tag_of(pick) if tag_of(pick) == tag_of(den) else f"{tag_of(pick)}/{tag_of(den)}"
-                cells += [Cell(fmt_sig(r_ours), tag if r_ours is not None else ""), Cell(fmt_sig(r_rep))]
-            rows.append(cells)
-    rows += error_sections(
-        srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)], 2, compact=True
-    )
     caption = (
         "Build and render time of each structure divided by that of BVH (median) on the "
         "same model, ours beside the report's: ratios within one machine are what can be "
@@ -326,6 +277,69 @@ def relative_table(
     )
 
 
+def relative_table(
+    results: Results,
+    report_nums: pd.DataFrame,
+    number: int,
+    report_models: list[str],
+    picker: Picker,
+    srows: list[StructureRow],
+    ours: list[str],
+) -> TableDoc:
+    """Times relative to the median-split BVH on the same model: survives a change of machine."""
+    bvh = picker.structure("bvh")
+    bvh_variants = picker.variants(ours, bvh.table_spec)
+    bvh_default = preferred_variant(bvh_variants)
+
+    def denominator_variant(variant: str | None) -> str | None:
+        # Same traversal as the numerator where the BVH has it, else the report's order.
+        return (
+            variant
+            if variant in bvh_variants and len(bvh_variants) > 1
+            else (bvh_default if len(bvh_variants) > 1 else None)
+        )
+
+    denominators = {
+        (o, v): picker.pick(o, bvh.table_spec, v)
+        for o in ours
+        for v in {denominator_variant(sr.variant) for sr in srows}
+    }
+    groups = [
+        (REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 2)
+        for rm, o in zip(report_models, ours)
+    ]
+    header = [""] + ["ours", "report"] * len(report_models)
+    picks = {
+        (o, sr.structure.key, sr.variant): picker.pick(o, sr.structure.table_spec, sr.variant)
+        for sr in srows
+        for o in ours
+    }
+    rows: list = []
+    for metric in (METRIC["build"], METRIC["render"]):
+        rows.append(Section(f"{metric.label} / BVH (median) {metric.label.split(' (')[0].lower()}"))
+        for sr in srows:
+            if sr.structure.key == "bvh":
+                continue
+            cells = [Cell(sr.label)]
+            for rm, o in zip(report_models, ours):
+                pick = picks[(o, sr.structure.key, sr.variant)]
+                den = denominators[(o, denominator_variant(sr.variant))]
+                r_ours = ratio(pick.value(metric.ours), den.value(metric.ours))
+                r_rep = None
+                if sr.structure.report_accel:
+                    r_rep = ratio(
+                        report_value(report_nums, rm, sr.structure.report_accel, "default", metric.report),
+                        report_value(report_nums, rm, "bvh", "default", metric.report),
+                    )
+                tag = tag_of(pick) if tag_of(pick) == tag_of(den) else f"{tag_of(pick)}/{tag_of(den)}"
+                cells += [Cell(fmt_sig(r_ours), tag if r_ours is not None else ""), Cell(fmt_sig(r_rep))]
+            rows.append(cells)
+    rows += error_sections(
+        srows, ours, lambda sr, o: picks[(o, sr.structure.key, sr.variant)], 2, compact=True
+    )
+    return relative_doc(results, number, groups, header, rows, picks, bvh_variants)
+
+
 def report_table(name, title, caption, groups, header, rows, notes, results) -> TableDoc:
     """One of the report's tables beside ours: the notes that apply (None where a note does
     not), the results' warnings, and provenance tags where the results mix builds."""
@@ -343,6 +357,42 @@ def report_table(name, title, caption, groups, header, rows, notes, results) -> 
 
 
 # ---- Table 2 ----------------------------------------------------------------------------
+
+
+def table2_notes(
+    results: Results,
+    report_nums: pd.DataFrame,
+    ablations: pd.DataFrame | None,
+    fixed_mp,
+    row_picks: list[Pick],
+) -> list[str]:
+    """Table 2's notes: what its rows are, where the report disagrees with itself, and the
+    notes every table has."""
+    fixed = [
+        "maxPrims=K rows are our kd-tree with max_prims=K at the automatic depth "
+        "(8 + 1.3 log2 N, N = triangles); maxDepth=D rows have max_depth=D at "
+        + (
+            f"max_prims={fixed_mp}, the value our depth sweep was run with (the report does "
+            f"not state the maxPrims of its depth sweep)."
+            if fixed_mp
+            else "whatever max_prims our depth sweep used (none found)."
+        )
+    ]
+    kd_default = report_value(report_nums, TABLE2_MODEL, "kdtree", "default", "nodes")
+    mp1 = report_value(report_nums, TABLE2_MODEL, "kdtree", "maxPrims=1", "nodes")
+    if kd_default is not None and mp1 is not None and kd_default != mp1:
+        fixed.append(
+            f"The report's maxPrims=1 row ({int(mp1):,} nodes) and its Table 4 kd-tree "
+            f"on the same bunny with the same maxPrims=1 default ({int(kd_default):,} "
+            f"nodes) differ: the report's two runs were not identical."
+        )
+    fixed += [
+        note_prim_tests(report_nums, [TABLE2_MODEL], 2),
+        note_what_n(report_nums, results, ablations),
+        note_times(),
+        note_errors(picked_rows(row_picks)),
+    ] + note_tags(results)
+    return fixed
 
 
 def table2(
@@ -410,30 +460,7 @@ def table2(
         f"report's #Primitives {fmt_count(prims)}. Each metric: our median with its 95% "
         f"CI, the report's number, ours/report."
     )
-    fixed = [
-        "maxPrims=K rows are our kd-tree with max_prims=K at the automatic depth "
-        "(8 + 1.3 log2 N, N = triangles); maxDepth=D rows have max_depth=D at "
-        + (
-            f"max_prims={fixed_mp}, the value our depth sweep was run with (the report does "
-            f"not state the maxPrims of its depth sweep)."
-            if fixed_mp
-            else "whatever max_prims our depth sweep used (none found)."
-        )
-    ]
-    kd_default = report_value(report_nums, TABLE2_MODEL, "kdtree", "default", "nodes")
-    mp1 = report_value(report_nums, TABLE2_MODEL, "kdtree", "maxPrims=1", "nodes")
-    if kd_default is not None and mp1 is not None and kd_default != mp1:
-        fixed.append(
-            f"The report's maxPrims=1 row ({int(mp1):,} nodes) and its Table 4 kd-tree "
-            f"on the same bunny with the same maxPrims=1 default ({int(kd_default):,} "
-            f"nodes) differ: the report's two runs were not identical."
-        )
-    fixed += [
-        note_prim_tests(report_nums, [TABLE2_MODEL], 2),
-        note_what_n(report_nums, results, ablations),
-        note_times(),
-        note_errors(picked_rows(row_picks)),
-    ] + note_tags(results)
+    fixed = table2_notes(results, report_nums, ablations, fixed_mp, row_picks)
     doc = report_table(
         "table2",
         "Table 2: kd-tree parameters on the Stanford bunny",
