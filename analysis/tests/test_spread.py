@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 
 from accelbench_analysis.inputs.schema import Results
+from accelbench_analysis.mapping.formatting import ci_label
 from accelbench_analysis.mapping.spread import claim_spread, measured_spread, median_ci, widest_gap
 
 
@@ -72,3 +73,9 @@ def test_median_interval_coverage_against_the_binomial_formula(n):
     expected = {3: (1, 0.75), 6: (1, 0.96875), 10: (2, 0.978515625)}[n]
     assert (k, coverage) == pytest.approx(expected)
     assert (coverage >= 0.95) == (n >= 6)
+
+
+def test_ci_labels_show_the_coverage_the_intervals_have():
+    assert ci_label([0.75, 0.75]) == "CI 75%"
+    assert ci_label([0.75, median_ci(6)[1], float("nan")]) == "CI 75-97%"
+    assert ci_label([float("nan")]) == "CI"

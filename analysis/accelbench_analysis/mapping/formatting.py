@@ -36,8 +36,19 @@ def fmt_count(x) -> str:
     return f"{int(round(x)):,}"
 
 
+def ci_label(coverages) -> str:
+    """ "CI" with the coverage the intervals shown really have (the harness's `ci_coverage`
+    of their rows, an order-statistics interval's exact coverage): "CI 75%", or
+    "CI 75-97%" where the rows differ; "CI" when no row has an interval."""
+    values = sorted({round(float(c) * 100) for c in coverages if not is_missing(c)})
+    if not values:
+        return "CI"
+    return f"CI {values[0]}%" if len(values) == 1 else f"CI {values[0]}-{values[-1]}%"
+
+
 def fmt_measure(median, lo=None, hi=None, sig: int = SIGNIFICANT) -> str:
-    """A median with its 95% CI in brackets, the bounds at the median's precision."""
+    """A median with its CI in brackets (coverage: ci_label), the bounds at the median's
+    precision."""
     if is_missing(median):
         return "—"
     text = fmt_sig(median, sig)

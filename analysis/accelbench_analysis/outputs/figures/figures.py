@@ -26,6 +26,7 @@ import seaborn as sns  # noqa: E402
 from ...inputs.report_numbers import REPORT_MODELS, TABLE2_MODEL, our_model, report_value  # noqa: E402
 from ...inputs.schema import Results  # noqa: E402
 from ...mapping.errors import wrong_answers  # noqa: E402
+from ...mapping.formatting import ci_label  # noqa: E402
 from ...mapping.metrics import preferred_variant, ratio, structure_rows  # noqa: E402
 from ...mapping.selection import STRUCTURE, Picker, setting_spec  # noqa: E402
 from ...mapping.styles import Styles, accel_styles  # noqa: E402
@@ -81,6 +82,7 @@ def structure_frame(results: Results) -> pd.DataFrame:
                     "traversal": sr.variant or NO_MODES,
                     "structure_key": sr.structure.key,
                     "params": r["params"],
+                    "ci_coverage": r.get("ci_coverage"),
                     **{
                         c: r[c]
                         for c in (
@@ -173,7 +175,7 @@ def build_vs_render(results: Results, path: Path) -> Path | Skipped:
 
     g.map_dataframe(errorbars)
     g.set(xscale="log", yscale="log")
-    g.set_axis_labels("build time (s, median, 95% CI)", "render time (s)")
+    g.set_axis_labels(f"build time (s, median, {ci_label(df['ci_coverage'])})", "render time (s)")
     g.set_titles("{col_name}")
     for ax in g.axes.flat:
         plain_log_ticks(ax, "x")
@@ -559,7 +561,7 @@ def relative_to_bvh(results: Results, report_nums: pd.DataFrame, path: Path) -> 
 
 FIGURES = {
     "build_vs_render": (
-        "Build vs render time per structure and model (report defaults), medians with 95% CIs",
+        "Build vs render time per structure and model (report defaults), medians with their CIs",
         lambda res, report_nums, p: build_vs_render(res, p),
     ),
     "relative_to_bvh": (
