@@ -3,6 +3,7 @@
 #include <cstring>
 #include <exception>
 
+#include "accelbench/base/memory.h"
 #include "commands/cli.h"
 #include "csv/results.h"
 
@@ -35,6 +36,9 @@ int usage(FILE* to) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // Before anything is allocated: a combination's build must not depend on what the
+    // process freed before it (base/memory.h), here or in the children forked to measure.
+    accelbench::fix_malloc_thresholds();
     // A column name twice would be read wrongly by every CSV reader but ours: refuse to
     // start rather than write such a file.
     try {
