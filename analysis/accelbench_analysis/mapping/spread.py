@@ -100,9 +100,10 @@ def _spread_of(rows: pd.DataFrame, col: str, metric: str) -> Spread:
     processes = max((_gap(medians[configs == c]) for c in configs.unique()), default=0.0)
     between = _between_configs(medians, configs)
     interval, coverage = _interval(rows, col)
+    n = len(rows)
     parts = {
-        f"{metric} between {len(rows)} measurements in {configs.nunique()} configs": between,
-        f"{metric} between processes of one config": processes,
+        f"{metric} between {n} measurements of one combination in {configs.nunique()} configs": between,
+        f"{metric} between {n} measurements of one combination, processes of one config": processes,
         f"{metric} repetitions' interval"
         + (f" ({coverage:.0%} coverage)" if coverage is not None else ""): interval,
     }
@@ -135,7 +136,7 @@ def widest_gap(results: Results, metric: str) -> Spread:
         return Spread(0.0, "")
     spreads = measured_spread(results, rows["combo_id"].unique(), metric).values()
     widest = max(spreads, key=lambda s: s.value)
-    how = f"the run's widest: {widest.how}" if widest.value > 0 else ""
+    how = f"the run's widest gap, {widest.how}" if widest.value > 0 else ""
     return Spread(
         widest.value, how, widest.between_processes, widest.between_configs, widest.interval, widest.coverage
     )
