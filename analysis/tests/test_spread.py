@@ -78,4 +78,4 @@ def test_median_interval_coverage_against_the_binomial_formula(n):
 def test_ci_labels_show_the_coverage_the_intervals_have():
     assert ci_label([0.75, 0.75]) == "CI 75%"
     assert ci_label([0.75, median_ci(6)[1], float("nan")]) == "CI 75-97%"
-    assert ci_label([float("nan")]) == "CI"
+    assert ci_label([float("nan"), ""]) == ci_label([]) == "CI"  # one repetition: no interval
