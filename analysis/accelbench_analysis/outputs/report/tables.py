@@ -71,6 +71,12 @@ def run_ci_label(results: Results) -> str:
     return ci_label(results.ok().get("ci_coverage", pd.Series(dtype=float)))
 
 
+def ci_caption(results: Results) -> str:
+    """The caption's words for the intervals: their coverage, or that there are none."""
+    label = run_ci_label(results)
+    return "no interval (one repetition)" if label == "CI" else f"{label[3:]} coverage"
+
+
 def subcolumns(results: Results) -> list[str]:
     return [f"ours [{run_ci_label(results)}]", *SUBCOLUMNS[1:]]
 
@@ -242,7 +248,7 @@ def model_table(
     caption = (
         f"Report's Table {number} beside our measurement of the same structures "
         f"(plus the binned-SAH BVH and Embree). Each model: our median with its "
-        f"confidence interval ({run_ci_label(results)} coverage), the report's number, "
+        f"confidence interval ({ci_caption(results)}), the report's number, "
         f"and ours/report."
     )
     main = report_table(f"table{number}", title, caption, groups, header, rows, fixed + notes, results)
@@ -419,7 +425,7 @@ def table2(
         f"The report's Table 2 (kd-tree parameters on the Stanford bunny) beside ours. "
         f"Model: ours {fmt_count(tri)} triangles / {fmt_count(vert)} vertices; the "
         f"report's #Primitives {fmt_count(prims)}. Each metric: our median with its "
-        f"{run_ci_label(results)} (its coverage), the report's number, ours/report."
+        f"confidence interval ({ci_caption(results)}), the report's number, ours/report."
     )
     fixed = [
         "maxPrims=K rows are our kd-tree with max_prims=K at the automatic depth "
