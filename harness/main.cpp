@@ -4,6 +4,7 @@
 #include <exception>
 #include <string>
 
+#include "accelbench/base/memory.h"
 #include "commands/cli.h"
 #include "csv/provenance.h"
 #include "csv/results.h"
@@ -52,6 +53,9 @@ int usage(FILE* to) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    // Before anything is allocated: a combination's build must not depend on what the
+    // process freed before it (base/memory.h), here or in the children forked to measure.
+    accelbench::fix_malloc_thresholds();
     // A column name twice would be read wrongly by every CSV reader but ours: refuse to
     // start rather than write such a file.
     try {

@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import pandas as pd
+
 SIGNIFICANT = 3  # digits shown for measured times and ratios
 
 
@@ -36,8 +38,20 @@ def fmt_count(x) -> str:
     return f"{int(round(x)):,}"
 
 
+def ci_label(coverages) -> str:
+    """ "CI" with the coverage the intervals shown really have (the harness's `ci_coverage`
+    of their rows, an order-statistics interval's exact coverage): "CI 75%", or
+    "CI 75-97%" where the rows differ; "CI" when no row has an interval."""
+    numbers = pd.to_numeric(pd.Series(list(coverages), dtype=object), errors="coerce").dropna()
+    values = sorted({round(float(c) * 100) for c in numbers})
+    if not values:
+        return "CI"
+    return f"CI {values[0]}%" if len(values) == 1 else f"CI {values[0]}-{values[-1]}%"
+
+
 def fmt_measure(median, lo=None, hi=None, sig: int = SIGNIFICANT) -> str:
-    """A median with its 95% CI in brackets, the bounds at the median's precision."""
+    """A median with its CI in brackets (coverage: ci_label), the bounds at the median's
+    precision."""
     if is_missing(median):
         return "—"
     text = fmt_sig(median, sig)

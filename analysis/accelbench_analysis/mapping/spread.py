@@ -1,108 +1,151 @@
-"""How far one combination's time moves between measurements of this run: the spread a
+"""How far one combination's time moves between measurements of one run: the spread a
 claim's verdict is judged against (`within noise` where its margin lies inside it).
 
 One combination (one `combo_id`: model, structure, parameters, image) may be measured by
-several configs of a run (a table config and the faithful or ablation configs), by several
-processes of one config (shards, resumed runs), and always by several repetitions. Its
-relative spread is the largest of:
+several configs of a run (a table config, the faithful and ablation configs), by the same
+config in several processes (the job's second pass, shards, resumed runs: each row is its
+own measuring process), and always by several repetitions. Its relative spread is the
+largest of three parts, each relative to the smaller or the middle value:
 
-- between measurements: the largest over the smallest median of its rows, minus one, over
-  every row of the combination whatever its config or process (ablation rows included);
-- the repetitions' interval: how far the repetitions of one row (its .reps.csv, else its
-  confidence interval's ends) reach from that row's median, relatively.
+- between processes: the largest over the smallest median among the rows of one config,
+  minus one (the largest such gap over its configs);
+- between configs: the largest gap between two rows of different configs (ablation rows
+  included), max / min - 1;
+- the repetitions' interval: how far one row's order-statistics interval of the median
+  (`*_ci_lo`, `*_ci_hi`) reaches from its median, max(hi / median - 1, 1 - lo / median),
+  the widest over the combination's rows, with the coverage that interval has
+  (`ci_coverage`, `median_ci`).
 
+So the spread is at least the widest gap between any two measurements of the combination.
 A claim's spread is the largest over the combinations and timed metrics it read, and never
-less than the widest gap between two measurements of any one combination in the run (for
-the metrics it read): what the run shows one combination can move, any of its
-combinations may have moved.
+less than the widest gap between two measurements of any one combination in the run.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from itertools import combinations
+from math import comb
 
 import pandas as pd
 
 from ..inputs.schema import Results
 
 TIMED = {"build": "build_s", "render": "render_s"}
+WANTED_COVERAGE = 0.95
 
 
 @dataclass(frozen=True)
 class Spread:
-    """A relative spread and where it comes from (for the reason text)."""
+    """A relative spread, its three parts and where the largest comes from (for reasons)."""
 
     value: float
     how: str
+    between_processes: float = 0.0
+    between_configs: float = 0.0
+    interval: float = 0.0
+    coverage: float | None = None  # of the interval counted in `interval`
 
     def __str__(self) -> str:
         return f"{self.value:.0%} ({self.how})" if self.how else f"{self.value:.0%}"
 
 
-def _between_measurements(rows: pd.DataFrame, col: str) -> pd.Series:
-    med = pd.to_numeric(rows[f"{col}_median"], errors="coerce")
-    g = med.groupby(rows["combo_id"])
-    gap = g.max() / g.min() - 1
-    return gap.where(g.count() > 1).dropna()
+def median_ci(n: int, wanted: float = WANTED_COVERAGE) -> tuple[int, float]:
+    """The order-statistics interval of the median of n samples: (k, coverage), the
+    interval [x(k), x(n+1-k)] (1-based) with the largest k whose coverage
+    sum_{j=k}^{n-k} C(n, j) / 2^n reaches `wanted`, else k = 1 ([min, max]). The harness
+    computes the same for `*_ci_lo`, `*_ci_hi` and `ci_coverage` (docs/configs.md)."""
+    if n < 2:
+        raise ValueError(f"an interval of the median needs two samples or more, not {n}")
+    best = 1
+    for k in range(1, n // 2 + 1):
+        if sum(comb(n, j) for j in range(k, n - k + 1)) / 2**n >= wanted:
+            best = k
+    return best, sum(comb(n, j) for j in range(best, n - best + 1)) / 2**n
 
 
-def _repetitions(results: Results, rows: pd.DataFrame, col: str) -> pd.Series:
-    """Per combo_id, the largest relative reach of one row's repetitions from its median."""
-    reps = results.reps
-    if reps is not None and not reps.empty and {"combo_id", col}.issubset(reps.columns):
-        key = ["combo_id", "source"] if "source" in reps.columns else ["combo_id"]
-        times = pd.to_numeric(reps[col], errors="coerce")
-        g = times.groupby([reps[k] for k in key])
-        med = g.median()
-        reach = pd.concat([g.max() / med - 1, 1 - g.min() / med], axis=1).max(axis=1)
-        return reach.groupby(level=0).max()
+def _gap(values: pd.Series) -> float:
+    return float(values.max() / values.min() - 1) if len(values) > 1 and values.min() > 0 else 0.0
+
+
+def _between_configs(medians: pd.Series, configs: pd.Series) -> float:
+    groups = {c: medians[configs == c] for c in configs.unique()}
+    gaps = [
+        max(a.max() / b.min(), b.max() / a.min()) - 1
+        for a, b in (pair for pair in combinations(groups.values(), 2))
+        if a.min() > 0 and b.min() > 0
+    ]
+    return float(max(gaps, default=0.0))
+
+
+def _interval(rows: pd.DataFrame, col: str) -> tuple[float, float | None]:
+    """The widest reach of a row's interval from its median, and that interval's coverage."""
     if not {f"{col}_ci_lo", f"{col}_ci_hi"}.issubset(rows.columns):
-        return pd.Series(dtype=float)
+        return 0.0, None
     lo, hi, med = (pd.to_numeric(rows[f"{col}_{s}"], errors="coerce") for s in ("ci_lo", "ci_hi", "median"))
-    reach = pd.concat([hi / med - 1, 1 - lo / med], axis=1).max(axis=1)
-    return reach.groupby(rows["combo_id"]).max().dropna()
+    reach = pd.concat([hi / med - 1, 1 - lo / med], axis=1).max(axis=1).dropna()
+    if reach.empty:
+        return 0.0, None
+    widest = reach.idxmax()
+    cov = pd.to_numeric(rows["ci_coverage"], errors="coerce").get(widest) if "ci_coverage" in rows else None
+    return float(reach.max()), (None if cov is None or pd.isna(cov) else float(cov))
+
+
+def _spread_of(rows: pd.DataFrame, col: str, metric: str) -> Spread:
+    medians = pd.to_numeric(rows[f"{col}_median"], errors="coerce")
+    keep = medians.notna()
+    rows, medians = rows[keep], medians[keep]
+    configs = rows["config"].astype(str) if "config" in rows else pd.Series("", index=rows.index)
+    processes = max((_gap(medians[configs == c]) for c in configs.unique()), default=0.0)
+    between = _between_configs(medians, configs)
+    interval, coverage = _interval(rows, col)
+    n = len(rows)
+    parts = {
+        f"{metric} between {n} measurements of one combination in {configs.nunique()} configs": between,
+        f"{metric} between {n} measurements of one combination, processes of one config": processes,
+        f"{metric} repetitions' interval"
+        + (f" ({coverage:.0%} coverage)" if coverage is not None else ""): interval,
+    }
+    how, value = max(parts.items(), key=lambda kv: kv[1])
+    if value <= 0:
+        how = "measured once"
+    return Spread(value, how, processes, between, interval, coverage)
 
 
 def measured_spread(results: Results, combo_ids: Iterable[str], metric: str) -> dict[str, Spread]:
     """Per combo_id of `combo_ids`, the relative spread of `metric` ("build" or "render")
-    measured in this run (module docstring). A combination measured once with one
-    repetition has spread 0 ("measured once")."""
+    measured in this run (module docstring): the largest of between processes, between
+    configs and the repetitions' interval. A combination measured once with one repetition
+    (or not at all) has spread 0, "measured once"."""
     col = TIMED[metric]
+    ids = list(dict.fromkeys(combo_ids))
     rows = results.ok()
-    rows = rows[rows["combo_id"].isin(set(combo_ids))] if "combo_id" in rows else rows.iloc[0:0]
-    between = _between_measurements(rows, col) if not rows.empty else pd.Series(dtype=float)
-    within = _repetitions(results, rows, col) if not rows.empty else pd.Series(dtype=float)
-    out: dict[str, Spread] = {}
-    for cid in dict.fromkeys(combo_ids):
-        b, w = float(between.get(cid, 0.0)), float(within.get(cid, 0.0))
-        n = int((rows["combo_id"] == cid).sum()) if not rows.empty else 0
-        if b >= w and b > 0:
-            out[cid] = Spread(b, f"{metric} between {n} measurements of one combination")
-        elif w > 0:
-            out[cid] = Spread(w, f"{metric} repetitions around their median")
-        else:
-            out[cid] = Spread(0.0, "measured once")
-    return out
+    rows = rows[rows["combo_id"].isin(set(ids))] if "combo_id" in rows else rows.iloc[0:0]
+    by_id = dict(tuple(rows.groupby("combo_id"))) if not rows.empty else {}
+    return {
+        cid: _spread_of(by_id[cid], col, metric) if cid in by_id else Spread(0.0, "measured once")
+        for cid in ids
+    }
 
 
 def widest_gap(results: Results, metric: str) -> Spread:
-    """The widest gap between two measurements of one combination anywhere in the run."""
+    """The widest spread of `metric` of any one combination anywhere in the run."""
     rows = results.ok()
     if "combo_id" not in rows or rows.empty:
         return Spread(0.0, "")
-    gaps = _between_measurements(rows, TIMED[metric])
-    if gaps.empty:
-        return Spread(0.0, "")
+    spreads = measured_spread(results, rows["combo_id"].unique(), metric).values()
+    widest = max(spreads, key=lambda s: s.value)
+    how = f"the run's widest gap, {widest.how}" if widest.value > 0 else ""
     return Spread(
-        float(gaps.max()), f"{metric}: the run's widest gap between two measurements of one combination"
+        widest.value, how, widest.between_processes, widest.between_configs, widest.interval, widest.coverage
     )
 
 
 def claim_spread(results: Results, read: Iterable[tuple[str, str]]) -> Spread:
     """The largest spread over the (combo_id, metric) pairs a claim read, at least the
-    run's widest gap for each timed metric it read; metrics that are not timed (counts,
-    nodes) are exact and add nothing."""
+    run's widest for each timed metric it read; metrics that are not timed (counts, nodes)
+    are exact and add nothing."""
     best = Spread(0.0, "no timed value read")
     by_metric: dict[str, set[str]] = {}
     for cid, metric in read:

@@ -1,5 +1,5 @@
 // An allocator for the large arrays a traversal reads all over (tree nodes, leaf triangles):
-// arrays of 2 MiB or more ask the kernel for transparent huge pages (2 MiB): aligned to 2 MiB, rounded up to whole huge pages and madvise(MADV_HUGEPAGE)d, as
+// arrays of 2 MiB or more ask the kernel for transparent huge pages (2 MiB): a fresh mapping at a 2 MiB boundary, whole huge pages, madvise(MADV_HUGEPAGE)d, as
 // Embree's allocator does for its BVH (alloc.cpp, os_madvise) — on a kernel whose THP mode is
 // `madvise` (this machine's) only such memory gets huge pages. A traversal visits nodes and
 // packets all over the tree; with 4 KiB pages the dragon's 60 MB of wbvh8 (14 MB nodes, 46 MB
@@ -23,6 +23,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <new>
 #include <vector>
@@ -50,17 +51,41 @@ struct HugePageAllocator : DefaultInitConstruct {
         if (n > size_t(-1) / sizeof(T)) throw std::bad_array_new_length();
         const size_t bytes = n * sizeof(T);
         if (bytes < kHugePage) return static_cast<T*>(::operator new(bytes, std::align_val_t(alignof(T))));
+#if defined(__linux__)
+        return static_cast<T*>(map_fresh(rounded(bytes)));
+#else
         void* p = std::aligned_alloc(kHugePage, rounded(bytes));
         if (p == nullptr) throw std::bad_alloc();
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-        madvise(p, rounded(bytes), MADV_HUGEPAGE);  // a hint: memory without huge pages works as well
-#endif
         return static_cast<T*>(p);
+#endif
     }
     void deallocate(T* p, size_t n) noexcept {
         if (n * sizeof(T) < kHugePage) ::operator delete(p, std::align_val_t(alignof(T)));
+#if defined(__linux__)
+        else munmap(p, rounded(n * sizeof(T)));
+#else
         else std::free(p);
+#endif
     }
+#if defined(__linux__)
+    // A fresh anonymous mapping of `bytes` (whole huge pages) at a 2 MiB boundary, madvised.
+    // Mapped here rather than taken from malloc: malloc may hand out a free chunk of its heap
+    // (in a forked measuring process, one its parent had already touched in 4 KiB pages, which
+    // then stay 4 KiB pages and are copied on the first write), and whether it does depends on
+    // what ran before (docs/decisions.md, "One combination, two configs").
+    static void* map_fresh(size_t bytes) {
+        void* raw = mmap(nullptr, bytes + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+        if (raw == MAP_FAILED) throw std::bad_alloc();
+        const auto start = reinterpret_cast<uintptr_t>(raw);
+        const uintptr_t aligned = (start + kHugePage - 1) & ~uintptr_t(kHugePage - 1);
+        if (aligned > start) munmap(raw, aligned - start);
+        if (const size_t tail = start + kHugePage - aligned) munmap(reinterpret_cast<void*>(aligned + bytes), tail);
+#if defined(MADV_HUGEPAGE)
+        madvise(reinterpret_cast<void*>(aligned), bytes, MADV_HUGEPAGE);  // a hint: 4 KiB pages work as well
+#endif
+        return reinterpret_cast<void*>(aligned);
+    }
+#endif
     template <class U>
     bool operator==(const HugePageAllocator<U>&) const noexcept {
         return true;

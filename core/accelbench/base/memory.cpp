@@ -1,6 +1,9 @@
 #include "accelbench/base/memory.h"
 
 #include <sys/resource.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <fstream>
 #include <sstream>
@@ -40,6 +43,17 @@ bool reset_peak_rss() {
     clear_refs << "5";
     clear_refs.flush();
     return bool(clear_refs);
+}
+
+bool fix_malloc_thresholds() {
+#if defined(__GLIBC__)
+    // glibc's defaults (malloc/malloc.c: DEFAULT_MMAP_THRESHOLD_MIN, DEFAULT_TRIM_THRESHOLD);
+    // setting either one by mallopt disables the dynamic adjustment of both.
+    constexpr int kDefaultThreshold = 128 * 1024;
+    return mallopt(M_MMAP_THRESHOLD, kDefaultThreshold) == 1 && mallopt(M_TRIM_THRESHOLD, kDefaultThreshold) == 1;
+#else
+    return false;
+#endif
 }
 
 }  // namespace accelbench

@@ -82,6 +82,7 @@ def structure_frame(results: Results) -> pd.DataFrame:
                     "traversal": sr.variant or NO_MODES,
                     "structure_key": sr.structure.key,
                     "params": r["params"],
+                    "ci_coverage": r.get("ci_coverage"),
                     **{
                         c: r[c]
                         for c in (
@@ -447,7 +448,7 @@ def relative_to_bvh(results: Results, report_nums: pd.DataFrame, path: Path) -> 
 
 FIGURES = {
     "build_vs_render": (
-        "Build vs render time per structure and model (report defaults), medians with 95% CIs",
+        "Build vs render time per structure and model (report defaults), medians with their CIs",
         lambda res, report_nums, p: build_vs_render(res, p),
     ),
     "relative_to_bvh": (

@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 import vl_convert
 
+from ...mapping.formatting import ci_label
 from ...mapping.styles import Styles
 
 SCHEMA = "https://vega.github.io/schema/vega-lite/v6.json"
@@ -105,8 +106,9 @@ def unique(values) -> list:
 
 def build_vs_render_spec(df: pd.DataFrame, title: str) -> dict:
     """structure_frame's rows (figures.build_vs_render): one point per structure and model,
-    its 95% CIs as rules."""
-    x, y = log("build_s_median", "build time (s, median, 95% CI)"), log("render_s_median", "render time (s)")
+    its CIs as rules, labelled with the coverage they have."""
+    x = log("build_s_median", f"build time (s, median, {ci_label(df['ci_coverage'])})")
+    y = log("render_s_median", "render time (s)")
     col = colour("structure", Styles(df["structure"]).palette())
     _, opacity = legend_pick("structure")
     tooltip = [

@@ -1,7 +1,7 @@
 """Tables 2, 4 and 5 of the report, with our numbers beside the report's.
 
 Tables 4 and 5 are laid out as in the report: models as columns, metrics as rows, one row
-per structure. Each model has three sub-columns: our median with its 95% CI, the report's
+per structure. Each model has three sub-columns: our median with its CI (the coverage it has), the report's
 number, and ours/report. Table 2 keeps the report's layout too: one row per kd-tree
 setting, metrics as column groups.
 
@@ -40,6 +40,7 @@ from ...mapping.formatting import (
     Cell,
     Section,
     TableDoc,
+    ci_label,
     fmt_count,
     fmt_measure,
     fmt_sig,
@@ -62,7 +63,22 @@ from .table_notes import (
     note_what_n,
 )
 
-SUBCOLUMNS = ["ours [95% CI]", "report", "ours/report"]
+SUBCOLUMNS = ["ours [CI]", "report", "ours/report"]
+
+
+def run_ci_label(results: Results) -> str:
+    """ "CI" with the coverage the run's intervals really have (ci_label)."""
+    return ci_label(results.ok().get("ci_coverage", pd.Series(dtype=float)))
+
+
+def ci_caption(results: Results) -> str:
+    """The caption's words for the intervals: their coverage, or that there are none."""
+    label = run_ci_label(results)
+    return "no interval (one repetition)" if label == "CI" else f"{label[3:]} coverage"
+
+
+def subcolumns(results: Results) -> list[str]:
+    return [f"ours [{run_ci_label(results)}]", *SUBCOLUMNS[1:]]
 
 
 def missing_text(pick: Pick) -> str:
@@ -184,7 +200,7 @@ def model_table(
         (REPORT_MODEL[rm].label + (f" → {o}" if REPORT_MODEL[rm].stand_in else ""), 3)
         for rm, o in zip(report_models, ours)
     ]
-    header = [""] + SUBCOLUMNS * len(report_models)
+    header = [""] + subcolumns(results) * len(report_models)
     rows: list = primitive_rows(results, report_nums, number, report_models, ours)
 
     notes: list[str] = []
@@ -239,8 +255,9 @@ def model_table(
     ]
     caption = (
         f"Report's Table {number} beside our measurement of the same structures "
-        f"(plus the binned-SAH BVH and Embree). Each model: our median with its 95% "
-        f"confidence interval, the report's number, and ours/report."
+        f"(plus the binned-SAH BVH and Embree). Each model: our median with its "
+        f"confidence interval ({ci_caption(results)}), the report's number, "
+        f"and ours/report."
     )
     main = report_table(f"table{number}", title, caption, groups, header, rows, fixed + notes, results)
     return [main, relative_table(results, report_nums, number, report_models, picker, srows, ours)]
@@ -406,7 +423,7 @@ def table2(
     depths = [s.split("=")[1] for s in settings if s.startswith("maxDepth=")]
     metrics = [METRIC["nodes"], METRIC["prim_tests"], METRIC["build"], METRIC["render"]]
     groups = [(m.label, 3) for m in metrics]
-    header = ["report setting", "our parameters"] + SUBCOLUMNS * len(metrics)
+    header = ["report setting", "our parameters"] + subcolumns(results) * len(metrics)
     rows: list = [Section(f"kd-tree on the {REPORT_MODEL[TABLE2_MODEL].label}")]
     row_picks: list[Pick] = []  # the pick behind each non-section row, for the error columns
     notes: list[str] = []
@@ -457,8 +474,8 @@ def table2(
     caption = (
         f"The report's Table 2 (kd-tree parameters on the Stanford bunny) beside ours. "
         f"Model: ours {fmt_count(tri)} triangles / {fmt_count(vert)} vertices; the "
-        f"report's #Primitives {fmt_count(prims)}. Each metric: our median with its 95% "
-        f"CI, the report's number, ours/report."
+        f"report's #Primitives {fmt_count(prims)}. Each metric: our median with its "
+        f"confidence interval ({ci_caption(results)}), the report's number, ours/report."
     )
     fixed = table2_notes(results, report_nums, ablations, fixed_mp, row_picks)
     doc = report_table(

@@ -1,0 +1,81 @@
+"""The measured spread on crafted frames: between configs, between processes of one
+config, the repetitions' interval with its coverage, and the order-statistics interval's
+coverage against the binomial formula."""
+
+from __future__ import annotations
+
+from math import comb
+
+import pandas as pd
+import pytest
+
+from accelbench_analysis.inputs.schema import Results
+from accelbench_analysis.mapping.formatting import ci_label
+from accelbench_analysis.mapping.spread import claim_spread, measured_spread, median_ci, widest_gap
+
+
+def results(*rows: tuple[str, str, float, float, float, float]) -> Results:
+    """Rows of (combo_id, config, build median, ci_lo, ci_hi, ci_coverage)."""
+    cols = ["combo_id", "config", "build_s_median", "build_s_ci_lo", "build_s_ci_hi", "ci_coverage"]
+    frame = pd.DataFrame(rows, columns=cols).assign(status="ok")
+    return Results(rows=frame, groups=[])
+
+
+def test_between_configs_is_the_widest_gap_across_two_configs():
+    # The bunny's LBVH build as the committed reference run measured it: 3.48 ms in
+    # table4, 5.80 ms in scaling (67%); each row's interval is narrow.
+    res = results(
+        ("lbvh", "table4", 3.48, 3.20, 3.84, 0.75),
+        ("lbvh", "scaling", 5.80, 5.72, 6.05, 0.75),
+    )
+    s = measured_spread(res, ["lbvh"], "build")["lbvh"]
+    assert s.between_configs == pytest.approx(5.80 / 3.48 - 1)
+    assert s.between_processes == 0
+    assert s.value == s.between_configs and "2 configs" in s.how
+
+
+def test_between_processes_of_one_config():
+    res = results(
+        ("bvh", "table4", 0.100, 0.099, 0.101, 0.969),
+        ("bvh", "table4", 0.120, 0.119, 0.121, 0.969),
+        ("bvh", "ablations", 0.110, 0.109, 0.111, 0.969),
+    )
+    s = measured_spread(res, ["bvh"], "build")["bvh"]
+    assert s.between_processes == pytest.approx(0.2)
+    assert s.between_configs == pytest.approx(0.1)  # ablations 0.110 against table4 0.100
+    assert s.value == pytest.approx(0.2) and "processes" in s.how
+
+
+def test_the_repetitions_interval_with_its_coverage():
+    res = results(("kd", "table2", 0.100, 0.090, 0.104, 0.75))
+    s = measured_spread(res, ["kd"], "build")["kd"]
+    assert s.interval == pytest.approx(0.10) and s.coverage == 0.75
+    assert s.value == pytest.approx(0.10) and "75% coverage" in s.how
+
+
+def test_the_largest_part_wins_and_unmeasured_is_zero():
+    res = results(
+        ("a", "table4", 1.0, 0.7, 1.05, 0.75),  # interval reaches 30% below
+        ("a", "scaling", 1.1, 1.09, 1.11, 0.75),
+    )
+    spreads = measured_spread(res, ["a", "absent"], "build")
+    assert spreads["a"].value == pytest.approx(0.3)
+    assert spreads["absent"].value == 0 and spreads["absent"].how == "measured once"
+    assert widest_gap(res, "build").value == pytest.approx(0.3)
+    assert claim_spread(res, [("a", "nodes")]).value == 0  # counts are exact
+
+
+@pytest.mark.parametrize("n", [3, 6, 10])
+def test_median_interval_coverage_against_the_binomial_formula(n):
+    k, coverage = median_ci(n)
+    # P(x(k) <= median <= x(n+1-k)) = P(k <= Binomial(n, 1/2) <= n - k).
+    assert coverage == pytest.approx(sum(comb(n, j) for j in range(k, n - k + 1)) / 2**n)
+    expected = {3: (1, 0.75), 6: (1, 0.96875), 10: (2, 0.978515625)}[n]
+    assert (k, coverage) == pytest.approx(expected)
+    assert (coverage >= 0.95) == (n >= 6)
+
+
+def test_ci_labels_show_the_coverage_the_intervals_have():
+    assert ci_label([0.75, 0.75]) == "CI 75%"
+    assert ci_label([0.75, median_ci(6)[1], float("nan")]) == "CI 75-97%"
+    assert ci_label([float("nan"), ""]) == ci_label([]) == "CI"  # one repetition: no interval
