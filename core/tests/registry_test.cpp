@@ -78,7 +78,7 @@ TEST(Registry, DefaultParameterTextIsUnchanged) {
         {"bvh",
          "split=median;axis=longest;max_prims=auto;max_depth=50;bins=32;all_axes_min=1024;traversal_cost=4;"
          "isect_cost=1;traversal=ordered;leaf_test=auto;reinsertion=0;threads=1"},
-        {"embree", "threads=1;quality=medium;robust=false;compact=false"},
+        {"embree", "threads=1;quality=medium;robust=false;compact=false;max_isa=auto"},
         {"lbvh",
          "build=karras;bits=10;max_prims=1;max_depth=50;threads=1;task_threshold=100;sort_digit_bits=10;"
          "traversal=ordered"},
@@ -88,7 +88,7 @@ TEST(Registry, DefaultParameterTextIsUnchanged) {
         {"reference", "leaf_size=4"},
         {"wbvh",
          "width=8;max_prims=8;max_depth=64;bins=32;all_axes_min=0;traversal_cost=2;isect_cost=1;reinsertion=0;"
-         "collapse=sah;packet_cost=2;kernel=simd;threads=1"},
+         "collapse=sah;packet_cost=2;kernel=simd;leaf_test=watertight;node_test=conservative;threads=1"},
     };
     for (const auto& [name, text] : expected) {
         const AcceleratorInfo* info = find_accelerator(name);

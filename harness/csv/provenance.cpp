@@ -71,6 +71,19 @@ std::vector<std::pair<std::string, std::string>> provenance_values() {
             {"isa", p.isa},           {"embree_isa", p.embree_isa}};
 }
 
+std::string row_embree_isa(const std::string& accel, const ParamSet& params, const std::optional<std::string>& shared) {
+    if (shared) return *shared;
+    if (accel != EmbreeAccel::info().name) return provenance().embree_isa;
+    return EmbreeAccel::kernel_isa(EmbreeAccel::Config::from(params).max_isa);
+}
+
+std::optional<std::string> embree_isa_of_rows(const std::vector<std::string>& max_isas) {
+    if (max_isas.empty()) return std::nullopt;
+    for (const std::string& cap : max_isas)
+        if (cap != max_isas.front()) return std::nullopt;
+    return EmbreeAccel::kernel_isa(max_isas.front());
+}
+
 const Provenance& provenance() {
     static const Provenance p = [] {
         Provenance p;

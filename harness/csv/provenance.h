@@ -3,9 +3,12 @@
 // from different builds or machines are never silently mixed.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "accelbench/base/params.h"
 
 namespace accelbench {
 
@@ -35,5 +38,16 @@ const Provenance& provenance();
 // of the build. The rows and `accelbench provenance` both print this one list, so a driver
 // that compares runs (analysis/accelbench_analysis/reproduce/runs.py) sees what rows will record.
 std::vector<std::pair<std::string, std::string>> provenance_values();
+
+// The embree_isa of one row: `shared` when the run's Embree rows all run the same kernels
+// (embree_isa_of_rows), else provenance().embree_isa, except on an Embree row whose
+// max_isa caps its kernels below it (EmbreeAccel::kernel_isa(max_isa)).
+std::string row_embree_isa(const std::string& accel, const ParamSet& params, const std::optional<std::string>& shared);
+
+// The kernels every Embree row of a run runs, when they share one max_isa (`max_isas`, one
+// per Embree row): every row of the run is divided by those Embree rows, so every row
+// records them (configs/ci.yaml caps Embree at avx2, the kernels valgrind can run, and its
+// timed and callgrind runs then agree). None without Embree rows or with several caps.
+std::optional<std::string> embree_isa_of_rows(const std::vector<std::string>& max_isas);
 
 }  // namespace accelbench

@@ -1,7 +1,9 @@
 #include "sinks/results_csv.h"
 
+#include "accelbench/accel/baseline/embree_accel.h"
 #include "accelbench/accel/registry.h"
 #include "csv/provenance.h"
+#include "plan/combinations.h"
 #include "util/stats.h"
 #include "util/text.h"
 
@@ -10,7 +12,8 @@ namespace accelbench {
 namespace {
 
 // The columns every row of a combination has, whatever its status.
-Row identification_row(const Config& config, const CombinationResult& result) {
+Row identification_row(const Config& config, const CombinationResult& result,
+                       const std::optional<std::string>& embree_isa) {
     const Combination& c = result.combination;
     const ModelSpec& model = result.model;
     Row r;
@@ -49,6 +52,7 @@ Row identification_row(const Config& config, const CombinationResult& result) {
     // A robustness case is judged in IEEE mode whatever the config says (judge_measurement).
     r["fp_mode"] = std::string(fp_mode_name(judged ? FpMode::Ieee : config.render.fp_mode));
     for (const auto& [name, value] : provenance_values()) r[name] = value;
+    r["embree_isa"] = row_embree_isa(c.accel, c.params, embree_isa);
     r["render_threads"] = std::to_string(c.threads);
     r["timestamp"] = result.timestamp;
     return r;
@@ -102,8 +106,15 @@ void add_measurement(Row& r, const Measurement& m) {
 
 }  // namespace
 
-Row result_row(const Config& config, const CombinationResult& result) {
-    Row r = identification_row(config, result);
+std::vector<std::string> embree_max_isas(const Config& config) {
+    std::vector<std::string> caps;
+    for (const Combination& c : expand(config))
+        if (c.accel == EmbreeAccel::info().name) caps.push_back(EmbreeAccel::Config::from(c.params).max_isa);
+    return caps;
+}
+
+Row result_row(const Config& config, const CombinationResult& result, const std::optional<std::string>& embree_isa) {
+    Row r = identification_row(config, result, embree_isa);
     add_measurement(r, result.measurement);
     return r;
 }

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <optional>
 
 #include "accelbench/accel/baseline/embree_accel.h"
 #include "accelbench/accel/registry.h"
@@ -389,6 +391,33 @@ TEST(ProvenanceTest, EmbreeKernelIsaIsATargetAndStdoutIsRestored) {
     const std::vector<std::string> targets = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
     EXPECT_NE(std::find(targets.begin(), targets.end(), isa), targets.end()) << isa;
     EXPECT_EQ(provenance().embree_isa, isa);
+}
+
+// max_isa caps the device's kernels: its report lists no target above the cap, and a row
+// records what its Embree ran — each Embree row its own, or every row the kernels of the
+// run's Embree rows when they share one cap (ci.yaml's avx2).
+TEST(ProvenanceTest, EmbreeMaxIsaCapsTheKernelsAndTheRowsSayWhichRan) {
+    const std::vector<std::string> targets = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
+    const auto rank = [&](const std::string& isa) { return std::find(targets.begin(), targets.end(), isa); };
+    const std::string best = EmbreeAccel::kernel_isa();
+    for (const std::string cap : {"sse2", "avx2"}) {
+        const std::string capped = EmbreeAccel::kernel_isa(cap);
+        ASSERT_NE(rank(capped), targets.end()) << cap;
+        EXPECT_EQ(capped, rank(cap) < rank(best) ? cap : best) << cap;
+    }
+    const auto params = [](const std::string& accel, const std::map<std::string, std::string>& given) {
+        const AcceleratorInfo& info = *find_accelerator(accel);
+        return resolve_params(accel, info.params, given);
+    };
+    const ParamSet avx2 = params("embree", {{"max_isa", "avx2"}}), wbvh = params("wbvh", {});
+    EXPECT_EQ(row_embree_isa("embree", avx2, std::nullopt), EmbreeAccel::kernel_isa("avx2"));
+    EXPECT_EQ(row_embree_isa("embree", params("embree", {}), std::nullopt), best);
+    EXPECT_EQ(row_embree_isa("wbvh", wbvh, std::nullopt), best);
+    const auto shared = embree_isa_of_rows({"avx2", "avx2"});
+    ASSERT_TRUE(shared.has_value());
+    EXPECT_EQ(row_embree_isa("wbvh", wbvh, shared), EmbreeAccel::kernel_isa("avx2"));
+    EXPECT_FALSE(embree_isa_of_rows({"auto", "avx2"}).has_value());
+    EXPECT_FALSE(embree_isa_of_rows({}).has_value());
 }
 
 }  // namespace

@@ -3,12 +3,16 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cstdio>
 #include <iostream>
+#include <map>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "accelbench/base/param_table.h"
@@ -16,6 +20,11 @@
 namespace accelbench {
 
 namespace {
+
+// Embree's kernel targets from least to most capable: the values of kernel_isa() and of
+// max_isa (after "auto", no cap).
+constexpr std::array<std::string_view, 5> kIsaOrder = {"sse2", "sse4.2", "avx", "avx2", "avx512"};
+constexpr std::array<std::string_view, 6> kMaxIsaNames = {"auto", "sse2", "sse4.2", "avx", "avx2", "avx512"};
 
 // The parameters, each once: its row and its Config member, whose initializer is the default.
 const ParamTable<EmbreeAccel::Config>& embree_params() {
@@ -28,6 +37,10 @@ const ParamTable<EmbreeAccel::Config>& embree_params() {
                      "RTC_BUILD_QUALITY_*"),
         bool_param("robust", &C::robust, "RTC_SCENE_FLAG_ROBUST (watertight, slower)"),
         bool_param("compact", &C::compact, "RTC_SCENE_FLAG_COMPACT (less memory)"),
+        choice_param("max_isa", &C::max_isa, kMaxIsaNames,
+                     std::array<std::string, 6>{"auto", "sse2", "sse4.2", "avx", "avx2", "avx512"},
+                     "the device's max_isa: the best kernels Embree may pick (auto = the best the CPU and the "
+                     "library have); avx2 beside our AVX2 code, and under valgrind"),
     };
     return rows;
 }
@@ -68,7 +81,8 @@ void check(RTCDevice device, const char* what) {
 }  // namespace
 
 EmbreeAccel::EmbreeAccel(const Config& config) : config_(config) {
-    const std::string device_config = "threads=" + std::to_string(config_.threads);
+    std::string device_config = "threads=" + std::to_string(config_.threads);
+    if (config_.max_isa != "auto") device_config += ",max_isa=" + config_.max_isa;
     device_ = rtcNewDevice(device_config.c_str());
     if (!device_) throw std::runtime_error("embree: rtcNewDevice(\"" + device_config + "\") failed");
     rtcSetDeviceErrorFunction(device_, error_callback, nullptr);
@@ -133,22 +147,27 @@ std::vector<std::string> targets_on_line(const std::string& report, const std::s
 
 }  // namespace
 
-std::string EmbreeAccel::kernel_isa() {
-    static const std::string isa = [] {
-        const std::string report = captured_stdout([] {
-            if (RTCDevice device = rtcNewDevice("verbose=1,threads=1")) rtcReleaseDevice(device);
-        });
-        // The device section lists the targets the CPU enables, then those compiled in.
-        const auto enabled = targets_on_line(report, "(supported)");
-        const auto compiled = targets_on_line(report, "(compile time enabled)");
-        std::string best = "unknown";
-        for (const char* target : {"sse2", "sse4.2", "avx", "avx2", "avx512"})
-            if (std::find(enabled.begin(), enabled.end(), target) != enabled.end() &&
-                std::find(compiled.begin(), compiled.end(), target) != compiled.end())
-                best = target;
-        return best;
-    }();
-    return isa;
+std::string EmbreeAccel::kernel_isa() { return kernel_isa("auto"); }
+
+std::string EmbreeAccel::kernel_isa(const std::string& max_isa) {
+    static std::mutex mutex;
+    static std::map<std::string, std::string> known;  // max_isa -> the kernels
+    const std::lock_guard lock(mutex);
+    if (const auto it = known.find(max_isa); it != known.end()) return it->second;
+    const std::string config = "verbose=1,threads=1" + (max_isa == "auto" ? "" : ",max_isa=" + max_isa);
+    const std::string report = captured_stdout([&] {
+        if (RTCDevice device = rtcNewDevice(config.c_str())) rtcReleaseDevice(device);
+    });
+    // The device section lists the targets the device enables (its CPU's, under the cap),
+    // then those compiled in.
+    const auto enabled = targets_on_line(report, "(supported)");
+    const auto compiled = targets_on_line(report, "(compile time enabled)");
+    std::string best = "unknown";
+    for (std::string_view target : kIsaOrder)
+        if (std::find(enabled.begin(), enabled.end(), target) != enabled.end() &&
+            std::find(compiled.begin(), compiled.end(), target) != compiled.end())
+            best = target;
+    return known.emplace(max_isa, best).first->second;
 }
 
 void EmbreeAccel::build(const Scene& scene) {

@@ -4,6 +4,8 @@
 
 #include <embree3/rtcore.h>
 
+#include <string>
+
 #include "accelbench/accel/accelerator.h"
 
 namespace accelbench {
@@ -17,6 +19,9 @@ public:
         RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;  // RTC_BUILD_QUALITY_*
         bool robust = false;                                 // RTC_SCENE_FLAG_ROBUST: watertight, slower
         bool compact = false;                                // RTC_SCENE_FLAG_COMPACT: less memory
+        // The device's max_isa: the best kernels Embree may pick, or none ("auto"). "avx2" is
+        // the fair row beside our AVX2 code, and the one valgrind can run.
+        std::string max_isa = "auto";
         static Config from(const ParamSet& params);
     };
 
@@ -39,6 +44,9 @@ public:
     // compiled into the library and enabled on the CPU. Embree 3's API has no query for it,
     // so it is read once from a verbose device's report; "unknown" if that cannot be read.
     static std::string kernel_isa();
+    // The kernels a device capped at `max_isa` runs ("auto": no cap), read likewise from
+    // such a device's report.
+    static std::string kernel_isa(const std::string& max_isa);
 
 private:
     RTCDevice device_ = nullptr;

@@ -51,6 +51,12 @@ const ParamTable<Wbvh::Config>& wbvh_params() {
         enum_param("kernel", &C::kernel, Wbvh::kKernelNames,
                    "simd: the vector slab and triangle tests compiled in (scalar on a target without SSE2); "
                    "scalar: the scalar forms, identical answers (for testing and measuring the vector gain)"),
+        enum_param("leaf_test", &C::leaf_test, Wbvh::kLeafTestNames,
+                   "ablation: watertight (Woop et al. 2013, the default) or moeller (Moeller-Trumbore in float on "
+                   "triangles precomputed as Embree's Triangle4: not watertight, for measuring the price)"),
+        enum_param("node_test", &C::node_test, Wbvh::kNodeTestNames,
+                   "ablation: conservative (far distance widened, Ize 2013, the default) or fma (one fused "
+                   "multiply-add per plane, unwidened, as Embree's non-robust test: not conservative)"),
         threads_param("threads", &C::threads,
                       "build threads (0 = all cores), the binary build's and the collapse's; the tree is the same "
                       "for every value"),
@@ -90,8 +96,18 @@ AcceleratorInfo Wbvh::info() {
             .create = [](const ParamSet& p) { return std::make_unique<Wbvh>(p); },
             .label =
                 [](const ParamSet& p) {
+                    std::string ablation;
+                    if (p.get_enum("leaf_test") != "watertight") ablation += ", ablation " + p.get_enum("leaf_test");
+                    if (p.get_enum("node_test") != "conservative") ablation += ", ablation " + p.get_enum("node_test");
                     return "wide BVH (" + p.get_enum("width") + ", " +
-                        (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") + ")";
+                        (p.get_enum("kernel") == "simd" ? "SIMD" : "scalar") + ablation + ")";
+                },
+            // The ablations give up the guarantees: leaks through edges (moeller) or past
+            // box faces (fma) are counted by the catalogue, not required.
+            .watertight =
+                [](const ParamSet& p) {
+                    const Config c = Config::from(p);
+                    return c.leaf_test == LeafTest::watertight && c.node_test == NodeTest::conservative;
                 },
             // Every wide child lies at least one binary level below its node, so the wide
             // tree is no deeper than the binary one, except that the wide root is an inner
@@ -484,6 +500,16 @@ void Wbvh::collapse(const FlatBvh& binary, WbvhTree<W>& out) {
                   });
 }
 
+namespace {
+
+template <int W>
+void moeller_leaves(WbvhTree<W>& tree) {
+    tree.moeller_packets.resize(tree.packets.size());
+    for (size_t i = 0; i < tree.packets.size(); ++i) tree.moeller_packets[i] = WbvhMoellerPacket::from(tree.packets[i]);
+}
+
+}  // namespace
+
 void Wbvh::build(const Scene& scene) {
     binary_.build(scene);
     threads_.run([&] {
@@ -494,6 +520,10 @@ void Wbvh::build(const Scene& scene) {
             collapse(binary_.tree(), tree4_);
             tree8_ = {};
         }
+        if (config_.leaf_test == LeafTest::moeller) {
+            moeller_leaves(tree8_);
+            moeller_leaves(tree4_);
+        }
     });
 }
 
@@ -502,7 +532,8 @@ BuildStats measure_wbvh(const WbvhTree<W>& tree) {
     TreeTally t;
     t.nodes = tree.nodes.size();
     t.max_depth = tree.empty() ? 0 : tree.depth + 1;  // edges down to the deepest leaf child
-    t.memory_bytes = tree.nodes.size() * sizeof(WbvhNode<W>) + tree.packets.size() * sizeof(WbvhTriPacket);
+    t.memory_bytes = tree.nodes.size() * sizeof(WbvhNode<W>) + tree.packets.size() * sizeof(WbvhTriPacket) +
+        tree.moeller_packets.size() * sizeof(WbvhMoellerPacket);
     uint64_t children = 0;
     for (size_t i = 0; i < tree.nodes.size(); ++i) {
         const WbvhNode<W>& node = tree.nodes[i];
@@ -598,11 +629,60 @@ inline ChildRef child_ref(const WbvhNode<W>& node, int k) {
 // Closest hit (kAnyHit false): `hit` must come in empty and receives the closest hit; the
 // interval shrinks to it. Any hit: the children hit are pushed in slot order, as Embree's
 // any-hit traverser does, and it returns at the first triangle hit.
-template <int W, bool kVector, bool kAnyHit, class C>
+// The tests of a traversal: the guarantees (both false, the default) or the ablations
+// (wbvh_ablations.h), each in the scalar or the vector form.
+template <int W, bool kVector, bool kMoeller, bool kFma>
+struct Tests {
+    static constexpr bool kAblation = kMoeller || kFma;
+    struct None {
+        explicit None(const Ray&) {}
+    };
+    // The ablations' per-ray constants, made only where one runs.
+    using AblationRay = std::conditional_t<kAblation, WbvhAblationRay<W>, None>;
+
+    static uint32_t node(const WbvhNode<W>& node, const WbvhRay<W, kVector>& r, const AblationRay& a, float tmin,
+                         float tmax, float (&tnear)[W]) {
+        if constexpr (kFma) {
+#if defined(ACCELBENCH_WBVH_SSE) && defined(__FMA__)
+            if constexpr (kVector) return wbvh_slab_test_fma_vector(node, a, tmin, tmax, tnear);
+#endif
+            return wbvh_slab_test_fma(node, a, tmin, tmax, tnear);
+        } else {
+            (void)a;
+            return wbvh_slab_test(node, r, tmin, tmax, tnear);
+        }
+    }
+
+    // Where leaf child `first`'s packets start (the ablation's own packets for moeller).
+    static const char* leaf_bytes(const WbvhTree<W>& tree, uint32_t first) {
+        if constexpr (kMoeller) return reinterpret_cast<const char*>(&tree.moeller_packets[first]);
+        else return reinterpret_cast<const char*>(&tree.packets[first]);
+    }
+
+    template <bool kAnyHit, class C>
+    static bool leaf(const WbvhTree<W>& tree, ChildRef ref, const WbvhRay<W, kVector>& r, const AblationRay& a,
+                     float tmin, float& tmax, Hit& hit, C& c) {
+        if constexpr (kMoeller) {
+            const auto test = [&](const WbvhMoellerPacket& p, int lanes, float t_max) {
+#if defined(ACCELBENCH_WBVH_SSE)
+                if constexpr (kVector) return wbvh_moeller_test(p, lanes, a.org4, a.dir4, tmin, t_max);
+#endif
+                return wbvh_moeller_test(p, lanes, a.org, a.dir, tmin, t_max);
+            };
+            return wbvh_leaf_packets<kAnyHit>(&tree.moeller_packets[ref.child], ref.count, test, tmax, hit, c);
+        } else {
+            (void)a;
+            return wbvh_leaf_test<kAnyHit>(&tree.packets[ref.child], ref.count, r, tmin, tmax, hit, c);
+        }
+    }
+};
+
+template <int W, bool kVector, bool kAnyHit, class T, class C>
 ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& hit, C& c) {
     if (tree.empty()) return false;
     const WbvhRay<W, kVector> r(ray);
     if (!r.valid) return false;
+    const typename T::AblationRay ablation(ray);
     const float tmin = ray.tmin;
     float tmax = ray.tmax;
     using Entry = std::conditional_t<kAnyHit, ChildRef, StackEntry>;
@@ -614,10 +694,26 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
         while (cur.count == 0) {  // an inner node
             c.node();
             const WbvhNode<W>& node = tree.nodes[cur.child];
+#if defined(ACCELBENCH_WBVH_SSE)
+            _mm_prefetch(reinterpret_cast<const char*>(node.child), _MM_HINT_T0);  // with the planes
+#endif
             c.box(node.child_count());
             float tnear[W];
-            uint32_t mask = wbvh_slab_test(node, r, tmin, tmax, tnear);
+            uint32_t mask = T::node(node, r, ablation, tmin, tmax, tnear);
             if (mask == 0) goto pop;
+#if defined(ACCELBENCH_WBVH_SSE)
+            // Every child hit: its node's lines, or its first packet's, requested now, so the
+            // misses of the children visited later overlap with this node's work.
+            for (uint32_t m = mask; m; m &= m - 1) {
+                const int k = std::countr_zero(m);
+                const char* p = node.count[k] ? T::leaf_bytes(tree, node.child[k])
+                                              : reinterpret_cast<const char*>(&tree.nodes[node.child[k]]);
+                _mm_prefetch(p, _MM_HINT_T0);
+                _mm_prefetch(p + 64, _MM_HINT_T0);
+                _mm_prefetch(p + 128, _MM_HINT_T0);
+                if (sizeof(WbvhNode<W>) > 192 && !node.count[k]) _mm_prefetch(p + 192, _MM_HINT_T0);
+            }
+#endif
             const int first = std::countr_zero(mask);
             mask &= mask - 1;
             if constexpr (kAnyHit) {
@@ -636,7 +732,7 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
                     continue;
                 }
                 // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
-                // Other orders and a prefetch were measured and not adopted (docs/decisions.md).
+                // Other orders were measured and not adopted (docs/decisions.md).
                 uint32_t keys[W];
                 int n = 0;
                 keys[n++] = order_key(tnear[first], first);
@@ -656,7 +752,7 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
         }
         // A leaf: its packets in turn, each against the interval shrunk by those before it.
         // (An 8-lane test of two packets and 8-byte stack entries: docs/decisions.md.)
-        if (wbvh_leaf_test<kAnyHit>(&tree.packets[cur.child], cur.count, r, tmin, tmax, hit, c) && kAnyHit) return true;
+        if (T::template leaf<kAnyHit>(tree, cur, r, ablation, tmin, tmax, hit, c) && kAnyHit) return true;
     pop:
         for (;;) {
             if (top == bottom) return hit.found();
@@ -672,14 +768,25 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
     }
 }
 
-template <bool kAnyHit, class C>
-bool dispatch(const Wbvh& w, const Ray& ray, Hit& hit, C& c) {
+template <bool kAnyHit, bool kMoeller, bool kFma, class C>
+bool dispatch_tests(const Wbvh& w, const Ray& ray, Hit& hit, C& c) {
     const bool vector = w.config().kernel == Wbvh::Kernel::simd;
     if (w.config().width == 8)
-        return vector ? traverse<8, true, kAnyHit>(w.tree8(), ray, hit, c)
-                      : traverse<8, false, kAnyHit>(w.tree8(), ray, hit, c);
-    return vector ? traverse<4, true, kAnyHit>(w.tree4(), ray, hit, c)
-                  : traverse<4, false, kAnyHit>(w.tree4(), ray, hit, c);
+        return vector ? traverse<8, true, kAnyHit, Tests<8, true, kMoeller, kFma>>(w.tree8(), ray, hit, c)
+                      : traverse<8, false, kAnyHit, Tests<8, false, kMoeller, kFma>>(w.tree8(), ray, hit, c);
+    return vector ? traverse<4, true, kAnyHit, Tests<4, true, kMoeller, kFma>>(w.tree4(), ray, hit, c)
+                  : traverse<4, false, kAnyHit, Tests<4, false, kMoeller, kFma>>(w.tree4(), ray, hit, c);
+}
+
+template <bool kAnyHit, class C>
+bool dispatch(const Wbvh& w, const Ray& ray, Hit& hit, C& c) {
+    const bool moeller = w.config().leaf_test == Wbvh::LeafTest::moeller;
+    const bool fma = w.config().node_test == Wbvh::NodeTest::fma;
+    if (moeller)
+        return fma ? dispatch_tests<kAnyHit, true, true>(w, ray, hit, c)
+                   : dispatch_tests<kAnyHit, true, false>(w, ray, hit, c);
+    return fma ? dispatch_tests<kAnyHit, false, true>(w, ray, hit, c)
+               : dispatch_tests<kAnyHit, false, false>(w, ray, hit, c);
 }
 
 }  // namespace

@@ -50,6 +50,7 @@
 
 #include "accelbench/accel/accelerator.h"
 #include "accelbench/accel/bvh/bvh.h"
+#include "accelbench/accel/bvh/wbvh_ablations.h"
 #include "accelbench/accel/bvh/wbvh_simd.h"
 #include "accelbench/base/huge_pages.h"
 
@@ -64,6 +65,8 @@ template <int W>
 struct WbvhTree {
     HugePageArray<WbvhNode<W>> nodes;
     HugePageArray<WbvhTriPacket> packets;
+    // leaf_test=moeller only: packets[i] as Embree's Triangle4 (the ablation's leaves).
+    HugePageArray<WbvhMoellerPacket> moeller_packets;
     uint32_t depth = 0;   // wide levels below the root on the longest path to a leaf child
     uint64_t leaves = 0;  // leaf children
     bool empty() const { return nodes.empty(); }
@@ -80,9 +83,14 @@ class Wbvh final : public AcceleratorBase<Wbvh> {
 public:
     enum class Kernel { simd, scalar };
     enum class Collapse { greedy, sah };
+    // The ablations (wbvh_ablations.h): the tests without the guarantees, to measure their price.
+    enum class LeafTest { watertight, moeller };
+    enum class NodeTest { conservative, fma };
     // The names, in the enums' order: the declared choices and the parser both read them.
     static constexpr std::array<std::string_view, 2> kKernelNames = {"simd", "scalar"};
     static constexpr std::array<std::string_view, 2> kCollapseNames = {"greedy", "sah"};
+    static constexpr std::array<std::string_view, 2> kLeafTestNames = {"watertight", "moeller"};
+    static constexpr std::array<std::string_view, 2> kNodeTestNames = {"conservative", "fma"};
 
     // The parameters: each member's initializer is its default; wbvh.cpp's table declares
     // them. What the defaults were measured against: docs/decisions.md, "Wide BVH".
@@ -107,7 +115,10 @@ public:
         Collapse collapse = Collapse::sah;  // how binary nodes are grouped into wide nodes and leaves
         double packet_cost = 2;             // collapse=sah: cost of one packet test, a wide node's = 1
         Kernel kernel = Kernel::simd;       // vector tests, or the scalar ones they must equal
-        int threads = 1;                    // build threads (the same tree for every count)
+        // Ablations only: the defaults are the guarantees (docs/benchmarks.md, "Ablations").
+        LeafTest leaf_test = LeafTest::watertight;
+        NodeTest node_test = NodeTest::conservative;
+        int threads = 1;  // build threads (the same tree for every count)
 
         static Config from(const ParamSet& params);
     };

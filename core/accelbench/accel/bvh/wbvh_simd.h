@@ -480,14 +480,15 @@ inline WbvhPacketHits wbvh_packet_test(const WbvhTriPacket& p, int lanes, const 
 // nearest, and of equally near ones the first. Closest hit (kAnyHit false): on a closer hit
 // writes `hit` and shrinks tmax; returns whether there was one. Any hit: returns true at the
 // first packet with a hit, leaving tmax and `hit` as they are. c.prim() per lane tested.
-template <bool kAnyHit, class R, class C>
-inline bool wbvh_leaf_test(const WbvhTriPacket* p, uint32_t count, const R& r, float tmin, float& tmax, Hit& hit,
-                           C& c) {
+// `test(packet, lanes, tmax)` tests one packet (the ablations pass their own, on their
+// own packets).
+template <bool kAnyHit, class P, class Test, class C>
+inline bool wbvh_leaf_packets(const P* p, uint32_t count, Test&& test, float& tmax, Hit& hit, C& c) {
     bool found = false;
-    for (uint32_t done = 0; done < count; done += WbvhTriPacket::kLanes, ++p) {
-        const int lanes = int(std::min<uint32_t>(WbvhTriPacket::kLanes, count - done));
+    for (uint32_t done = 0; done < count; done += P::kLanes, ++p) {
+        const int lanes = int(std::min<uint32_t>(P::kLanes, count - done));
         c.prim(uint64_t(lanes));
-        const WbvhPacketHits h = wbvh_packet_test(*p, lanes, r, tmin, tmax);
+        const WbvhPacketHits h = test(*p, lanes, tmax);
         if (h.mask == 0) continue;
         if constexpr (kAnyHit) return true;
         const int k = h.nearest();
@@ -496,6 +497,17 @@ inline bool wbvh_leaf_test(const WbvhTriPacket* p, uint32_t count, const R& r, f
         found = true;
     }
     return found;
+}
+
+template <bool kAnyHit, class R, class C>
+inline bool wbvh_leaf_test(const WbvhTriPacket* p, uint32_t count, const R& r, float tmin, float& tmax, Hit& hit,
+                           C& c) {
+    return wbvh_leaf_packets<kAnyHit>(
+        p, count,
+        [&](const WbvhTriPacket& packet, int lanes, float t_max) {
+            return wbvh_packet_test(packet, lanes, r, tmin, t_max);
+        },
+        tmax, hit, c);
 }
 
 }  // namespace accelbench
