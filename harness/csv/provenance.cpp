@@ -71,6 +71,21 @@ std::vector<std::pair<std::string, std::string>> provenance_values() {
             {"isa", p.isa},           {"embree_isa", p.embree_isa}};
 }
 
+const std::vector<std::string>& build_identity_columns() {
+    static const std::vector<std::string> columns = {"git_sha",    "git_dirty", "compiler",
+                                                     "build_type", "isa",       "embree_version"};
+    return columns;
+}
+
+const std::vector<std::string>& mixing_columns() {
+    static const std::vector<std::string> columns = [] {
+        std::vector<std::string> c = build_identity_columns();
+        c.push_back("cpu");
+        return c;
+    }();
+    return columns;
+}
+
 const Provenance& provenance() {
     static const Provenance p = [] {
         Provenance p;
