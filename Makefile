@@ -107,7 +107,7 @@ test-sanitize: deps
 # of the same configs is unfinished and was measured by a build with the same provenance
 # (`accelbench provenance`) from the same contents (sha256 of the configs, model and ray
 # files); otherwise it starts afresh and says why; FRESH=1 never
-# continues. The driver: analysis/accelbench_analysis/reproduce.py. REPORT.md compares
+# continues. The driver: analysis/accelbench_analysis/reproduce/job.py. REPORT.md compares
 # the run with the report and the committed reference run (results/reference/).
 # The configs of the job, in order (add one here):
 REPRODUCE_CONFIGS := table2 table4 table5 ablations ablations-primary scaling ray-sets thread-scaling

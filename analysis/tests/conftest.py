@@ -3,8 +3,8 @@ from pathlib import Path
 import pytest
 from synthetic import realistic_rows, write_csv
 
+from accelbench_analysis.inputs.load import load_results
 from accelbench_analysis.inputs.report_numbers import load_report_numbers
-from accelbench_analysis.inputs.schema import load_results
 
 
 @pytest.fixture(scope="session")

@@ -5,8 +5,9 @@ import pandas as pd
 from synthetic import BVH, KD, LBVH, write_csv
 from synthetic import row as row_csv
 
-from accelbench_analysis.inputs.schema import Results, load_results
-from accelbench_analysis.outputs import claims as cl
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.inputs.schema import Results
+from accelbench_analysis.outputs.report import claims as cl
 
 
 class FakeSource:

@@ -6,8 +6,8 @@ import math
 import pytest
 from synthetic import BVH, KD, LBVH, row, write_csv
 
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.outputs.claims import (
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.report.claims import (
     CLAIMS,
     FAILS,
     HOLDS,

@@ -5,9 +5,9 @@ read the ablation rows (complete trees, what N is) and the ordered traversal."""
 import pandas as pd
 import pytest
 
-from accelbench_analysis.outputs import claims as cl
-from accelbench_analysis.outputs import cost_model as cm
-from accelbench_analysis.outputs.tables import note_complete_trees
+from accelbench_analysis.outputs.report import claims as cl
+from accelbench_analysis.outputs.report import cost_model as cm
+from accelbench_analysis.outputs.report.table_notes import note_complete_trees
 
 
 def test_fit_recovers_a_known_floor_and_cost_per_test():
@@ -151,7 +151,7 @@ def test_an_ablation_on_another_model_fits_its_own_floor(tmp_path, report_nums):
     # those rows, and replays them with the report's floor in tests' worth.
     from synthetic import KD, row, write_csv
 
-    from accelbench_analysis.inputs.schema import load_results
+    from accelbench_analysis.inputs.load import load_results
 
     settings = {"maxPrims=1": (1, "auto"), "maxPrims=10": (10, "auto"), "maxPrims=100": (100, "auto")}
     settings.update({f"maxDepth={d}": (1, str(d)) for d in (5, 10, 28, 100)})
@@ -206,8 +206,8 @@ def test_what_n_note_reads_the_kd_tree_at_table_3s_settings_only(tmp_path, repor
     # (b_e 0, mailboxes, other depths): the note gives the first only.
     from synthetic import KD, row, write_csv
 
-    from accelbench_analysis.inputs.schema import load_results
-    from accelbench_analysis.outputs.tables import note_what_n
+    from accelbench_analysis.inputs.load import load_results
+    from accelbench_analysis.outputs.report.table_notes import note_what_n
 
     results = load_results(
         [write_csv(tmp_path / "t2.csv", [row("stanford-bunny", "kdtree", KD, build=1, render=1)])]

@@ -9,12 +9,13 @@ import pytest
 from synthetic import BVH, EMBREE, KD, LBVH, SAH, ZERO_ERRORS, case_row, realistic_rows, row, write_csv
 from test_tables import cells_of, section_rows
 
-from accelbench_analysis.inputs.schema import ContractError, load_results, read_csv
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.inputs.schema import ContractError, read_csv
+from accelbench_analysis.mapping.errors import NOT_MEASURED
+from accelbench_analysis.mapping.formatting import Section, to_latex, to_markdown
 from accelbench_analysis.mapping.selection import STRUCTURE, Picker
-from accelbench_analysis.outputs import figures
-from accelbench_analysis.outputs.errors import NOT_MEASURED
-from accelbench_analysis.outputs.formatting import Section, to_latex, to_markdown
-from accelbench_analysis.outputs.tables import NOT_MEASURED_SECTION, model_table, table2
+from accelbench_analysis.outputs.figures import figures
+from accelbench_analysis.outputs.report.tables import NOT_MEASURED_SECTION, model_table, table2
 
 BUNNY = "stanford-bunny"
 

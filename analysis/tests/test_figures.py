@@ -6,8 +6,8 @@ import pandas as pd
 import pytest
 from synthetic import BVH, row, write_csv
 
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.outputs import figures
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.figures import figures
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -14,21 +14,22 @@ from PIL import Image
 from synthetic import KD, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.grid.grid import (
+from accelbench_analysis.grid.grid import analyse
+from accelbench_analysis.grid.grid_config import (
     CHEAP,
     FINAL,
-    analyse,
-    heatmap_data,
-    marker_position,
-    published_settings,
-)
-from accelbench_analysis.grid.grid_config import (
     GridConfigError,
     default_accelbench,
     load_grid_config,
     parse_objective,
 )
-from accelbench_analysis.inputs.schema import load_results, parse_params
+from accelbench_analysis.grid.heatmaps import (
+    heatmap_data,
+    marker_position,
+    published_settings,
+)
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.inputs.schema import parse_params
 
 REPO = Path(__file__).resolve().parents[2]
 # The harness expands grid configs (accelbench run --dry-run=json): these tests need it built.

@@ -18,8 +18,8 @@ import pytest
 from synthetic import BVH, EMBREE, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.outputs.figures import structure_frame
-from accelbench_analysis.outputs.markdown_html import to_html
+from accelbench_analysis.outputs.figures.figures import structure_frame
+from accelbench_analysis.outputs.pages.markdown_html import to_html
 
 SPECS = ["build_vs_render", "error_pareto", "scaling", "ray_sets", "thread_scaling"]
 

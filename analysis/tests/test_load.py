@@ -5,7 +5,8 @@ import pandas as pd
 import pytest
 from synthetic import row, write_csv
 
-from accelbench_analysis.inputs.schema import ContractError, load_results, parse_params, read_csv
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.inputs.schema import ContractError, parse_params, read_csv
 
 BUNNY_BVH = {"split": "median", "max_prims": "1", "max_depth": "50", "threads": "1"}
 

@@ -8,8 +8,8 @@ import pytest
 from synthetic import BVH, EMBREE, KD, LBVH, PROVENANCE, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.outputs.regress import compare, embree_ratios, keyed
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.ci.regress import compare, embree_ratios, keyed
 
 EXTRA = ("combo_id", "instructions")
 

@@ -14,20 +14,18 @@ import pytest
 from synthetic import BVH, KD, LBVH, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.outputs.claims import FAILS, HOLDS, evaluate_all
-from accelbench_analysis.outputs.comparison import three_way
-from accelbench_analysis.reproduce import (
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.report.claims import FAILS, HOLDS, evaluate_all
+from accelbench_analysis.outputs.report.comparison import three_way
+from accelbench_analysis.reproduce.job import Job, Progress, reproduce
+from accelbench_analysis.reproduce.runs import (
     RUN_JSON,
-    Job,
-    Progress,
     ReproduceError,
     csv_rows,
     decide,
     inputs_differences,
     prepare_into,
     provenance_differences,
-    reproduce,
     tree_changes,
 )
 

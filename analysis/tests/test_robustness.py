@@ -5,8 +5,8 @@ import pytest
 from synthetic import EMBREE_LEAKS, realistic_rows, robustness_rows, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.outputs.robustness import case_sort_key, robustness_markdown
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.report.robustness import case_sort_key, robustness_markdown
 
 
 @pytest.fixture(scope="module")

@@ -9,8 +9,8 @@ from PIL import Image
 from synthetic import BVH, EMBREE, KD, SAH, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.outputs.scaling import cost_figure, fit_slopes, read_cost_csv, scaling_frame
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.figures.scaling import cost_figure, fit_slopes, read_cost_csv, scaling_frame
 
 SIZES = {
     "stanford-dragon@decimate=10000": 10000,

@@ -6,7 +6,7 @@ from __future__ import annotations
 from synthetic import BVH, EMBREE, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.inputs.schema import load_results
+from accelbench_analysis.inputs.load import load_results
 from accelbench_analysis.mapping.selection import report_rows
 
 EXTRA = ("ray_set", "ray_set_hash", "image_width", "image_height", "spp")

@@ -3,12 +3,12 @@ still appears in the tables and figures, each with a colour no other structure h
 
 from synthetic import BVH, KD, LBVH, row, write_csv
 
-from accelbench_analysis.inputs.schema import load_results
+from accelbench_analysis.inputs.load import load_results
 from accelbench_analysis.mapping.selection import Picker, label_of
 from accelbench_analysis.mapping.styles import Styles, accel_styles
-from accelbench_analysis.outputs.comparison import three_way
-from accelbench_analysis.outputs.figures import structure_frame
-from accelbench_analysis.outputs.tables import build_tables, to_markdown
+from accelbench_analysis.outputs.figures.figures import structure_frame
+from accelbench_analysis.outputs.report.comparison import three_way
+from accelbench_analysis.outputs.report.tables import build_tables, to_markdown
 
 WBVH8 = {"width": "8"}
 WBVH4 = {"width": "4"}

@@ -5,9 +5,8 @@ import re
 import pytest
 from synthetic import BVH, EMBREE, KD, LBVH, SAH, row, write_csv
 
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.mapping.selection import AUTO, kd_auto_depths, param_matches
-from accelbench_analysis.outputs.formatting import (
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.mapping.formatting import (
     Cell,
     Section,
     TableDoc,
@@ -17,7 +16,8 @@ from accelbench_analysis.outputs.formatting import (
     to_latex,
     to_markdown,
 )
-from accelbench_analysis.outputs.tables import model_table, table2
+from accelbench_analysis.mapping.selection import AUTO, kd_auto_depths, param_matches
+from accelbench_analysis.outputs.report.tables import model_table, table2
 
 
 def cells_of(doc: TableDoc, label: str) -> list[str]:

@@ -10,8 +10,8 @@ import pytest
 from synthetic import BVH, EMBREE, KD, row, write_csv
 
 from accelbench_analysis.cli import main
-from accelbench_analysis.inputs.schema import load_results
-from accelbench_analysis.outputs.workloads import (
+from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.figures.workloads import (
     ranking,
     ray_set_rows,
     ray_set_table,

@@ -1,5 +1,5 @@
 // `accelbench provenance`: the provenance columns this build writes into every results
-// row, NAME=VALUE (reproduce.py compares them with an unfinished run's).
+// row, NAME=VALUE (the main job's reproduce/runs.py compares them with an unfinished run's).
 #include <cstdio>
 
 #include "commands/args.h"

@@ -44,7 +44,7 @@ const std::vector<std::string>& mixing_columns();
 // The provenance columns of every results CSV row (results.h's provenance_columns(), in
 // that order) with this process's values; `threads` and `timestamp` are per run, not facts
 // of the build. The rows and `accelbench provenance` both print this one list, so a driver
-// that compares runs (analysis/accelbench_analysis/reproduce.py) sees what rows will record.
+// that compares runs (analysis/accelbench_analysis/reproduce/runs.py) sees what rows will record.
 std::vector<std::pair<std::string, std::string>> provenance_values();
 
 }  // namespace accelbench

@@ -83,6 +83,17 @@ def harness_expansion(path: Path, accelbench: Path | None = None) -> dict:
     return json.loads(done.stdout)
 
 
+# ranked.csv's columns (grid.py writes it, heatmaps.py reads it back):
+PARAM_COL = "param:"  # ranked.csv's per-parameter columns, so they never meet a statistic's name
+PASS_COL = "pass"
+FINAL, CHEAP = "final", "cheap"  # ranked candidates; the cheap pass's rows shown as context
+
+
+def final_config_name(cfg: GridConfig) -> str:
+    """The name `halve` gives the second pass's config (its rows carry it in `config`)."""
+    return f"{cfg.name}-final"
+
+
 @dataclass
 class Axis:
     """One parameter (or a zipped group of parameters) and its values, as the harness

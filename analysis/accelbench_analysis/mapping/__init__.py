@@ -1,1 +1,2 @@
-"""From the report's cells to our rows: which structure setting stands for which report column."""
+"""What every output shares: from the report's cells to our rows (selection), the metrics
+and ratios, the formatting of numbers and tables, the error columns, the styles."""

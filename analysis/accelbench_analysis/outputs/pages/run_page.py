@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .interactive import spec_path
+from ..figures.interactive import spec_path
 from .markdown_html import first_heading, slug, to_html
 from .page import page, png_data_uri, vega_figure, write_page
 

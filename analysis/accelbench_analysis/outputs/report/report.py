@@ -6,12 +6,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
-from ..inputs.schema import FP_MODE_COLUMN, Results
+from ...inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
+from ...inputs.schema import FP_MODE_COLUMN, Results
+from ...mapping.formatting import md_escape
+from ..figures.figures import FIGURES, Skipped
 from .claims import FAILS, HOLDS, NOT_COMPARABLE, ClaimRow, reference_ablation_text, summary_line
 from .comparison import TIME_METRICS, ThreeWay, comparison_markdown
-from .figures import FIGURES, Skipped
-from .formatting import md_escape
 
 TABLE_CAPTIONS = {
     "table2": "Table 2: kd-tree maxPrims and maxDepth sweeps on the Stanford bunny.",

@@ -29,8 +29,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.schema import KEY_COLUMNS, ContractError, Results, is_companion, parse_params, read_csv
-from ..mapping.selection import label_of
+from ...inputs.load import is_companion
+from ...inputs.schema import KEY_COLUMNS, ContractError, Results, parse_params, read_csv
+from ...mapping.selection import label_of
 from .regress import ERROR_COUNTS, EXACT_COUNTS, RENDER_SETTING_COLUMNS, embree_ratios
 
 HISTORY_DIR = Path("results/history")

@@ -23,13 +23,13 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
-from ..inputs.report_numbers import REPORT_MODELS, TABLE2_MODEL, our_model, report_value  # noqa: E402
-from ..inputs.schema import Results  # noqa: E402
-from ..mapping.selection import STRUCTURE, Picker, setting_spec  # noqa: E402
-from ..mapping.styles import Styles, accel_styles  # noqa: E402
-from .errors import wrong_answers  # noqa: E402
+from ...inputs.report_numbers import REPORT_MODELS, TABLE2_MODEL, our_model, report_value  # noqa: E402
+from ...inputs.schema import Results  # noqa: E402
+from ...mapping.errors import wrong_answers  # noqa: E402
+from ...mapping.metrics import preferred_variant, ratio, structure_rows  # noqa: E402
+from ...mapping.selection import STRUCTURE, Picker, setting_spec  # noqa: E402
+from ...mapping.styles import Styles, accel_styles  # noqa: E402
 from .interactive import build_vs_render_spec, error_pareto_spec, write_spec  # noqa: E402
-from .tables import preferred_variant, ratio, structure_rows  # noqa: E402
 
 SEED = 0
 NO_MODES = "own (no modes)"  # traversal label of structures without traversal modes

@@ -14,9 +14,9 @@ import matplotlib.ticker as mticker  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from ..inputs.schema import ContractError, Results, record_lines, scan_records, to_numbers  # noqa: E402
-from ..mapping.selection import label_of  # noqa: E402
-from ..mapping.styles import Styles  # noqa: E402
+from ...inputs.schema import ContractError, Results, record_lines, scan_records, to_numbers  # noqa: E402
+from ...mapping.selection import label_of  # noqa: E402
+from ...mapping.styles import Styles  # noqa: E402
 from .figures import DPI, plain_log_ticks  # noqa: E402
 from .interactive import scaling_spec, write_spec  # noqa: E402
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from .formatting import fmt_sig
+from ...mapping.formatting import fmt_sig
 
 # Table 2's two sweeps (the report's settings labels) and the model they run on.
 SWEEPS = {

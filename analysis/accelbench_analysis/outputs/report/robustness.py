@@ -20,9 +20,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.schema import CASE_PREFIX, Results
-from .errors import ERROR_METRIC, NOT_MEASURED, error_text, shown_metrics
-from .formatting import fmt_count, fmt_sig, is_missing, md_escape, md_table
+from ...inputs.schema import CASE_PREFIX, Results
+from ...mapping.errors import ERROR_METRIC, NOT_MEASURED, error_text, shown_metrics
+from ...mapping.formatting import fmt_count, fmt_sig, is_missing, md_escape, md_table
 
 ACCEL_ORDER = ("brute_force", "bvh", "lbvh", "kdtree", "embree", "reference")
 MIB = 1024 * 1024

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from .history import COUNTS, Collected
-from .interactive import SCHEMA, records
+from ..ci.history import COUNTS, Collected
+from ..figures.interactive import SCHEMA, records
 from .markdown_html import to_html
 from .page import data_table, page, vega_figure, write_page
 

@@ -31,15 +31,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.schema import (
-    INSTRUCTIONS_COLUMN,
-    KEY_COLUMNS,
-    RENDER_SETTING_COLUMNS,
-    ContractError,
-    Results,
-    load_results,
-)
-from .formatting import fmt_count, fmt_sig, md_table
+from ...inputs.load import load_results
+from ...inputs.schema import INSTRUCTIONS_COLUMN, KEY_COLUMNS, RENDER_SETTING_COLUMNS, ContractError, Results
+from ...mapping.formatting import fmt_count, fmt_sig, md_table
 
 EXIT_PASS, EXIT_REGRESSION, EXIT_BAD_INPUT, EXIT_REMEASURE = 0, 1, 2, 3
 

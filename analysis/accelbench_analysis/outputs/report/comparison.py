@@ -21,12 +21,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.report_numbers import REPORT_MODEL, TABLE2_MODEL, TABLE4_MODELS, TABLE5_MODELS, report_value
-from ..inputs.schema import Results
-from ..mapping.selection import Structure
+from ...inputs.report_numbers import REPORT_MODEL, TABLE2_MODEL, TABLE4_MODELS, TABLE5_MODELS, report_value
+from ...inputs.schema import Results
+from ...mapping.formatting import fmt_count, fmt_sig, is_missing, md_table
+from ...mapping.metrics import METRIC, ratio
+from ...mapping.selection import Structure
 from .claims import Missing, OurSource
-from .formatting import fmt_count, fmt_sig, is_missing, md_table
-from .tables import METRIC, ratio
 
 TIME_METRICS = ["build", "render"]
 COUNT_METRICS = ["prim_tests", "nodes"]

@@ -19,12 +19,12 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..inputs.report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
-from ..inputs.schema import Results
-from ..mapping.selection import Picker, setting_spec
+from ...inputs.report_numbers import REPORT_MODEL, TABLE4_MODELS, TABLE5_MODELS, our_model, report_value
+from ...inputs.schema import Results
+from ...mapping.formatting import fmt_sig, md_escape
+from ...mapping.metrics import METRIC, preferred_variant
+from ...mapping.selection import Picker, setting_spec
 from .cost_model import AdjustedSource, FlooredSource, cost_model_lines, fit_all, write_cost_model
-from .formatting import fmt_sig, md_escape
-from .tables import METRIC, preferred_variant
 
 # "~N x": the measured factor must lie within a factor APPROX_FACTOR of N, and never closer
 # to 1 than APPROX_MIN_EFFECT of the claimed effect in log terms, so that "~1.2x" is not

@@ -34,29 +34,36 @@ elapsed, an estimate of what is left from the pace so far in this invocation).
 
 from __future__ import annotations
 
-import argparse
-import csv
-import json
-import os
 import re
 import subprocess
 import sys
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
-RUN_JSON = "run.json"
+from .. import commands
+from .runs import (
+    RUN_JSON,
+    ReproduceError,
+    csv_rows,
+    decide,
+    job_of,
+    point_latest,
+    prepare_into,
+    read_run_json,
+    record_written,
+    tree_changes,
+    utc,
+    write_run_json,
+)
+
 # A tag is part of a directory name: letters, digits, '_', '-' and '.', not first '-' or '.'.
 TAG = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.-]*$")
-RUN_NAME = re.compile(r"^\d{8}T\d{6}Z-[0-9a-z]+(-\d+)?(-[A-Za-z0-9_][A-Za-z0-9_.-]*)?$")
 DRY_RUN_COUNT = re.compile(r"^(\d+) combinations", re.M)
 # `accelbench run --dry-run`'s inputs: "  KIND SHA256 NAME" after its "inputs" line.
 DRY_RUN_INPUT = re.compile(r"^  (config|model|rays) +([0-9a-f]{64}) (.*)$")
-
-
-class ReproduceError(RuntimeError):
-    """A job that cannot go on, with the reason for the user (exit 2)."""
 
 
 def harness(cmd: list[str]) -> str:
@@ -88,156 +95,7 @@ def build_provenance(accelbench: Path) -> dict[str, str]:
     return prov
 
 
-def provenance_differences(recorded: dict[str, str], current: dict[str, str]) -> list[str]:
-    """Every field in which two builds differ, "name: old -> new"; a field one of them does
-    not record at all (an older build without `isa`) differs as "(absent)"."""
-    out = []
-    for name in list(recorded) + [n for n in current if n not in recorded]:
-        old, new = recorded.get(name), current.get(name)
-        if old != new:
-            out.append(
-                f"{name}: {old if old is not None else '(absent)'} -> "
-                f"{new if new is not None else '(absent)'}"
-            )
-    return out
-
-
-@dataclass
-class Decision:
-    run_dir: Path
-    resume: bool
-    reason: str
-
-
-def read_run_json(run_dir: Path) -> dict | None:
-    try:
-        return json.loads((run_dir / RUN_JSON).read_text())
-    except (OSError, ValueError):
-        return None
-
-
-def job_of(configs: list[Path], tag: str) -> dict:
-    return {"configs": [p.name for p in configs], "tag": tag}
-
-
-def newest_run_of_job(runs: Path, job: dict) -> tuple[Path, dict] | None:
-    """The newest run directory under `runs` whose run.json asked for the same job."""
-    if not runs.is_dir():
-        return None
-    found = []
-    for d in runs.iterdir():
-        if d.is_dir() and not d.is_symlink() and RUN_NAME.match(d.name):
-            meta = read_run_json(d)
-            if meta is not None and meta.get("job") == job:
-                found.append((meta.get("started", ""), d.name, d, meta))
-    if not found:
-        return None
-    _, _, d, meta = max(found)
-    return d, meta
-
-
-def new_run_dir(runs: Path, provenance: dict[str, str], tag: str, now: datetime) -> Path:
-    sha = provenance.get("git_sha", "unknown")[:7] or "unknown"
-    base = f"{now.strftime('%Y%m%dT%H%M%SZ')}-{sha}"
-    name, n = base, 1
-    while (runs / (name + (f"-{tag}" if tag else ""))).exists():  # two runs in one second
-        n += 1
-        name = f"{base}-{n}"
-    return runs / (name + (f"-{tag}" if tag else ""))
-
-
-def inputs_differences(recorded: dict | None, current: dict, measured: set[str] | None = None) -> list[str]:
-    """Where two records of a job's inputs ({config file name: [[kind, sha256, name], ...]})
-    differ: "CONFIG: KIND NAME: sha256 OLD then, NEW now", "...: only then" or "only now".
-    `measured`: compare only these configs (those with rows: another's rows cannot mix)."""
-    if recorded is None:
-        if measured is not None and not measured:
-            return []
-        return ["the run recorded no inputs (an older driver): its contents cannot be compared"]
-    out = []
-    for config in list(recorded) + [c for c in current if c not in recorded]:
-        if measured is not None and config not in measured:
-            continue
-        then = {(k, n): sha for k, sha, n in recorded.get(config, [])}
-        now = {(k, n): sha for k, sha, n in current.get(config, [])}
-        for key in list(then) + [k for k in now if k not in then]:
-            what = f"{config}: {key[0]} {key[1]}"
-            if key not in now:
-                out.append(f"{what}: only then")
-            elif key not in then:
-                out.append(f"{what}: only now")
-            elif then[key] != now[key]:
-                out.append(f"{what}: sha256 {then[key][:12]} then, {now[key][:12]} now")
-    return out
-
-
-def decide(
-    runs: Path, job: dict, provenance: dict[str, str], fresh: bool, now: datetime, inputs: dict | None = None
-) -> Decision:
-    """Resume the newest run of this job only when it is unfinished, was measured by a
-    build with the same provenance and from the same inputs (`inputs`: the configs' and
-    their models' contents, compared for every config with rows; None: not compared);
-    otherwise a new directory, saying why."""
-    last = newest_run_of_job(runs, job)
-    new = new_run_dir(runs, provenance, job["tag"], now)
-    if last is None:
-        return Decision(new, False, "no earlier run of these configs")
-    d, meta = last
-    if meta.get("complete"):
-        return Decision(new, False, f"the last run {d} is complete")
-    if fresh:
-        return Decision(new, False, f"FRESH=1: not resuming the unfinished run {d}")
-    diffs = provenance_differences(meta.get("provenance", {}), provenance)
-    if diffs:
-        return Decision(
-            new,
-            False,
-            f"the last run {d} is unfinished but was measured by "
-            f"another build or machine ({'; '.join(diffs)})",
-        )
-    measured = {c for c in inputs or {} if csv_rows(d / "csv" / f"{Path(c).stem}.csv") > 0}
-    if inputs is not None and (changed := inputs_differences(meta.get("inputs"), inputs, measured)):
-        return Decision(
-            new,
-            False,
-            f"the last run {d} is unfinished but was measured from other contents under the same "
-            f"names ({'; '.join(changed)})",
-        )
-    return Decision(
-        d,
-        True,
-        f"the last run {d} is unfinished, its provenance matches this build's and its inputs the configs'",
-    )
-
-
-def tree_changes(repo: Path) -> list[str]:
-    """Uncommitted changes to tracked files (`git status --porcelain`, untracked files not
-    counted: the harness's git_dirty uses the same test). Raises when repo is no checkout."""
-    out = subprocess.run(
-        ["git", "-C", str(repo), "status", "--porcelain", "--untracked-files=no"],
-        capture_output=True,
-        text=True,
-    )
-    if out.returncode != 0:
-        raise RuntimeError(f"{repo}: not a git work tree ({out.stderr.strip()})")
-    return [line for line in out.stdout.splitlines() if line.strip()]
-
-
 # ---- measuring ------------------------------------------------------------------------------
-
-
-def csv_rows(path: Path) -> int:
-    """Complete data rows of a results CSV (a line cut by an interruption does not count;
-    the harness drops it when it resumes)."""
-    if not path.is_file():
-        return 0
-    with path.open(newline="") as fh:
-        text = fh.read()
-    if not text:
-        return 0
-    if not text.endswith("\n"):
-        text = text[: text.rfind("\n") + 1]
-    return max(0, sum(1 for _ in csv.reader(text.splitlines())) - 1)
 
 
 @dataclass
@@ -333,61 +191,6 @@ class Job:
     analyse: bool = True
 
 
-def write_run_json(run_dir: Path, meta: dict) -> None:
-    tmp = run_dir / (RUN_JSON + ".tmp")
-    tmp.write_text(json.dumps(meta, indent=2) + "\n")
-    tmp.replace(run_dir / RUN_JSON)
-
-
-def utc(now: datetime) -> str:
-    return now.strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
-def files_under(d: Path) -> set[str]:
-    """Every file (or link) under d, as paths relative to it."""
-    if not d.is_dir():
-        return set()
-    return {str(p.relative_to(d)) for p in d.rglob("*") if p.is_file() or p.is_symlink()}
-
-
-def prepare_into(into: Path) -> set[str]:
-    """Makes `into` ready for a run from scratch and returns the files in it that the driver
-    did not write (kept, never removed). It must be a directory the driver makes, an empty
-    one, or one whose run.json (an earlier run's) lists what the driver wrote there: only
-    those files are removed."""
-    if into.exists() and not into.is_dir():
-        raise ReproduceError(f"--into {into}: not a directory")
-    if not into.exists():
-        into.mkdir(parents=True)
-        return set()
-    present = files_under(into)
-    meta = read_run_json(into)
-    written = meta.get("written") if isinstance(meta, dict) and "job" in meta else None
-    if not present:
-        return set()
-    if not isinstance(written, list):
-        shown = ", ".join(sorted(present)[:5]) + (f" and {len(present) - 5} more" if len(present) > 5 else "")
-        raise ReproduceError(
-            f"--into {into}: the directory holds files this driver did not write ({shown}) and no "
-            f"{RUN_JSON} of an earlier run listing what it wrote; give a new or empty directory"
-        )
-    for rel in sorted(set(written) & present):
-        (into / rel).unlink()
-    # Directories left empty by that, deepest first.
-    holding = {p for w in written for p in Path(w).parents if p != Path(".")}
-    for rel in sorted(holding, key=lambda p: -len(p.parts)):
-        if (into / rel).is_dir() and not any((into / rel).iterdir()):
-            (into / rel).rmdir()
-    return present - set(written)
-
-
-def record_written(run_dir: Path, meta: dict, foreign: set[str]) -> None:
-    """run.json's `written`: every file under run_dir but those that were there before the
-    driver started writing (and were not its own): what a later --into may remove."""
-    meta["written"] = sorted((files_under(run_dir) | {RUN_JSON}) - foreign - {RUN_JSON + ".tmp"})
-    write_run_json(run_dir, meta)
-
-
 def start(job: Job, provenance: dict[str, str], inputs: dict, now: datetime) -> tuple[Path, dict, set[str]]:
     """The run directory, its run.json and the files in it the driver did not write, after
     deciding whether to continue a run."""
@@ -468,38 +271,42 @@ def output_problems(job: Job) -> list[str]:
     return problems
 
 
-def analysis_commands(job: Job, run_dir: Path) -> list[list[str]]:
-    """The analysis's command lines (python -m accelbench_analysis ...) over the run's CSVs."""
+def analysis_steps(job: Job, run_dir: Path) -> list[tuple[str, Callable[[], list[Path]]]]:
+    """The analysis's commands over the run's CSVs, each a name and a typed call."""
     csvs = {c: run_dir / "csv" / f"{c.stem}.csv" for c in job.configs}
-    cmds = []
+    steps = []
     if job.scaling is not None:
-        cmds.append(["scaling", str(csvs[job.scaling]), "--out", str(run_dir)])
-    main = [str(p) for c, p in csvs.items() if c != job.scaling]
+        scaling_csv = csvs[job.scaling]
+        steps.append(("scaling", lambda: commands.scaling([scaling_csv], run_dir)))
+    main = [p for c, p in csvs.items() if c != job.scaling]
     if main:
-        cmd = ["all", *main, "--out", str(run_dir)]
+        src = commands.Sources(main)
         if job.report_numbers is not None:
-            cmd += ["--report-numbers", str(job.report_numbers)]
+            src = replace(src, report_numbers=job.report_numbers)
         ref_csv = job.reference_run / "csv" if job.reference_run is not None else None
         if ref_csv is not None and ref_csv.is_dir() and ref_csv.resolve() != (run_dir / "csv").resolve():
-            cmd += ["--reference-run", str(job.reference_run)]
-        cmds.append(cmd)
-    return cmds
+            src = replace(src, reference_run=job.reference_run)
+        steps.append(("all", lambda: commands.analyse_all(src, run_dir)))
+    return steps
 
 
-def point_latest(latest: Path, run_dir: Path) -> None:
-    latest.parent.mkdir(parents=True, exist_ok=True)
-    tmp = latest.with_name(latest.name + ".tmp")
-    tmp.unlink(missing_ok=True)
-    tmp.symlink_to(os.path.relpath(run_dir.resolve(), latest.parent.resolve()))
-    tmp.replace(latest)
+def analyse(job: Job, run_dir: Path) -> int:
+    """Runs the analysis steps, printing what each wrote; 2 on input it cannot use."""
+    for name, step in analysis_steps(job, run_dir):
+        print(f"== analysis: {name} -> {run_dir}", file=sys.stderr, flush=True)
+        try:
+            for path in step():
+                print(path)
+        except commands.BAD_INPUT as e:
+            print(f"error: {e}", file=sys.stderr)
+            return commands.EXIT_BAD_INPUT
+    return 0
 
 
 def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
     """Runs the job; returns (exit code, run directory). The run is marked complete only
     when every config measured and the analysis ran. A ReproduceError is a job that cannot
     go on, with the reason."""
-    from .pipeline import main as analysis_main
-
     now = now or datetime.now(UTC)
     if job.require_clean_tree:
         changes = tree_changes(Path.cwd())
@@ -573,18 +380,16 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
                         file=sys.stderr,
                     )
                     return cost.returncode, run_dir
-            for cmd in analysis_commands(job, run_dir):
-                print(f"== analysis: {cmd[0]} -> {run_dir}", file=sys.stderr, flush=True)
-                rc = analysis_main(cmd)
-                if rc != 0:
-                    return rc, run_dir
+            rc = analyse(job, run_dir)
+            if rc != 0:
+                return rc, run_dir
         meta["complete"] = True
         meta["finished"] = utc(datetime.now(UTC))
     finally:
         record_written(run_dir, meta, foreign)
     if job.latest is not None and job.into is None:
         point_latest(job.latest, run_dir)
-    from .outputs.runs_page import write_runs_page
+    from ..outputs.pages.runs_page import write_runs_page
 
     write_runs_page(job.runs.parent)
     took = clock(time.monotonic() - progress.start)
@@ -594,79 +399,3 @@ def reproduce(job: Job, now: datetime | None = None) -> tuple[int, Path]:
         file=sys.stderr,
     )
     return 0, run_dir
-
-
-# ---- command line (python -m accelbench_analysis reproduce ...) -----------------------------
-
-
-def add_reproduce(sub) -> None:
-    s = sub.add_parser(
-        "reproduce",
-        help="the main job: measure configs into a run directory of their own, then analyse it",
-        description="Measures every CONFIG with the harness into RUNS/<UTC time>-<sha>[-TAG]/"
-        "csv/ and analyses them there (tables/, figures/, REPORT.md); LATEST then "
-        "points at it. Continues the newest run of the same configs only when it "
-        "is unfinished, `accelbench provenance` matches what it recorded and so do the "
-        "contents of its configs, model and ray files (sha256).",
-    )
-    s.add_argument("configs", nargs="+", type=Path, help="configs/NAME.yaml, in order")
-    s.add_argument("--accelbench", type=Path, default=Path("build/accelbench"))
-    s.add_argument("--scaling", type=Path, help="the config among them analysed by `scaling`")
-    s.add_argument(
-        "--tag", default="", help="suffix of the run directory and part of the job's identity (e.g. quick)"
-    )
-    s.add_argument("--runs", type=Path, default=Path("results/runs"))
-    s.add_argument("--latest", type=Path, default=Path("results/latest"))
-    s.add_argument(
-        "--into",
-        type=Path,
-        help="measure from scratch into this directory instead (the committed reference run): a new or "
-        "empty one, or one an earlier run wrote (its run.json lists the files it wrote, the only ones "
-        "removed)",
-    )
-    s.add_argument(
-        "--reference-run",
-        type=Path,
-        default=Path("results/reference"),
-        help="the committed reference run compared with (default results/reference)",
-    )
-    s.add_argument("--report-numbers", type=Path)
-    s.add_argument(
-        "--cost-images",
-        help="command (split at spaces) writing OUT/figures/cost-*.png; the run directory is appended",
-    )
-    s.add_argument("--fresh", action="store_true", help="never continue an unfinished run")
-    s.add_argument(
-        "--require-clean-tree",
-        action="store_true",
-        help="refuse when tracked files have uncommitted changes (the reference run)",
-    )
-
-
-def run_reproduce(args: argparse.Namespace) -> int:
-    job = Job(
-        accelbench=args.accelbench,
-        configs=list(args.configs),
-        scaling=args.scaling,
-        tag=args.tag,
-        runs=args.runs,
-        latest=args.latest,
-        into=args.into,
-        reference_run=args.reference_run,
-        report_numbers=args.report_numbers,
-        cost_images=args.cost_images.split() if args.cost_images else None,
-        fresh=args.fresh,
-        require_clean_tree=args.require_clean_tree,
-    )
-    try:
-        rc, _ = reproduce(job)
-    except ReproduceError as e:
-        print(f"reproduce: {e}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        # The harness got the same signal; what it finished is in the CSVs.
-        print(
-            "\nreproduce: interrupted; run the job again with the same build to continue it", file=sys.stderr
-        )
-        return 130
-    return rc

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from ..mapping.styles import Styles
+from ...mapping.styles import Styles
 
 SCHEMA = "https://vega.github.io/schema/vega-lite/v6.json"
 SPEC_SUFFIX = ".vl.json"

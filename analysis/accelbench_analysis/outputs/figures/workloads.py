@@ -32,9 +32,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 import seaborn as sns  # noqa: E402
 
-from ..inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results  # noqa: E402
-from ..mapping.selection import EMBREE_PREFERRED  # noqa: E402
-from .formatting import md_escape  # noqa: E402
+from ...inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results  # noqa: E402
+from ...mapping.formatting import md_escape  # noqa: E402
+from ...mapping.selection import EMBREE_PREFERRED  # noqa: E402
 from .interactive import ray_sets_spec, thread_scaling_spec, write_spec  # noqa: E402
 
 BASELINE = "embree"

@@ -13,7 +13,7 @@ import json
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..inputs.schema import is_companion
+from ...inputs.load import is_companion
 from .page import data_table, page, write_page
 
 INDEX = "index.html"
