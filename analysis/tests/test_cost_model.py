@@ -91,6 +91,31 @@ def test_the_floor_decides_a_ratio_claim():
     assert cl.evaluate(claim, floored).verdict == cl.HOLDS  # (50M + 12M) / (50M + 1M) = 1.22
 
 
+def test_a_fit_that_gives_negative_times_judges_no_claim():
+    # Our times falling as tests rise (b < 0, as noise over a short sweep can give):
+    # render - a_ours + b_ours * floor is below zero at every setting. No floored source,
+    # so no claim is judged on it.
+    ours, report = Sweep(5.0, -1e-9, TESTS), Sweep(9.0, 0.2e-6, TESTS)
+    fo, fr = cm.fit_all(ours, cl.Missing), cm.fit_all(report, cl.Missing)
+    with pytest.raises(ValueError, match="render times <= 0"):
+        cm.FlooredSource(ours, fo, fr, cl.Missing)
+    # A report fit with no positive cost per test has no floor to replay.
+    flat = Sweep(3.0, -1e-9, TESTS)
+    with pytest.raises(ValueError, match="no positive cost per test"):
+        cm.FlooredSource(
+            Sweep(0.05, 5e-9, TESTS),
+            cm.fit_all(Sweep(0.05, 5e-9, TESTS), cl.Missing),
+            cm.fit_all(flat, cl.Missing),
+            cl.Missing,
+        )
+    # A point the fit was not made on that replays below zero: Missing, the claim undecided.
+    fine = cm.FlooredSource(
+        Sweep(0.05, 5e-9, TESTS), cm.fit_all(Sweep(0.05, 5e-9, TESTS), cl.Missing), fr, cl.Missing
+    )
+    with pytest.raises(cl.Missing, match="gives no time"):
+        fine.adjust(cm.SWEEP_MODEL, cm.SWEEP_STRUCTURE, "render", "maxDepth=10", -1.0)
+
+
 def test_ordered_traversal_verdict_is_noted_where_it_differs():
     c = cl.Claim("t-1", "5.3", "kd-tree renders fastest", lambda src: (True, "x"))
     r = cl.ClaimRow(c, cl.Finding(cl.HOLDS, "r"), cl.Finding(cl.HOLDS, "ours"))

@@ -585,7 +585,7 @@ class Ablation:
         if self.params or self.models:  # our floor is fitted on the rows the ablation reads
             our_fits = fit_all(base, Missing)
         try:
-            return FlooredSource(base, our_fits, report_fits)
+            return FlooredSource(base, our_fits, report_fits, Missing)
         except ValueError:
             return None
 

@@ -153,19 +153,47 @@ class FlooredSource(AdjustedSource):
     own fits. Every other number is ours, unchanged. This is the one difference "the
     report's renderer has a fixed floor" makes; a claim that holds here is decided by it."""
 
-    def __init__(self, base, ours: dict[str, SweepFit], report: dict[str, SweepFit]):
+    def __init__(
+        self,
+        base,
+        ours: dict[str, SweepFit],
+        report: dict[str, SweepFit],
+        missing: type[Exception] = ValueError,
+    ):
         absent = [s for s in SWEEPS if s not in ours or s not in report]
         if absent:
             raise ValueError(f"no fit of the {', '.join(absent)} sweep on both sides")
         super().__init__(base)
-        self.ours, self.report = ours, report
+        self.ours, self.report, self.missing = ours, report, missing
+        # A fit that replays to a time of zero or less is no model of render time: refused
+        # here (no floor without a positive cost per test; no replayed point <= 0), so no
+        # claim is judged on negative times.
+        for sweep in SWEEPS:
+            r = report[sweep].fit
+            if not (r.b > 0 and math.isfinite(r.floor_tests)):
+                raise ValueError(f"the report's {sweep} fit has no positive cost per test (b = {r.b:.3g} s)")
+            bad = [
+                s for s, y in zip(ours[sweep].settings, ours[sweep].render) if not self.replayed(sweep, y) > 0
+            ]
+            if bad:
+                raise ValueError(
+                    f"the {sweep} floor replayed on ours gives render times <= 0 at {', '.join(bad)}"
+                )
+
+    def replayed(self, sweep: str, value: float) -> float:
+        o, r = self.ours[sweep].fit, self.report[sweep].fit
+        return value - o.a + o.b * r.floor_tests
 
     def adjust(self, model: str, structure: str, metric: str, setting: str, value: float) -> float:
         sweep = sweep_of(setting)
         if metric != "render" or model != SWEEP_MODEL or structure != SWEEP_STRUCTURE or sweep is None:
             return value
-        o, r = self.ours[sweep].fit, self.report[sweep].fit
-        return value - o.a + o.b * r.floor_tests
+        out = self.replayed(sweep, value)
+        if not (math.isfinite(out) and out > 0):
+            raise self.missing(
+                f"the replayed render time at {setting} is {out:.3g} s: the fit gives no time there"
+            )
+        return out
 
 
 def describe(f: SweepFit) -> str:
