@@ -6,6 +6,8 @@ it; nothing outside a folder is read, embedded or removed; builds are never one 
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -142,3 +144,22 @@ def test_markdown_from_data_is_text_and_its_links_stay_inside():
         False,
         False,
     ]
+
+
+def test_the_page_writer_under_an_address_space_limit_writes_its_page(tmp_path):
+    """Under `ulimit -v` 16 GiB vl-convert's V8 cannot start: one line says so, the page is
+    written all the same (its figures undrawn), and the process is not killed."""
+    code = (
+        "from pathlib import Path; from accelbench_analysis.outputs.pages.page import page, write_page;"
+        f"write_page(Path({str(tmp_path / 'p.html')!r}), page('t', '<p>x</p>', charts=True))"
+    )
+    done = subprocess.run(
+        ["bash", "-c", f'ulimit -v {16 * 2**20} && exec "$0" -c "$1"', sys.executable, code],
+        capture_output=True,
+        text=True,
+        cwd=Path(__file__).resolve().parents[1],
+    )
+    assert done.returncode == 0, done.stderr
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and "interactive figures left undrawn" in lines[0] and "16.0 GiB" in lines[0]
+    assert "<p>x</p>" in (tmp_path / "p.html").read_text()
