@@ -85,6 +85,10 @@ def results_with_one_bad_run_of_each_kind(tmp_path: Path) -> Path:
     (partial / "csv").mkdir(parents=True)
     (partial / "csv" / "table4.csv").write_text(text.splitlines()[0] + "\n")
     (partial / RUN_JSON).write_text(json.dumps({"job": JOB, "complete": False}))
+    regress = runs / "regress"  # its newest report's run is header-only
+    regress.mkdir(parents=True)
+    (regress / "report-1.md").write_text("# Regression check: PASS\n")
+    (regress / "run-1.csv").write_text("git_sha,git_dirty,timestamp\n")
     garbage = runs / "slurm-x"
     garbage.mkdir(parents=True)
     (garbage / "out.csv").write_bytes(b"\xff\xfe\x00garbage\x00\n\x80")
@@ -100,6 +104,9 @@ def test_runs_page_and_history_skip_each_bad_file_and_name_it(tmp_path, capsys):
     assert f"skipped {results / 'runs/20261201T130000Z-ddddddd' / RUN_JSON}: JSONDecodeError" in err
     assert f"skipped {results / 'runs/slurm-x/out.csv'}: UnicodeDecodeError" in err
     c = update(results, tmp_path / "history", tmp_path)
+    assert f"skipped {results / 'runs/regress/run-1.csv'}: the regression check's verdict left out" in (
+        capsys.readouterr().err
+    )
     notes = "\n".join(c.notes)
     for bad in (
         "slurm-x/out.csv",

@@ -30,6 +30,7 @@ from pathlib import Path
 import pandas as pd
 
 from ...inputs.load import is_companion
+from ...inputs.run_json import skipped
 from ...inputs.schema import BUILD_IDENTITY, KEY_COLUMNS, ContractError, Results, parse_params, read_csv
 from ...mapping.selection import label_of
 from .regress import ERROR_COUNTS, EXACT_COUNTS, RENDER_SETTING_COLUMNS, embree_ratios
@@ -334,14 +335,21 @@ def latest_verdict(results: Path) -> Verdict | None:
     if not reports:
         return None
     report = reports[-1]
-    verdict = verdict_of_report(report.read_text())
     run = d / f"run-{report.stem.split('-')[-1]}.csv"
-    if verdict is None or not run.is_file():
+    try:
+        text = report.read_text()
+        verdict = verdict_of_report(text)
+        if verdict is None or not run.is_file():
+            return None
+        rows = pd.read_csv(
+            run, dtype=str, keep_default_na=False, usecols=["git_sha", "git_dirty", "timestamp"]
+        )
+        sha = rows["git_sha"].iloc[0]
+        commit = sha[:7] + ("+dirty" if rows["git_dirty"].iloc[0] == "true" else "")
+    except (OSError, ValueError, KeyError, IndexError) as e:  # a cut or header-only run, bytes no text
+        skipped(run, f"the regression check's verdict left out: {type(e).__name__}: {e}")
         return None
-    rows = pd.read_csv(run, dtype=str, keep_default_na=False, usecols=["git_sha", "git_dirty", "timestamp"])
-    sha = rows["git_sha"].iloc[0]
-    commit = sha[:7] + ("+dirty" if rows["git_dirty"].iloc[0] == "true" else "")
-    return Verdict(verdict, commit, rows["timestamp"].max(), report, report.read_text())
+    return Verdict(verdict, commit, rows["timestamp"].max(), report, text)
 
 
 def verdict_history(latest: Verdict | None, store: Path) -> pd.DataFrame:
