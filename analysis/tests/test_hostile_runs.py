@@ -12,11 +12,13 @@ from pathlib import Path
 
 import pytest
 from synthetic import BVH, row, write_csv
+from test_reproduce import ACCELBENCH, NOW, tiny_job
 
 from accelbench_analysis.inputs.run_json import read_run_json
 from accelbench_analysis.outputs.ci.history import update
 from accelbench_analysis.outputs.pages.markdown_html import confined, to_html
 from accelbench_analysis.outputs.pages.runs_page import runs_page_html
+from accelbench_analysis.reproduce.job import reproduce
 from accelbench_analysis.reproduce.runs import RUN_JSON, ReproduceError, prepare_into
 
 JOB = {"configs": ["table4.yaml"], "tag": ""}
@@ -170,3 +172,28 @@ def test_the_page_writer_under_an_address_space_limit_writes_its_page(tmp_path):
     lines = [line for line in done.stderr.splitlines() if line.strip()]
     assert len(lines) == 1 and "interactive figures left undrawn" in lines[0] and "16.0 GiB" in lines[0]
     assert "<p>x</p>" in (tmp_path / "p.html").read_text()
+
+
+@pytest.mark.skipif(not ACCELBENCH.is_file(), reason=f"{ACCELBENCH} not built")
+def test_a_job_beside_corrupt_runs_measures_writes_its_pages_and_names_them(tmp_path, capfd):
+    """Other run folders with a run.json of the wrong shape, one of this very job with
+    fields of the wrong types, and a cut CSV: the job measures, writes the runs page, exits
+    0 and names each file it skipped."""
+    job = tiny_job(tmp_path)
+    runs = job.runs
+    bad = {
+        "20240101T000000Z-aaaaaaa": "[1]",
+        "20240101T000001Z-bbbbbbb": json.dumps(
+            {"job": {"configs": ["tiny.yaml", "second.yaml"], "tag": ""}, "provenance": [], "continued": 3}
+        ),
+    }
+    for name, text in bad.items():
+        (runs / name / "csv").mkdir(parents=True)
+        (runs / name / RUN_JSON).write_text(text)
+    (runs / "20240101T000001Z-bbbbbbb" / "csv" / "tiny.csv").write_bytes(b"config,combo\n\xff\xfe")
+    rc, run_dir = reproduce(job, NOW)
+    assert rc == 0 and run_dir.name not in bad
+    err = capfd.readouterr().err
+    assert f"skipped {runs / '20240101T000000Z-aaaaaaa' / RUN_JSON}: a JSON list, not an object" in err
+    assert "another build or machine" in err  # the unfinished run of this job: provenance unknown
+    assert run_dir.name in (runs.parent / "index.html").read_text()
