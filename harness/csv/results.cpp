@@ -727,7 +727,10 @@ size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
         if (reps) {
             // Written first, as a run writes a combination's repetitions before its row.
             if (!fs::path(new_reps).parent_path().empty()) fs::create_directories(fs::path(new_reps).parent_path());
-            fs::copy_file(old_reps, new_reps);
+            // Over the empty file the lock made (checked absent before), nothing else.
+            fs::copy_file(old_reps, new_reps, fs::copy_options::overwrite_existing);
+        } else {
+            fs::remove(new_reps);  // the empty file the lock made: there are no repetitions
         }
         write_parts(new_csv, {CsvData{header, rows, 0, false}});
         // Without a record beside OLD none is written; nothing beside NEW is removed (none

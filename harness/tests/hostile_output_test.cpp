@@ -1,9 +1,9 @@
 // Hostile inputs aimed at what reaches a results file or standard output: numbers printed
-// at the float limits, labels with control characters, ray sets too large together, rows
-// of another build under --resume, --take-column's sources, file names of companions, a
-// conversion beside files it did not write, and standard output that cannot be written.
-// Each is generated here; each must be a clear refusal or, for good input, accepted.
-#include <fcntl.h>
+// at the float limits, labels with control characters, ray sets too large together,
+// --take-column's sources, a conversion beside files it did not write, and standard
+// output that cannot be written. (Rows of another build under --resume, companion names
+// and merge --shards without the config: hostile_input_test.cpp.) Each is generated here;
+// each must be a clear refusal or, for good input, accepted.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -27,21 +27,6 @@ namespace {
 
 using namespace testing_util;
 namespace fs = std::filesystem;
-
-struct Outcome {
-    int code;
-    std::string err;
-};
-
-Outcome command(int (*cmd)(int, char**), std::vector<std::string> args) {
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    ::testing::internal::CaptureStderr();
-    ::testing::internal::CaptureStdout();
-    const int code = cmd(int(argv.size()), argv.data());
-    ::testing::internal::GetCapturedStdout();
-    return {code, ::testing::internal::GetCapturedStderr()};
-}
 
 bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
@@ -96,70 +81,6 @@ accelerators: [{name: embree}]
     EXPECT_EQ(e.issues().size(), 1u) << all_issues(e);
     EXPECT_TRUE(contains(all_issues(e), "ray_sets: the ray sets together hold 4294967296 bytes")) << all_issues(e);
     EXPECT_TRUE(contains(all_issues(e), "ao 1879048192")) << all_issues(e);
-}
-
-class HostileRunTest : public ::testing::Test {
-protected:
-    TempDir dir{"accelbench-hostile-output-"};
-    std::string config, out;
-    void SetUp() override {
-        write_triangle_case(dir.path());
-        config = write_file(dir.path(), "tiny.yaml", R"(name: tiny
-repetitions: 2
-warmup: 0
-models:
-  - {path: tri.obj, rays: {file: tri.rays.csv}}
-accelerators:
-  - {name: brute_force}
-  - {name: bvh}
-)");
-        out = (dir.path() / "tiny.csv").string();
-    }
-    std::string path(const std::string& name) const { return (dir.path() / name).string(); }
-};
-
-// --resume appends only to rows of this build (the rule merge applies), or with --allow-mixed.
-TEST_F(HostileRunTest, ResumeRefusesRowsOfAnotherBuild) {
-    ASSERT_EQ(command(run_command, {config, "--out", out}).code, 0);
-    CsvData d = read_csv(out);
-    const size_t sha = size_t(std::find(d.header.begin(), d.header.end(), "build_type") - d.header.begin());
-    d.rows.pop_back();  // one combination left to do
-    std::string text = csv_line(d.header);
-    for (auto& r : d.rows) {
-        r[sha] = "Debug";
-        text += csv_line(r);
-    }
-    write_file(dir.path(), "tiny.csv", text);
-    const Outcome o = command(run_command, {config, "--out", out, "--resume"});
-    EXPECT_EQ(o.code, 2);
-    EXPECT_TRUE(contains(o.err, "column build_type differs")) << o.err;
-    EXPECT_TRUE(contains(o.err, "(this build)")) << o.err;
-    EXPECT_EQ(read_file(out), text);  // nothing appended
-    EXPECT_EQ(command(run_command, {config, "--out", out, "--resume", "--allow-mixed"}).code, 0);
-    EXPECT_EQ(read_csv(out).rows.size(), 2u);
-}
-
-// A results file named like a companion would be written, then skipped by every reader.
-TEST_F(HostileRunTest, AResultsFileNamedLikeACompanionIsRefused) {
-    for (const char* name : {"x.reps.csv", "x.inputs.csv"}) {
-        const Outcome o = command(run_command, {config, "--out", path(name)});
-        EXPECT_EQ(o.code, 2) << name;
-        EXPECT_TRUE(contains(o.err, "the name of a results file's companion")) << o.err;
-        EXPECT_FALSE(fs::exists(path(name)));
-    }
-    ASSERT_EQ(command(run_command, {config, "--out", out}).code, 0);
-    const Outcome m = command(merge_command, {path("m.reps.csv"), out});
-    EXPECT_EQ(m.code, 2);
-    EXPECT_TRUE(contains(m.err, "ends in .reps.csv")) << m.err;
-    EXPECT_FALSE(fs::exists(path("m.reps.csv")));
-}
-
-TEST_F(HostileRunTest, ShardsWithoutTheConfigAreRefused) {
-    ASSERT_EQ(command(run_command, {config, "--out", out}).code, 0);
-    const Outcome o = command(merge_command, {"--shards", "2", path("m.csv"), out});
-    EXPECT_EQ(o.code, 2);
-    EXPECT_TRUE(contains(o.err, "--shards 2 needs --config")) << o.err;
-    EXPECT_FALSE(fs::exists(path("m.csv")));
 }
 
 // --take-column: what it takes is declared, numbers only, from whole files, and the output
@@ -222,7 +143,8 @@ TEST(HostileOutputTest, ConvertCsvTouchesNoFileItDidNotWrite) {
     EXPECT_FALSE(fs::exists(new_csv));
     fs::remove(record);
     EXPECT_EQ(convert_results(old_csv, new_csv), 1u);
-    EXPECT_FALSE(fs::exists(record));  // OLD has no record: none is made
+    EXPECT_FALSE(fs::exists(record));                         // OLD has no record: none is made
+    EXPECT_FALSE(fs::exists((dir.path() / "new.reps.csv")));  // nor repetitions
 }
 
 // The exit status of a command whose standard output did not arrive, in a child process
