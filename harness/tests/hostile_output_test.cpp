@@ -4,6 +4,7 @@
 // output that cannot be written. (Rows of another build under --resume, companion names
 // and merge --shards without the config: hostile_input_test.cpp.) Each is generated here;
 // each must be a clear refusal or, for good input, accepted.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
