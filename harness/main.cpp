@@ -66,10 +66,10 @@ int main(int argc, char** argv) {
     }
     if (argc < 2) return usage(stderr);
     if (!std::strcmp(argv[1], "-h") || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "help"))
-        return usage(stdout);
-    if (!std::strcmp(argv[1], "--version")) return version();
+        return accelbench::with_output_checked("help", usage(stdout));
+    if (!std::strcmp(argv[1], "--version")) return accelbench::with_output_checked("--version", version());
     for (const auto& c : kCommands)
-        if (!std::strcmp(argv[1], c.name)) return c.run(argc - 2, argv + 2);
+        if (!std::strcmp(argv[1], c.name)) return accelbench::with_output_checked(c.name, c.run(argc - 2, argv + 2));
     std::fprintf(stderr, "accelbench: unknown command '%s'\n", argv[1]);
     return usage(stderr);
 }

@@ -161,3 +161,53 @@ def test_the_ranking_and_the_claims_counts_are_on_the_first_screen(analysed_run)
     assert 0 < r.facts["ranking"] < r.facts["claims"] <= 1400, r.facts
     assert r.facts["sections"][:2] == ["Ranking against Embree", "The report's claims"]
     assert len(r.facts["sections"]) == len(set(r.facts["sections"]))  # no section twice
+
+
+# Markup in every label a run carries (model names, config names, messages): none of it may
+# run, add an element, load anything, or embed a file outside the run; the page's own
+# scripts (by CSP hash) still draw its figures.
+MARKUP = (
+    '<img src=x onerror="window.pwned=1"><script>window.pwned=2</script>'
+    '<b onclick="window.pwned=3">b</b>[secret](../../../secret.md)[deep](../../../../secret.md)'
+)
+HARMLESS = """(() => ({
+  pwned: window.pwned === undefined ? null : window.pwned,
+  scripts: document.querySelectorAll("script:not([type])").length,
+  handlers: document.querySelectorAll("[onerror],[onclick],[onload]").length,
+  bold: document.querySelectorAll("main b").length,
+  secret: document.body.innerText.includes("TOPSECRET"),
+  outside: Array.from(document.images).filter((i) => i.getAttribute("src") && !i.src.startsWith("data:")).length,
+  markup: document.body.innerText.includes("<script>window.pwned="),
+  charts: document.documentElement.dataset.charts,
+}))()"""
+
+
+def test_markup_in_every_label_runs_nothing_and_embeds_nothing_outside(tmp_path):
+    from synthetic import BVH, realistic_rows, row, write_csv
+
+    (tmp_path / "secret.md").write_text("# TOPSECRET\n\nnot the run's\n")
+    run = tmp_path / "results" / "runs" / "20240101T000000Z-0123456"
+    (run / "csv").mkdir(parents=True)
+    rows = realistic_rows(with_errors=False)
+    for r in rows:
+        r["config"] += MARKUP
+    for accel, params in (("bvh", BVH), ("embree", {"threads": "1"})):
+        rows.append(row(MARKUP, accel, params, build=0.1, render=0.2, nodes=9, config="table4" + MARKUP))
+    rows.append(row(MARKUP + "2", "bvh", BVH, status="error", message=MARKUP, config="table4" + MARKUP))
+    csv = write_csv(run / "csv" / "table4.csv", rows)
+    (run / "run.json").write_text(
+        '{"job": {"configs": ["x.yaml<script>window.pwned=4</script>"], "tag": ""}}'
+    )
+    assert main(["all", str(csv), "--out", str(run)]) == 0
+    assert MARKUP in (run / "REPORT.md").read_text() + "".join(
+        p.read_text() for p in (run / "tables").glob("*.md")
+    )
+    assert main(["history", "--results", str(tmp_path / "results"), "--out", str(tmp_path / "h")]) == 0
+    for page in (run / "index.html", tmp_path / "h" / "index.html", tmp_path / "results" / "index.html"):
+        r = render(page, HARMLESS)
+        outside = [u for u in r.requests if not u.startswith(("file:", "data:"))]
+        assert outside == [] and not any(u.endswith("secret.md") for u in r.requests), (page, r.requests)
+        f = r.facts
+        assert f["pwned"] is None and f["handlers"] == 0 and f["bold"] == 0, (page, f)
+        assert not f["secret"] and f["outside"] == 0 and f["markup"], (page, f)
+        assert f["charts"] == "ready", (page, f)  # the hashed scripts ran: Vega drew its figures

@@ -1,7 +1,11 @@
 #include "commands/args.h"
+#include "commands/cli.h"
 
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
+#include <cstring>
+#include <iostream>
 #include <utility>
 
 #include "accelbench/base/params.h"
@@ -75,5 +79,15 @@ int usage_error(std::string_view command, std::string_view usage, std::string_vi
 int Args::error(const std::string& message) const { return usage_error(command_, usage_, message); }
 
 void Args::print_usage() const { std::printf("%s", usage_.c_str()); }
+
+int with_output_checked(const char* command, int status) {
+    std::cout.flush();
+    const bool failed = !std::cout.good() || std::fflush(stdout) != 0 || std::ferror(stdout);
+    if (!failed) return status;
+    const int err = errno;
+    std::fprintf(stderr, "accelbench %s: writing to standard output failed%s%s\n", command, err ? ": " : "",
+                 err ? std::strerror(err) : "");
+    return status == 0 ? 1 : status;
+}
 
 }  // namespace accelbench

@@ -37,6 +37,11 @@ int convert_csv_command(int argc, char** argv);
 // prints "accelbench COMMAND: plugin PATH: problem" and returns 2, the exit code.
 std::optional<int> load_plugins(const char* command, const std::vector<std::string>& paths);
 
+// A command's exit status `status`, or 1 (after one line on stderr) when what it wrote to
+// standard output did not all arrive: a full disk, or a closed pipe while SIGPIPE is
+// ignored (a listing cut short is no success). main.cpp passes every command's status here.
+int with_output_checked(const char* command, int status);
+
 // NAME (registry), PATH (a mesh file) or procedural:KIND[,k=v...], loaded the way the
 // harness loads a config's model (load_model: the registry's or procedural scene's own
 // camera and light when it has one, else the auto-fit defaults for the image's aspect).

@@ -20,16 +20,18 @@ const char* kMergeUsage =
     "usage: accelbench merge [--allow-mixed] [--config CONFIG.yaml [--shards N]] OUT.csv IN.csv...\n"
     "       accelbench merge [--allow-mixed] --take-column COLUMN OUT.csv IN.csv FROM.csv\n"
     "  joins result files (e.g. shards) and their .reps.csv files; refuses inputs whose\n"
-    "  provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa,\n"
-    "  embree_isa), config or record of inputs (NAME.inputs.csv: sha256 of the config, mesh\n"
+    "  build or machine (git_sha, git_dirty, compiler, build_type, isa, embree_version, cpu:\n"
+    "  the rule run --resume and the analysis share), config or record of inputs\n"
+    "  (NAME.inputs.csv: sha256 of the config, mesh\n"
     "  and ray files) differs, or that have no such record, unless --allow-mixed; a\n"
     "  combination present in two inputs;\n"
     "  and an input a run is still writing (it holds the file's lock).\n"
     "  --config: also refuses (exit 3, nothing written) unless every combination of CONFIG\n"
     "  is in an input, naming the missing ones by their shard of N (--shards, default 1),\n"
     "  and refuses rows that are not of CONFIG or measured from other contents than it has now\n"
-    "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (e.g. the\n"
-    "  instructions of a callgrind run added to a timed run of the same config)\n";
+    "  --take-column: OUT is IN with COLUMN's values taken from FROM by combo_id (the\n"
+    "  instructions of a callgrind run added to a timed run of the same config); COLUMN is one\n"
+    "  of: instructions; FROM's values must be numbers, neither file may end in a cut row\n";
 
 // OUT.csv is IN.csv with `column` taken from FROM.csv.
 int take_one_column(const std::vector<std::string>& files, const std::string& column, bool allow_mixed) {
@@ -71,6 +73,12 @@ int merge_command(int argc, char** argv) {
         }
     }
     if (files.size() < 2) return args.error("give OUT.csv and at least one IN.csv");
+    // The shard count only means something against a config's combinations: without one,
+    // nothing would be checked and the merge would look checked.
+    if (!shards_text.empty() && config_path.empty())
+        return args.error("--shards " + shards_text + " needs --config CONFIG.yaml (the combinations to check)");
+    if (!take.empty() && (!config_path.empty() || !shards_text.empty()))
+        return args.error("--take-column does not check shards: give it without --config and --shards");
     if (!take.empty()) return take_one_column(files, take, allow_mixed);
     if (!config_path.empty())
         if (int rc = check_shards_complete(config_path, shards, {files.begin() + 1, files.end()}, allow_mixed); rc != 0)

@@ -32,6 +32,8 @@ const char* kRunUsage =
     "                        beside it in FILE minus .csv plus .reps.csv\n"
     "  --resume              append to the output file, skipping combinations already in it (without\n"
     "                        --out: the newest results/runs/<name>-*.csv of this shard)\n"
+    "  --allow-mixed         with --resume: append even to rows another build or machine measured (they\n"
+    "                        differ in git_sha, git_dirty, compiler, build_type, isa, embree_version or cpu)\n"
     "  --shard I/N           run only shard I (0-based) of N, chosen by a hash of each combination;\n"
     "                        default from SLURM_ARRAY_TASK_ID / SLURM_ARRAY_TASK_COUNT\n"
     "  --plugin PATH         load the structures of a plugin (accelbench_plugin.h); repeatable, like\n"
@@ -107,6 +109,7 @@ int run_command(int argc, char** argv) {
         if (args.flag("--dry-run")) opt.dry_run = true;
         else if (args.flag("--dry-run=json")) opt.dry_run = opt.dry_run_json = true;
         else if (args.flag("--resume")) opt.resume = true;
+        else if (args.flag("--allow-mixed")) opt.allow_mixed = true;
         else if (args.flag("--in-process")) opt.in_process = true;
         else if (args.flag("--show-repetitions")) opt.show_repetitions = true;
         else if (args.value("--out", opt.out) || args.value("--instructions", opt.callgrind_out)) return;

@@ -125,6 +125,9 @@ inline constexpr uint64_t kMaxReferenceRays = uint64_t(1) << 25;  // 33,554,432:
 // A ray set's rays and answers: the ray, the reference's hit and the measurement's.
 inline constexpr uint64_t kRaySetBytesPerRay = sizeof(Ray) + 2 * sizeof(Hit);  // 64
 inline constexpr uint64_t kMaxRaySetBytes = uint64_t(1) << 31;                 // 2 GiB: 33,554,432 rays
+// Every set of a model is held at once: one budget for all of them together, the same size
+// as one set's, so the largest set allowed alone is also the most held together.
+inline constexpr uint64_t kMaxRaySetsTotalBytes = kMaxRaySetBytes;
 
 // Loads the structure plugin at `path` (`--plugin PATH`, `plugins:`) into the accelerator
 // registry, with its file's SHA-256 for the rows' provenance. Throws std::runtime_error,

@@ -267,6 +267,9 @@ void check_models(ConfigReader& r) {
     std::map<std::string, size_t> by_key, by_label;
     for (size_t i = 0; i < r.cfg.models.size(); ++i) {
         const ModelSpec& b = r.cfg.models[i];
+        // Every label, given or made from a path, a case or parameters: checked once here.
+        if (const std::string why = control_character_problem(b.label); !why.empty())
+            r.c.issues.push_back({b.mark, b.key_path, "the model's label " + json_quoted(b.label) + " " + why});
         const auto [key, new_key] = by_key.emplace(b.key, i);
         const auto [label, new_label] = by_label.emplace(b.label, i);
         if (!new_key) {

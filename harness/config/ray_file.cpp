@@ -116,7 +116,7 @@ RayFileContents read_ray_file(const std::string& path, const std::string& displa
                 ok = false;
                 break;
             }
-            v[i] = float(d);
+            v[i] = literal ? float(d) : round_to_float(d);
         }
         if (!ok) continue;
         Ray r;

@@ -11,6 +11,7 @@
 #include "accelbench/base/unknown_name.h"
 #include "config/config_sections.h"
 #include "config/ray_file.h"
+#include "util/text.h"
 
 namespace fs = std::filesystem;
 
@@ -42,8 +43,9 @@ void read_threads(ConfigReader& r, const YAML::Node& n, const std::string& path)
 }
 
 // Each set's rays and the reference's answers for them (and the measurement's second
-// counting trace) are held in memory: a set larger than kMaxRaySetBytes is refused
-// here, naming the key that makes it, not as std::bad_alloc in its rows.
+// counting trace) are held in memory, every set of a model at once: a set larger than
+// kMaxRaySetBytes, or sets that are larger together, are refused here, naming the keys
+// that make them, before any set is made (not as std::bad_alloc in a model's loading).
 void check_ray_set_bytes(ConfigReader& r, const RaySetsSpec& spec, const Fields& f, const YAML::Node& n) {
     const RenderSettings& render = r.cfg.render;
     const uint64_t primary = uint64_t(render.width) * uint64_t(render.height) * uint64_t(render.spp);
@@ -52,6 +54,9 @@ void check_ray_set_bytes(ConfigReader& r, const RaySetsSpec& spec, const Fields&
             if (e->value.IsMap() && e->value[key]) return {e->value[key], f.child(group) + "." + key};
         return {n, "ray_sets"};
     };
+    uint64_t total = 0;
+    std::string shares;  // "name N bytes, ..." of every set
+    bool each_fits = true;
     for (RaySetKind kind : spec.sets) {
         uint64_t rays = primary;
         std::string why = "render: width x height x spp = " + std::to_string(primary) + " primary rays";
@@ -72,13 +77,22 @@ void check_ray_set_bytes(ConfigReader& r, const RaySetsSpec& spec, const Fields&
             why = "ray_sets.random.rays = " + std::to_string(rays) + " rays";
         }
         const uint64_t bytes = rays * kRaySetBytesPerRay;
+        total += bytes;
+        append_item(shares, ", ", ray_set_name(kind), " ", std::to_string(bytes));
         if (bytes <= kMaxRaySetBytes) continue;
+        each_fits = false;
         r.c.error(at.first, at.second,
                   "ray set '" + std::string(ray_set_name(kind)) + "': " + why + ", " + std::to_string(bytes) +
                       " bytes with their answers (" + std::to_string(kRaySetBytesPerRay) + " a ray); at most " +
                       std::to_string(kMaxRaySetBytes) + " bytes (" +
                       std::to_string(kMaxRaySetBytes / kRaySetBytesPerRay) + " rays) a set");
     }
+    if (each_fits && total > kMaxRaySetsTotalBytes)
+        r.c.error(n, "ray_sets",
+                  "the ray sets together hold " + std::to_string(total) + " bytes with their answers (" + shares +
+                      "), all in memory at once; at most " + std::to_string(kMaxRaySetsTotalBytes) +
+                      " bytes for every set of a model: fewer sets, or fewer rays (render size, ao.samples, "
+                      "diffuse.bounces, random.rays)");
 }
 
 }  // namespace

@@ -84,6 +84,21 @@ std::optional<std::string> embree_isa_of_rows(const std::vector<std::string>& ma
     return EmbreeAccel::kernel_isa(max_isas.front());
 }
 
+const std::vector<std::string>& build_identity_columns() {
+    static const std::vector<std::string> columns = {"git_sha",    "git_dirty", "compiler",
+                                                     "build_type", "isa",       "embree_version"};
+    return columns;
+}
+
+const std::vector<std::string>& mixing_columns() {
+    static const std::vector<std::string> columns = [] {
+        std::vector<std::string> c = build_identity_columns();
+        c.push_back("cpu");
+        return c;
+    }();
+    return columns;
+}
+
 const Provenance& provenance() {
     static const Provenance p = [] {
         Provenance p;

@@ -33,6 +33,17 @@ struct Provenance {
 // change them.
 const Provenance& provenance();
 
+// A build's identity: the provenance columns that name the binary that measured a row
+// (git_sha, git_dirty, compiler, build_type, isa, embree_version). The one list.
+const std::vector<std::string>& build_identity_columns();
+
+// The one rule for mixing: rows may share a file or a median (merge, merge --take-column,
+// run --resume, history, the analysis) only when these agree: the build's identity and the
+// machine (cpu). Not embree_isa: that is Embree's run-time choice on this build and CPU
+// (under valgrind, which a --take-column source runs under, it sees no AVX-512), nor
+// render_threads and timestamp, which are per run. --allow-mixed allows it everywhere.
+const std::vector<std::string>& mixing_columns();
+
 // The provenance columns of every results CSV row (results.h's provenance_columns(), in
 // that order) with this process's values; `threads` and `timestamp` are per run, not facts
 // of the build. The rows and `accelbench provenance` both print this one list, so a driver

@@ -10,8 +10,10 @@
 
 #include "accelbench/accel/registry.h"
 #include "csv/csv.h"
+#include "csv/provenance.h"
 #include "csv/run_inputs.h"
 #include "util/output_lock.h"
+#include "util/text.h"
 
 namespace fs = std::filesystem;
 
@@ -296,6 +298,19 @@ const std::vector<std::string>& provenance_columns() {
     return cols;
 }
 
+const std::vector<std::string>& companion_suffixes() {
+    static const std::vector<std::string> suffixes = {".reps.csv", ".inputs.csv"};
+    return suffixes;
+}
+
+void require_results_name(const std::string& path) {
+    for (const std::string& suffix : companion_suffixes())
+        if (path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0)
+            throw std::runtime_error("'" + path + "' ends in " + suffix +
+                                     ", the name of a results file's companion: readers would take it for one "
+                                     "and never read it as results; choose a name ending in plain .csv");
+}
+
 std::string repetitions_path(const std::string& results_path) {
     fs::path p(results_path);
     if (p.extension() == ".csv") p.replace_extension();
@@ -376,25 +391,36 @@ void filter_rows(const std::string& path, const std::set<std::string>& keep) {
     fs::rename(tmp, path);
 }
 
-// Refuses files from different builds or machines: their rows are not comparable. `skip`
-// names a column not compared.
-void check_same_provenance(const std::vector<CsvData>& data, const std::vector<std::string>& paths,
-                           const std::string& skip = "") {
-    for (const auto& col : provenance_columns()) {
-        if (col == skip) continue;
-        const size_t c = column_index(data.front(), col, paths.front());
-        std::map<std::string, std::string> seen;  // value -> first file with it
-        for (size_t f = 0; f < data.size(); ++f)
-            for (const auto& r : data[f].rows) seen.emplace(r[c], paths[f]);
+}  // namespace
+
+void check_same_build(const std::vector<CsvData>& data, const std::vector<std::string>& names) {
+    for (const auto& col : mixing_columns()) {
+        std::map<std::string, std::string> seen;  // value -> the first file with it
+        for (size_t f = 0; f < data.size(); ++f) {
+            const size_t c = column_index(data[f], col, names[f]);
+            for (const auto& r : data[f].rows) seen.emplace(r[c], names[f]);
+        }
         if (seen.size() > 1) {
             std::string values;
             for (const auto& [v, file] : seen) values += "\n  '" + v + "' (" + file + ")";
-            throw std::runtime_error("mixed provenance: column " + col + " differs between the inputs:" + values +
-                                     "\nresults from different builds or machines are not comparable; "
-                                     "pass --allow-mixed to merge them anyway");
+            throw std::runtime_error("mixed builds: column " + col + " differs:" + values +
+                                     "\nrows of different builds or machines are not comparable; "
+                                     "pass --allow-mixed to mix them anyway");
         }
     }
 }
+
+CsvData this_build_rows() {
+    CsvData d;
+    d.rows.emplace_back();
+    for (const auto& [name, value] : provenance_values()) {
+        d.header.push_back(name);
+        d.rows.back().push_back(value);
+    }
+    return d;
+}
+
+namespace {
 
 // Writes the parts' rows under the first part's header, through a temporary file.
 void write_parts(const std::string& path, const std::vector<CsvData>& parts) {
@@ -495,6 +521,7 @@ void check_no_orphans(const CsvData& results, const std::string& results_path, c
 // left from an earlier file is removed, never left beside the new OUT.
 void write_output(const std::string& out, const std::vector<CsvData>& results, const std::vector<CsvData>* reps,
                   const std::optional<RunInputs>& inputs) {
+    require_results_name(out);
     const std::string reps_out = repetitions_path(out);
     require_inputs_path_free(out);  // before the locks make OUT
     OutputLock lock({out, reps_out});
@@ -572,7 +599,7 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
     const CsvData& first = data.front();
     const size_t id = column_index(first, "combo_id", inputs.front());
     if (!allow_mixed) {
-        check_same_provenance(data, inputs);
+        check_same_build(data, inputs);
         check_same_config(data, inputs);
     }
     std::map<std::string, std::string> owner;  // combo_id -> file
@@ -597,22 +624,44 @@ size_t merge_results(const std::string& out, const std::vector<std::string>& inp
     return owner.size();
 }
 
+const std::vector<std::string>& takeable_columns() {
+    // Counted in a run of its own (callgrind's instructions): the only column another run of
+    // the same config measures better. A status, a time or a count taken alone would leave
+    // a row whose columns contradict each other.
+    static const std::vector<std::string> columns = {"instructions"};
+    return columns;
+}
+
 size_t take_column(const std::string& out, const std::string& in, const std::string& from, const std::string& column,
                    bool allow_mixed) {
-    if (fs::exists(out) && fs::exists(in) && fs::equivalent(out, in))
-        throw std::runtime_error("the output '" + out + "' is also an input");
+    const auto& takeable = takeable_columns();
+    if (std::find(takeable.begin(), takeable.end(), column) == takeable.end()) {
+        std::string names;
+        for (const auto& c : takeable) append_item(names, ", ", c);
+        throw std::runtime_error("column '" + column + "' cannot be taken from another run (takeable: " + names +
+                                 "): the row's other columns would no longer agree with it");
+    }
+    for (const auto& [source, role] : {std::pair{in, "IN"}, std::pair{from, "FROM"}})
+        if (fs::exists(out) && fs::exists(source) && fs::equivalent(out, source))
+            throw std::runtime_error("the output '" + out + "' is also the input " + role + " ('" + source +
+                                     "'): write to another file");
     const InputLock locked = lock_inputs({in, from});
     const std::optional<RunInputs> shared = common_inputs({in, from}, allow_mixed);
     std::vector<CsvData> data = {read_csv(in), read_csv(from)};
-    for (size_t f = 0; f < 2; ++f)
-        if (auto m = old_header_message(f == 0 ? in : from, data[f].header); !m.empty()) throw std::runtime_error(m);
+    for (size_t f = 0; f < 2; ++f) {
+        const std::string& path = f == 0 ? in : from;
+        if (auto m = old_header_message(path, data[f].header); !m.empty()) throw std::runtime_error(m);
+        // As merge: a cut last row is the run's to finish, not ours to drop while its
+        // repetitions stay in the copy.
+        if (data[f].incomplete_tail)
+            throw std::runtime_error(path + ": the last line is incomplete (an interrupted run?); resume it first");
+    }
     if (auto m = header_mismatch(from, data[1].header, data[0].header); !m.empty())
         throw std::runtime_error(m + " (compared with " + in + ")");
+    check_result_rows(data[0], in);
+    check_result_rows(data[1], from);  // the taken values among them: numbers or empty
     if (!allow_mixed) {
-        // Embree picks its kernels when it runs: under valgrind (the callgrind run FROM usually
-        // is) it sees no AVX-512 and runs AVX2 on the same build and machine. The counted
-        // column comes from FROM; every other column, embree_isa too, stays IN's.
-        check_same_provenance(data, {in, from}, "embree_isa");
+        check_same_build(data, {in, from});
         check_same_config(data, {in, from});
     }
     const size_t id = column_index(data[0], "combo_id", in), col = column_index(data[0], column, in);
@@ -627,7 +676,10 @@ size_t take_column(const std::string& out, const std::string& in, const std::str
             ++taken;
         }
     std::vector<CsvData> reps;
-    if (fs::exists(repetitions_path(in))) reps.push_back(read_csv(repetitions_path(in)));
+    if (fs::exists(repetitions_path(in))) {
+        reps.push_back(read_csv(repetitions_path(in)));
+        check_no_orphans(data[0], in, reps.back(), repetitions_path(in));
+    }
     write_output(out, {data[0]}, reps.empty() ? nullptr : &reps, shared);
     return taken;
 }
@@ -635,10 +687,11 @@ size_t take_column(const std::string& out, const std::string& in, const std::str
 size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
     if (fs::exists(new_csv) && fs::equivalent(old_csv, new_csv))
         throw std::runtime_error("the output '" + new_csv + "' is the input: the check needs the old file");
-    // Never over another file: NEW may be a run's results (or their repetitions) that a
-    // conversion would replace.
-    for (const std::string& out : {new_csv, repetitions_path(new_csv)})
-        if (fs::exists(out))
+    require_results_name(new_csv);
+    // Never over another file: NEW and its companions may be a run's results, repetitions
+    // or record of inputs that a conversion would replace (or, for the record, remove).
+    for (const std::string& out : {new_csv, repetitions_path(new_csv), inputs_path(new_csv)})
+        if (fs::exists(fs::symlink_status(out)))
             throw std::runtime_error("the output '" + out + "' exists: choose another NEW, or remove it");
     const CsvData old = read_csv(old_csv);
     if (old.incomplete_tail)
@@ -685,13 +738,15 @@ size_t convert_results(const std::string& old_csv, const std::string& new_csv) {
         if (reps) {
             // Written first, as a run writes a combination's repetitions before its row.
             if (!fs::path(new_reps).parent_path().empty()) fs::create_directories(fs::path(new_reps).parent_path());
+            // Over the empty file the lock made (checked absent before), nothing else.
             fs::copy_file(old_reps, new_reps, fs::copy_options::overwrite_existing);
         } else {
-            fs::remove(new_reps);
+            fs::remove(new_reps);  // the empty file the lock made: there are no repetitions
         }
         write_parts(new_csv, {CsvData{header, rows, 0, false}});
+        // Without a record beside OLD none is written; nothing beside NEW is removed (none
+        // was there: checked above), so no file this command did not write is touched.
         if (const auto inputs = read_inputs(old_csv)) write_inputs(new_csv, *inputs);
-        else remove_inputs(new_csv);
     }
 
     // The check: the file as a reader sees it, against the old one cell by cell.

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "csv/csv.h"
+
 namespace accelbench {
 
 using Row = std::map<std::string, std::string>;
@@ -80,6 +82,21 @@ std::vector<std::string> repetition_columns();
 // The provenance columns that must agree for rows to be compared or merged.
 const std::vector<std::string>& provenance_columns();
 
+// The endings of a results file's companions (".reps.csv", ".inputs.csv"): the files beside
+// it that readers of a results folder skip. The one list of them.
+const std::vector<std::string>& companion_suffixes();
+// Throws std::runtime_error for a results file name that ends like a companion: written,
+// it would never be read back as results. Every writer of a results file calls it first.
+void require_results_name(const std::string& path);
+
+// The one rule for mixing (provenance.h's mixing_columns): throws std::runtime_error naming
+// the column and each value with its file unless every row of every `data` agrees on each
+// (names[i] names data[i]). merge, --take-column and run --resume call it; --allow-mixed
+// skips it in each.
+void check_same_build(const std::vector<CsvData>& data, const std::vector<std::string>& names);
+// One row of this process's provenance columns, for check_same_build against a file.
+CsvData this_build_rows();
+
 // "<results minus .csv>.reps.csv"
 std::string repetitions_path(const std::string& results_path);
 
@@ -113,11 +130,16 @@ std::set<std::string> prepare_resume(const std::string& results_path, const std:
 // same combo_id twice, and mixed provenance unless allow_mixed. Returns the row count.
 size_t merge_results(const std::string& out, const std::vector<std::string>& inputs, bool allow_mixed);
 
+// The columns --take-column may take (instructions): counted in a run of their own, they
+// leave no other column of the row contradicting them.
+const std::vector<std::string>& takeable_columns();
+
 // Writes `in` to `out` (and its .reps.csv beside, when there is one) with `column` taken
 // from `from`, matched by combo_id: e.g. the instructions of a callgrind run added to a
 // timed run of the same config. Rows of `in` without a match in `from` keep their value.
-// Refuses, with std::runtime_error: different headers, a column that is not in them,
-// mixed provenance (unless allow_mixed) and a combo_id twice in `from`. Returns the
+// Refuses, with std::runtime_error: a column not in takeable_columns(), OUT equal to IN or
+// FROM, a cut last row in either, a value that is no number, different headers, mixed
+// builds (check_same_build, unless allow_mixed) and a combo_id twice in `from`. Returns the
 // number of rows that took a value.
 size_t take_column(const std::string& out, const std::string& in, const std::string& from, const std::string& column,
                    bool allow_mixed);

@@ -265,6 +265,7 @@ void choose_output(RunPlan& plan, const RunOptions& options) {
     if (plan.out.empty())
         plan.out =
             runs_dir + "/" + plan.config.name + "-" + utc_now("%Y%m%d-%H%M%S") + shard_suffix(plan.shard) + ".csv";
+    require_results_name(plan.out);
     const std::string reps = repetitions_path(plan.out);
     require_regular_file_or_absent(plan.out, "--out (the results CSV)");
     require_regular_file_or_absent(reps, "the repetitions file beside --out");
@@ -295,6 +296,8 @@ void choose_output(RunPlan& plan, const RunOptions& options) {
                                      " has now (" + d +
                                      "): continuing it would mix rows of different contents under the same "
                                      "names; choose another --out");
+        // Rows of another build (or machine) would mix with this one's in every median.
+        if (!options.allow_mixed) check_same_build({read_csv(plan.out), this_build_rows()}, {plan.out, "this build"});
     }
     if (options.resume) plan.done = prepare_resume(plan.out, result_columns(), repetition_columns());
     write_inputs(plan.out, plan.inputs);

@@ -20,6 +20,7 @@ namespace accelbench {
 struct RunOptions {
     std::string config_path;
     bool dry_run = false, dry_run_json = false, resume = false, in_process = false, show_repetitions = false;
+    bool allow_mixed = false;  // --resume may append to rows of another build (check_same_build)
     std::string out, json_out, callgrind_out;
     std::optional<Shard> shard;
     std::vector<std::string> benchmark_args;

@@ -3,7 +3,8 @@
 // whose reference cannot fit, a second YAML document, long model lists, repetitions left
 // without their results, and results files that merge must refuse. Every one must be a
 // clear refusal (exit 2 and a message naming the cause), never a crash, a hang or data
-// of two runs mixed.
+// of two runs mixed: rows of another build under --resume, a results file named like a
+// companion, and merge --shards without the config included.
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -42,6 +43,7 @@ Outcome run(std::vector<std::string> args, bool merge = false) {
 }
 
 size_t data_rows(const std::string& path) { return read_csv(path).rows.size(); }
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 class HostileInputTest : public ::testing::Test {
 protected:
@@ -465,6 +467,50 @@ accelerators: [{name: bvh}]
     const auto rows = statuses(path("cut.csv"));
     ASSERT_EQ(rows.size(), 1u);  // tri.obj's row only
     EXPECT_EQ(rows[0].first, "ok") << rows[0].second;
+}
+
+// --resume appends only to rows of this build (the rule merge applies), or with --allow-mixed.
+TEST_F(HostileInputTest, ResumeRefusesRowsOfAnotherBuild) {
+    ASSERT_EQ(run({config, "--out", out}).code, 0);
+    CsvData d = read_csv(out);
+    const size_t sha = size_t(std::find(d.header.begin(), d.header.end(), "build_type") - d.header.begin());
+    d.rows.pop_back();  // one combination left to do
+    std::string text = csv_line(d.header);
+    for (auto& r : d.rows) {
+        r[sha] = "Debug";
+        text += csv_line(r);
+    }
+    write_file(dir.path(), "tiny.csv", text);
+    const Outcome o = run({config, "--out", out, "--resume"});
+    EXPECT_EQ(o.code, 2);
+    EXPECT_TRUE(contains(o.err, "column build_type differs")) << o.err;
+    EXPECT_TRUE(contains(o.err, "(this build)")) << o.err;
+    EXPECT_EQ(read_file(out), text);  // nothing appended
+    EXPECT_EQ(run({config, "--out", out, "--resume", "--allow-mixed"}).code, 0);
+    EXPECT_EQ(read_csv(out).rows.size(), 2u);
+}
+
+// A results file named like a companion would be written, then skipped by every reader.
+TEST_F(HostileInputTest, AResultsFileNamedLikeACompanionIsRefused) {
+    for (const char* name : {"x.reps.csv", "x.inputs.csv"}) {
+        const Outcome o = run({config, "--out", path(name)});
+        EXPECT_EQ(o.code, 2) << name;
+        EXPECT_TRUE(contains(o.err, "the name of a results file's companion")) << o.err;
+        EXPECT_FALSE(fs::exists(path(name)));
+    }
+    ASSERT_EQ(run({config, "--out", out}).code, 0);
+    const Outcome m = run({path("m.reps.csv"), out}, true);
+    EXPECT_EQ(m.code, 2);
+    EXPECT_TRUE(contains(m.err, "ends in .reps.csv")) << m.err;
+    EXPECT_FALSE(fs::exists(path("m.reps.csv")));
+}
+
+TEST_F(HostileInputTest, ShardsWithoutTheConfigAreRefused) {
+    ASSERT_EQ(run({config, "--out", out}).code, 0);
+    const Outcome o = run({"--shards", "2", path("m.csv"), out}, true);
+    EXPECT_EQ(o.code, 2);
+    EXPECT_TRUE(contains(o.err, "--shards 2 needs --config")) << o.err;
+    EXPECT_FALSE(fs::exists(path("m.csv")));
 }
 
 }  // namespace

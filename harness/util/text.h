@@ -61,3 +61,22 @@ inline std::string json_quoted(std::string_view text) {
 }
 
 }  // namespace accelbench
+
+namespace accelbench {
+
+// Why `text` cannot be a label (a model's label, a config's name or description), or "":
+// a control character (U+0000-U+001F, U+007F), which would break the one-line forms a label
+// takes (a CSV cell, the wire between processes, a terminal line, a page's text).
+inline std::string control_character_problem(std::string_view text) {
+    for (size_t i = 0; i < text.size(); ++i)
+        if (const auto ch = static_cast<unsigned char>(text[i]); ch < 0x20 || ch == 0x7f) {
+            char buf[96];
+            std::snprintf(buf, sizeof buf,
+                          "holds the control character U+%04X at byte %zu: labels are one line of text", unsigned(ch),
+                          i + 1);
+            return buf;
+        }
+    return "";
+}
+
+}  // namespace accelbench

@@ -124,6 +124,14 @@ RENDER_SETTING_COLUMNS = [
 # Settings that are counts: where a row has one, a whole number of at least 1.
 COUNT_SETTING_COLUMNS = ["render_threads", "image_width", "image_height", "spp"]
 
+# A build's identity: the columns naming the binary that measured a row, as the harness's
+# build_identity_columns() (harness/csv/provenance.h). History keeps builds apart by them:
+# two builds of one commit (a Debug and a Release, two compilers) are two series.
+BUILD_IDENTITY = ["git_sha", "git_dirty", "compiler", "build_type", "isa", "embree_version"]
+# The one rule for mixing, as the harness's mixing_columns(): rows may share a file or a
+# median (merge, --take-column, run --resume, the main job's resume) only when these agree.
+MIXING_COLUMNS = [*BUILD_IDENTITY, "cpu"]
+
 # Rows differing in any of these fields were not measured with the same code on the same
 # machine. `render_threads` and `timestamp` are per-run facts, not identity.
 PROVENANCE_IDENTITY = [

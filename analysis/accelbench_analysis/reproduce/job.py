@@ -44,6 +44,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from .. import commands
+from ..inputs import run_json
 from ..mapping.structures import use_accelbench
 from .runs import (
     RUN_JSON,
@@ -242,7 +243,7 @@ def start(job: Job, provenance: dict[str, str], inputs: dict, now: datetime) -> 
             "continued": [],
         }
     else:
-        meta["continued"].append(utc(now))
+        meta["continued"] = [*run_json.field(meta, "continued", list, []), utc(now)]
     write_run_json(run_dir, meta)
     return run_dir, meta, foreign
 

@@ -14,7 +14,9 @@ from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 
-RUN_JSON = "run.json"
+from ..inputs.run_json import RUN_JSON, field, read_run_json
+from ..inputs.schema import MIXING_COLUMNS
+
 RUN_NAME = re.compile(r"^\d{8}T\d{6}Z-[0-9a-z]+(-\d+)?(-[A-Za-z0-9_][A-Za-z0-9_.-]*)?$")
 
 
@@ -26,10 +28,11 @@ class ReproduceError(RuntimeError):
 
 
 def provenance_differences(recorded: dict[str, str], current: dict[str, str]) -> list[str]:
-    """Every field in which two builds differ, "name: old -> new"; a field one of them does
-    not record at all (an older build without `isa`) differs as "(absent)"."""
+    """Every field of the mixing rule (MIXING_COLUMNS, the harness's) in which two builds
+    differ, "name: old -> new"; a field one of them does not record at all (an older build
+    without `isa`) differs as "(absent)"."""
     out = []
-    for name in list(recorded) + [n for n in current if n not in recorded]:
+    for name in MIXING_COLUMNS:
         old, new = recorded.get(name), current.get(name)
         if old != new:
             out.append(
@@ -46,13 +49,6 @@ class Decision:
     reason: str
 
 
-def read_run_json(run_dir: Path) -> dict | None:
-    try:
-        return json.loads((run_dir / RUN_JSON).read_text())
-    except (OSError, ValueError):
-        return None
-
-
 def job_of(configs: list[Path], tag: str) -> dict:
     return {"configs": [p.name for p in configs], "tag": tag}
 
@@ -66,7 +62,7 @@ def newest_run_of_job(runs: Path, job: dict) -> tuple[Path, dict] | None:
         if d.is_dir() and not d.is_symlink() and RUN_NAME.match(d.name):
             meta = read_run_json(d)
             if meta is not None and meta.get("job") == job:
-                found.append((meta.get("started", ""), d.name, d, meta))
+                found.append((str(field(meta, "started", str, "")), d.name, d, meta))
     if not found:
         return None
     _, _, d, meta = max(found)
@@ -124,7 +120,7 @@ def decide(
         return Decision(new, False, f"the last run {d} is complete")
     if fresh:
         return Decision(new, False, f"FRESH=1: not resuming the unfinished run {d}")
-    diffs = provenance_differences(meta.get("provenance", {}), provenance)
+    diffs = provenance_differences(field(meta, "provenance", dict, {}), provenance)
     if diffs:
         return Decision(
             new,
@@ -133,7 +129,9 @@ def decide(
             f"another build or machine ({'; '.join(diffs)})",
         )
     measured = {c for c in inputs or {} if csv_rows(d / "csv" / f"{Path(c).stem}.csv") > 0}
-    if inputs is not None and (changed := inputs_differences(meta.get("inputs"), inputs, measured)):
+    if inputs is not None and (
+        changed := inputs_differences(field(meta, "inputs", dict, None), inputs, measured)
+    ):
         return Decision(
             new,
             False,
@@ -203,7 +201,7 @@ def prepare_into(into: Path) -> set[str]:
         return set()
     present = files_under(into)
     meta = read_run_json(into)
-    written = meta.get("written") if isinstance(meta, dict) and "job" in meta else None
+    written = meta.get("written") if meta is not None and "job" in meta else None
     if not present:
         return set()
     if not isinstance(written, list):
@@ -212,14 +210,31 @@ def prepare_into(into: Path) -> set[str]:
             f"--into {into}: the directory holds files this driver did not write ({shown}) and no "
             f"{RUN_JSON} of an earlier run listing what it wrote; give a new or empty directory"
         )
+    outside = [w for w in written if not inside(into, w)]
+    if outside:
+        raise ReproduceError(
+            f"--into {into}: its {RUN_JSON} lists paths that are not files inside it "
+            f"({', '.join(map(repr, outside[:5]))}): nothing removed; give a new or empty directory"
+        )
     for rel in sorted(set(written) & present):
         (into / rel).unlink()
-    # Directories left empty by that, deepest first.
+    # Directories left empty by that, deepest first (each inside `into`: checked above).
     holding = {p for w in written for p in Path(w).parents if p != Path(".")}
     for rel in sorted(holding, key=lambda p: -len(p.parts)):
-        if (into / rel).is_dir() and not any((into / rel).iterdir()):
+        if (into / rel).is_dir() and not (into / rel).is_symlink() and not any((into / rel).iterdir()):
             (into / rel).rmdir()
     return present - set(written)
+
+
+def inside(root: Path, rel) -> bool:
+    """Whether `rel` (an entry of run.json's `written`) names a path inside `root`: a
+    relative path without "..", whose folder resolves (links followed) inside root."""
+    if not isinstance(rel, str) or not rel:
+        return False
+    p = Path(rel)
+    if p.is_absolute() or ".." in p.parts:
+        return False
+    return (root / p).parent.resolve().is_relative_to(root.resolve())
 
 
 def record_written(run_dir: Path, meta: dict, foreign: set[str]) -> None:

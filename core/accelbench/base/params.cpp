@@ -1,5 +1,6 @@
 #include "accelbench/base/params.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -64,14 +65,27 @@ std::string number_form_problem(const std::string& text) {
     return "";
 }
 
+bool rounds_to_finite_float(double value) {
+    // FLT_MAX plus half its spacing (2^104 at the top): round-to-nearest takes a value below
+    // it to FLT_MAX, one at or above it to infinity (FLT_MAX's odd mantissa loses the tie).
+    constexpr double kOverflow = double(std::numeric_limits<float>::max()) + 0x1p103;
+    return std::fabs(value) < kOverflow;
+}
+
+float round_to_float(double value) {
+    const double top = double(std::numeric_limits<float>::max());
+    return float(std::clamp(value, -top, top));  // what nearest rounding gives for |value| in (FLT_MAX, kOverflow)
+}
+
 std::string float_conversion_problem(double value, const std::string& text) {
-    const double magnitude = std::fabs(value);
-    if (magnitude > double(std::numeric_limits<float>::max()))
-        return "value " + text + " is beyond the float range (at most 3.4e38)";
-    if (value != 0 && magnitude < double(std::numeric_limits<float>::min()))
+    // Judged on the float the value rounds to, not on the double: programs print FLT_MAX
+    // as 3.4028235e38 and FLT_MIN as 1.1754944e-38, both just past the limits as doubles.
+    if (!rounds_to_finite_float(value))
+        return "value " + text + " is beyond the float range (at most 3.4028235e38, FLT_MAX)";
+    if (const float f = round_to_float(value); value != 0 && !std::isnormal(f))
         return "value " + text + " does not survive conversion to float (it becomes " +
-            (float(value) == 0.0f ? std::string("0") : std::string("a subnormal")) +
-            "; the smallest normal float is 1.2e-38)";
+            (f == 0.0f ? std::string("0") : std::string("a subnormal")) +
+            "; the smallest normal float is 1.1754944e-38)";
     return "";
 }
 

@@ -95,6 +95,10 @@ std::string number_form_problem(const std::string& text);
 // Why `value`, written as `text`, cannot be used as a float, or "": a non-zero value that
 // rounds to zero or to a subnormal float (1e-50 becomes 0), or one beyond the float range.
 std::string float_conversion_problem(double value, const std::string& text);
+// Whether `value` rounds to a finite float (nearest rounding: up to FLT_MAX plus half an
+// ulp, so the printed 3.4028235e38 does), and the float it rounds to.
+bool rounds_to_finite_float(double value);
+float round_to_float(double value);
 
 // True for the YAML 1.2 core schema's booleans (true True TRUE), and the YAML 1.1 forms
 // configs already use (yes on, in the same three cases); `value` receives it.

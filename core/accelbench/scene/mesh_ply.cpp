@@ -200,10 +200,10 @@ public:
                 const PlyType t = el.properties[size_t(xyz_[k])].type;
                 if (t == PlyType::f32) xyz[k] = v.single;
                 else if (t == PlyType::f64) {
-                    if (std::isfinite(v.real) && std::fabs(v.real) > double(std::numeric_limits<float>::max()))
+                    if (std::isfinite(v.real) && !rounds_to_finite_float(v.real))
                         throw MeshError(place() + "vertex " + number(i) + ": coordinate " + std::to_string(v.real) +
                                         " is too large for a float");
-                    xyz[k] = float(v.real);
+                    xyz[k] = std::isfinite(v.real) ? round_to_float(v.real) : float(v.real);
                 } else xyz[k] = float(v.integer);
             }
             mesh_.add_vertex({xyz[0], xyz[1], xyz[2]}, [&] { return place() + "vertex " + number(i) + ": "; });

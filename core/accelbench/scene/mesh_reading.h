@@ -20,6 +20,7 @@
 #include <system_error>
 #include <vector>
 
+#include "accelbench/base/params.h"
 #include "accelbench/scene/mesh_io.h"
 #include "accelbench/scene/scene.h"
 
@@ -161,8 +162,8 @@ inline Real parse_float(std::string_view s, float& value) {
     double wide = 0;
     const Real r = parse_double(s, wide);
     if (r != Real::ok) return r;
-    if (std::fabs(wide) > double(std::numeric_limits<float>::max())) return Real::too_large;
-    value = float(wide);
+    if (!rounds_to_finite_float(wide)) return Real::too_large;
+    value = round_to_float(wide);
     return Real::ok;
 }
 

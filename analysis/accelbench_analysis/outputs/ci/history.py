@@ -31,7 +31,8 @@ from pathlib import Path
 import pandas as pd
 
 from ...inputs.load import is_companion
-from ...inputs.schema import KEY_COLUMNS, ContractError, Results, parse_params, read_csv
+from ...inputs.run_json import skipped
+from ...inputs.schema import BUILD_IDENTITY, KEY_COLUMNS, ContractError, Results, parse_params, read_csv
 from ...mapping.selection import label_of
 from .regress import ERROR_COUNTS, EXACT_COUNTS, RENDER_SETTING_COLUMNS, embree_ratios
 
@@ -57,7 +58,9 @@ COMBINATION = ["model", "accel", "params", *SETTINGS]
 # Rows of two machines (or two instruction sets of one) are never one median: each keeps
 # its own series, and a count's step is against the same machine's previous commit.
 MACHINE = ["cpu", "isa"]
-PROVENANCE = ["git_sha", "git_dirty", "cpu", "compiler", "build_type", "isa", "embree_version", "embree_isa"]
+PROVENANCE = [*BUILD_IDENTITY, "cpu", "embree_isa"]
+# What tells two builds of one commit apart on the page (the commit says the rest).
+BUILD_FIELDS = [c for c in BUILD_IDENTITY if c not in ("git_sha", "git_dirty")]
 SOURCE = ["kind", "run", "file", "config", "timestamp"]
 
 
@@ -155,8 +158,10 @@ def collect(results: Path, out: Path) -> tuple[pd.DataFrame, pd.DataFrame, list[
             continue
         try:
             frames.append(measured_rows(src, results))
-        except ContractError as e:
-            notes.append(f"left out {src.file}: {e}")
+        except (ContractError, OSError, ValueError, KeyError, TypeError) as e:
+            # One unreadable file (cut, not a harness CSV, unreadable bytes) is named and
+            # left out; the others are still collected.
+            notes.append(f"left out {src.file}: {type(e).__name__}: {e}")
     text = [*IDENTITY, *PROVENANCE, "kind", "run", "structure"]
     new = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=[*text, *MEASURES])
     if store.is_file():
@@ -239,7 +244,16 @@ def series_labels(df: pd.DataFrame) -> pd.Series:
     label = label.where(~image, label + " · " + df["image_width"] + "x" + df["image_height"])
     threads = ~df["render_threads"].isin(["", "1"])
     label = label.where(~threads, label + " · " + df["render_threads"] + " threads")
+    if "build" in df.columns:  # two builds of one commit or more: each its own series, named
+        builds = df.groupby(["model", "structure"])["build"].transform("nunique") > 1
+        label = label.where(~builds, label + " · " + df["build"])
     return label.str.strip(" ·").where(lambda s: s != "", "(one combination)")
+
+
+def build_text(rows: pd.DataFrame) -> pd.Series:
+    """The build beside its commit: build type, compiler, ISA and Embree, e.g.
+    "RelWithDebInfo, gcc 12.2.0, avx2, Embree 4.3.0"."""
+    return rows[BUILD_FIELDS].astype(str).agg(lambda r: ", ".join(r[:-1]) + f", Embree {r.iloc[-1]}", axis=1)
 
 
 def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:
@@ -250,7 +264,10 @@ def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:
         return pd.DataFrame(columns=["commit", "measure", "value"])
     # Aggregated per commit and combination first (a few thousand groups, not one per
     # measure too), then one row per measure.
-    keys = ["git_sha", "git_dirty", *MACHINE, *COMBINATION, "structure"]
+    # Per build and machine, not per commit: a Debug and a Release build of one commit, or
+    # two machines, are never one median.
+    collected = collected.assign(build=build_text(collected))
+    keys = [*BUILD_IDENTITY, "build", "cpu", *COMBINATION, "structure"]
     g = collected.groupby(keys, sort=False)
     stats = [
         getattr(g[MEASURES], how)().reset_index().melt(id_vars=keys, var_name="measure", value_name=name)
@@ -268,7 +285,7 @@ def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:
     out = out.merge(commit_table(collected, repo), on=["git_sha", "git_dirty"], how="left")
     out["series"] = series_labels(out)
     out = out.sort_values([*MACHINE, *COMBINATION, "measure", "commit_order"]).reset_index(drop=True)
-    prev = out.groupby([*MACHINE, *COMBINATION, "measure"])["value"].shift()
+    prev = out.groupby([*MACHINE, *COMBINATION, "build", "measure"])["value"].shift()
     out["step"] = out["measure"].isin(COUNTS) & prev.notna() & (out["value"] != prev)
     cols = [
         "commit",
@@ -277,6 +294,7 @@ def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:
         "commit_order",
         "commit_date",
         "subject",
+        "build",
         "model",
         "structure",
         "accel",
@@ -324,14 +342,21 @@ def latest_verdict(results: Path) -> Verdict | None:
     if not reports:
         return None
     report = reports[-1]
-    verdict = verdict_of_report(report.read_text())
     run = d / f"run-{report.stem.split('-')[-1]}.csv"
-    if verdict is None or not run.is_file():
+    try:
+        text = report.read_text()
+        verdict = verdict_of_report(text)
+        if verdict is None or not run.is_file():
+            return None
+        rows = pd.read_csv(
+            run, dtype=str, keep_default_na=False, usecols=["git_sha", "git_dirty", "timestamp"]
+        )
+        sha = rows["git_sha"].iloc[0]
+        commit = sha[:7] + ("+dirty" if rows["git_dirty"].iloc[0] == "true" else "")
+    except (OSError, ValueError, KeyError, IndexError) as e:  # a cut or header-only run, bytes no text
+        skipped(run, f"the regression check's verdict left out: {type(e).__name__}: {e}")
         return None
-    rows = pd.read_csv(run, dtype=str, keep_default_na=False, usecols=["git_sha", "git_dirty", "timestamp"])
-    sha = rows["git_sha"].iloc[0]
-    commit = sha[:7] + ("+dirty" if rows["git_dirty"].iloc[0] == "true" else "")
-    return Verdict(verdict, commit, rows["timestamp"].max(), report, report.read_text())
+    return Verdict(verdict, commit, rows["timestamp"].max(), report, text)
 
 
 def verdict_history(latest: Verdict | None, store: Path) -> pd.DataFrame:

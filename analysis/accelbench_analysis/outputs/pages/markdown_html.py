@@ -4,7 +4,8 @@ The pages show what the Markdown says, never a number computed again: Python-Mar
 turns the text into an element tree, and a tree processor marks its tables for page.js
 (class `data`, numeric cells, one <tbody> per section row such as "*Build time (s)*", so
 that sorting stays inside a section), demotes headings under the page's own, gives them
-ids, and hands every link to a function that may point it somewhere else."""
+ids, and hands every link to a function that may point it somewhere else. Raw HTML is
+escaped and links are confined (`confined`): what the Markdown says comes from data."""
 
 from __future__ import annotations
 
@@ -67,6 +68,26 @@ def mark_table(table: ET.Element) -> ET.Element:
     return wrap
 
 
+SAFE_SCHEME = re.compile(r"^(https?:|mailto:|#)", re.I)
+SCHEME = re.compile(r"^[a-z][a-z0-9+.-]*:", re.I)
+
+
+def confined(href: str) -> bool:
+    """Whether a link may stay on a page: a web or mail address, an anchor, or a relative
+    path that stays below the page's folder. Not javascript:, data:, file: or any other
+    scheme, an absolute path, or a path out through "..": text from data may be a link."""
+    if SAFE_SCHEME.match(href):
+        return True
+    if SCHEME.match(href) or href.startswith(("/", "\\")):
+        return False
+    depth = 0
+    for part in href.split("#")[0].split("?")[0].replace("\\", "/").split("/"):
+        depth += -1 if part == ".." else (0 if part in ("", ".") else 1)
+        if depth < 0:
+            return False
+    return True
+
+
 class PageTree(Treeprocessor):
     """Marks tables, shifts headings by `shift` levels with ids under `prefix`, and
     rewrites each link's href with `link(href, text)` (None: keep it), `text` being the
@@ -93,6 +114,10 @@ class PageTree(Treeprocessor):
                 new = self.link(el.get("href"), self.subject(el, parent))
                 if new is not None:
                     el.set("href", new)
+                if not confined(el.get("href")):
+                    del el.attrib["href"]  # the text stays, the link goes
+            elif el.tag == "img" and not (el.get("src") or "").startswith("data:image/"):
+                el.attrib.pop("src", None)  # a page embeds its own images as data: URIs only
 
     @staticmethod
     def subject(a: ET.Element, parent: dict) -> str:
@@ -119,8 +144,13 @@ def to_html(
     prefix: str = "",
     link: Callable[[str, str], str | None] = lambda href, text: None,
 ) -> str:
-    """Markdown text as an HTML fragment (the tables extension: the analysis writes pipe tables)."""
-    return markdown.markdown(text, extensions=["tables", "sane_lists", Extension(shift, prefix, link)])
+    """Markdown text as an HTML fragment (the tables extension: the analysis writes pipe tables).
+    Raw HTML in the text is shown as text, never passed through: the Markdown holds labels
+    and names from configs and CSVs, which are no one's markup."""
+    md = markdown.Markdown(extensions=["tables", "sane_lists", Extension(shift, prefix, link)])
+    md.preprocessors.deregister("html_block")
+    md.inlinePatterns.deregister("html")
+    return md.convert(text)
 
 
 def first_heading(text: str) -> str | None:

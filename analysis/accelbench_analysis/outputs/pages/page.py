@@ -13,8 +13,12 @@ vegaEmbed. When every figure is drawn, the page sets `data-charts="ready"` on <h
 from __future__ import annotations
 
 import base64
+import hashlib
 import html
 import json
+import resource
+import subprocess
+import sys
 from functools import lru_cache
 from pathlib import Path
 
@@ -22,19 +26,40 @@ ASSETS = Path(__file__).resolve().parent / "assets"
 DOCTYPE = "<!DOCTYPE html>"
 
 
+# vl-convert's V8 reserves its caged heap (Oilpan's CagedHeap) when it starts: under an
+# address-space limit (`ulimit -v`) of 64 GiB or less it dies with "Fatal process out of
+# memory"; 128 GiB is enough (measured with vl-convert-python 1.x). So it runs in a child.
+V8_ADDRESS_SPACE = "more than 64 GiB of address space (128 GiB is enough)"
+
+
 @lru_cache(maxsize=1)
-def vega_bundle() -> str:
+def vega_bundle() -> str | None:
     """Vega, Vega-Lite and vega-embed as one classic script that sets window.vegaEmbed.
     vl-convert builds it from the copies inside the package (about 0.9 MB, 2 s the first
-    time in a process)."""
-    import vl_convert
+    time in a process), in a child process: where V8 cannot start (an address-space limit)
+    that is one line on stderr and None, and the pages are written without drawing their
+    interactive figures (the PNGs stay), never a job killed by V8's fatal error."""
+    code = "import sys, vl_convert; sys.stdout.write(vl_convert.javascript_bundle())"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    if done.returncode == 0 and done.stdout:
+        return done.stdout
+    limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    shown = "none" if limit == resource.RLIM_INFINITY else f"{limit / 2**30:.1f} GiB"
+    print(
+        f"pages: interactive figures left undrawn: vl-convert's V8 could not build the Vega bundle "
+        f"(exit {done.returncode}; it needs {V8_ADDRESS_SPACE}, the address-space limit is {shown})",
+        file=sys.stderr,
+    )
+    return None
 
-    return vl_convert.javascript_bundle()
 
-
-def inline_script(code: str) -> str:
+def inline_script(code: str) -> tuple[str, str]:
+    """The element and its CSP source ('sha256-...' of its exact text): only the page's own
+    scripts run, never one that text from data smuggled in."""
     # "</script" inside a script would close the element early; "<\/" reads the same in JS.
-    return "<script>" + code.replace("</script", "<\\/script") + "</script>"
+    text = code.replace("</script", "<\\/script")
+    digest = base64.b64encode(hashlib.sha256(text.encode("utf-8")).digest()).decode("ascii")
+    return "<script>" + text + "</script>", f"'sha256-{digest}'"
 
 
 def json_script(value, css_class: str) -> str:
@@ -76,9 +101,13 @@ def page(
     bundle (only pages with interactive figures carry its 0.9 MB)."""
     links = "".join(f'<li><a href="#{html.escape(a)}">{html.escape(label)}</a></li>' for a, label in nav)
     side = f'<nav class="toc"><p class="toc-title">On this page</p><ul>{links}</ul></nav>' if nav else ""
-    scripts = (inline_script(vega_bundle()) if charts else "") + inline_script(
-        (ASSETS / "page.js").read_text()
-    )
+    bundle = vega_bundle() if charts else None
+    codes = ([bundle] if bundle else []) + [(ASSETS / "page.js").read_text()]
+    own = [inline_script(code) for code in codes]
+    scripts = "".join(element for element, _ in own)
+    # Scripts by hash only: no 'unsafe-inline', so markup in a label cannot run. Vega
+    # compiles its expressions with Function(), hence 'unsafe-eval' (for the hashed ones).
+    script_src = " ".join(source for _, source in own) + " 'unsafe-eval'"
     return "\n".join(
         [
             DOCTYPE,
@@ -88,7 +117,8 @@ def page(
             '<meta name="viewport" content="width=device-width, initial-scale=1">',
             # No request may leave the page: the figures and scripts are inline, links stay local.
             '<meta http-equiv="Content-Security-Policy" content="default-src \'none\'; '
-            "img-src data:; style-src 'unsafe-inline'; script-src 'unsafe-inline' 'unsafe-eval'\">",
+            f"img-src data:; style-src 'unsafe-inline'; script-src {script_src}; base-uri 'none'; "
+            "form-action 'none'\">",
             f"<title>{html.escape(title)}</title>",
             f"<style>{(ASSETS / 'page.css').read_text()}</style>",
             "</head>",

@@ -43,8 +43,14 @@ class RunPage:
         if EXTERNAL.match(href):
             return None
         path = (base / href.split("#")[0]).resolve()
+        # Only the run's own files: a label that is a link to ../../elsewhere.md embeds nothing.
         return (
-            path if path.suffix in (".md", ".png") and path.is_file() and path.name != "REPORT.md" else None
+            path
+            if path.suffix in (".md", ".png")
+            and path.is_relative_to(self.run_dir)
+            and path.is_file()
+            and path.name != "REPORT.md"
+            else None
         )
 
     def render(self, text: str, base: Path, shift: int, prefix: str, found: list) -> str:
@@ -59,7 +65,9 @@ class RunPage:
                 return "#" + self.anchor(t)
             if EXTERNAL.match(href):
                 return None
-            return self.rel((base / href).resolve())
+            local = (base / href).resolve()
+            # Outside the run: "../.." from its folder, which to_html's confinement drops.
+            return self.rel(local) if local.is_relative_to(self.run_dir) else "../" + href
 
         return to_html(text, shift=shift, prefix=prefix, link=link)
 

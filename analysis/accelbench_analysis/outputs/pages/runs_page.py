@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import csv
 import html
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 from ...inputs.load import is_companion
+from ...inputs.run_json import RUN_JSON, field, read_run_json, skipped
 from .page import data_table, page, write_page
 
 INDEX = "index.html"
@@ -30,30 +30,34 @@ class RunEntry:
 
 
 def csv_provenance(files: list[Path]) -> tuple[str, str]:
-    """(commit, newest timestamp) over the rows of harness CSVs; "?" when they have none."""
+    """(commit, newest timestamp) over the rows of harness CSVs; "?" when they have none.
+    A file that cannot be read is skipped, said so (skipped)."""
     shas, stamps = set(), []
     for f in files:
-        with f.open(newline="") as fh:
-            for row in csv.DictReader(fh):
-                if row.get("git_sha"):
-                    shas.add(row["git_sha"][:7] + ("+dirty" if row.get("git_dirty") == "true" else ""))
-                stamps.append(row.get("timestamp", ""))
+        try:
+            with f.open(newline="") as fh:
+                rows = list(csv.DictReader(fh))
+        except (OSError, ValueError, csv.Error) as e:
+            skipped(f, f"{type(e).__name__}: {e}")
+            continue
+        for row in rows:
+            if row.get("git_sha"):
+                shas.add(str(row["git_sha"])[:7] + ("+dirty" if row.get("git_dirty") == "true" else ""))
+            stamps.append(str(row.get("timestamp") or ""))
     return ", ".join(sorted(shas)) or "?", max(stamps, default="")
 
 
 def entry(d: Path, kind: str) -> RunEntry | None:
-    meta_path = d / "run.json"
-    if meta_path.is_file():
-        try:
-            meta = json.loads(meta_path.read_text())
-        except ValueError:
+    if (d / RUN_JSON).is_file():
+        meta = read_run_json(d)  # None (said so) when unreadable or not an object
+        if meta is None:
             return None
-        prov = meta.get("provenance", {})
-        commit = prov.get("git_sha", "?")[:7] + ("+dirty" if prov.get("git_dirty") == "true" else "")
-        job = meta.get("job", {})
-        what = ", ".join(job.get("configs", [])) + (f" (tag {job['tag']})" if job.get("tag") else "")
-        state = "complete" if meta.get("complete") else "unfinished"
-        return RunEntry(d, kind, meta.get("started", ""), commit, what, state)
+        prov, job = field(meta, "provenance", dict, {}), field(meta, "job", dict, {})
+        commit = str(prov.get("git_sha", "?"))[:7] + ("+dirty" if prov.get("git_dirty") == "true" else "")
+        configs = [str(c) for c in field(job, "configs", list, [])]
+        what = ", ".join(configs) + (f" (tag {job['tag']})" if job.get("tag") else "")
+        state = "complete" if meta.get("complete") is True else "unfinished"
+        return RunEntry(d, kind, str(field(meta, "started", str, "")), commit, what, state)
     files = [f for f in sorted(d.glob("*.csv")) if not is_companion(f)]
     if not files:
         return None

@@ -153,8 +153,10 @@
           views.push(result.view);
           el.setAttribute("data-drawn", "true");
         }, function (err) {
-          el.innerHTML = '<p class="chart-error">This figure could not be drawn: ' +
-            String(err && err.message || err) + "</p>";
+          const p = document.createElement("p");  // the message as text: it may quote data
+          p.className = "chart-error";
+          p.textContent = "This figure could not be drawn: " + String(err && err.message || err);
+          el.replaceChildren(p);
           throw err;
         });
       })
