@@ -116,7 +116,7 @@ test: test-cpp test-python ## every test: C++ and Python
 # To fix: clang-format -i FILES, .venv/bin/ruff format analysis.
 .PHONY: lint
 lint: deps-tools venv ## formatting checks: clang-format and ruff
-	clang-format --dry-run --Werror $$(git ls-files '*.cpp' '*.h')
+	clang-format --dry-run --Werror $$(git ls-files '*.cpp' '*.h' '*.c')
 	cd analysis && ../$(VENV)/bin/ruff check . && ../$(VENV)/bin/ruff format --check .
 
 # ASan + UBSan (incl. float-divide-by-zero and float-cast-overflow; flags in CMakeLists.txt,

@@ -118,8 +118,8 @@ static float best_split(const accelbench_structure* s, uint32_t first, uint32_t 
             grow_box(&acc, &bin_box[b - 1]);
             n += bin_count[b - 1];
             if (n == 0 || right_count[b] == 0) continue;
-            const float cost = 1.0f + (half_area(&acc) * (float)n + right_area[b] * (float)right_count[b]) /
-                                          half_area(bounds);
+            const float cost =
+                1.0f + (half_area(&acc) * (float)n + right_area[b] * (float)right_count[b]) / half_area(bounds);
             if (cost < best) {
                 best = cost;
                 *best_axis = axis;

@@ -72,8 +72,18 @@ static const accelbench_param_desc kParams[] = {
 #endif
 
 static const accelbench_structure_desc kStructures[] = {{
-    STRUCTURE_NAME, "Fault plugin", "a structure that never hits, or fails as told", kParams, 1, 0, create, build,
-    closest_hits, any_hits, build_stats, destroy,
+    STRUCTURE_NAME,
+    "Fault plugin",
+    "a structure that never hits, or fails as told",
+    kParams,
+    1,
+    0,
+    create,
+    build,
+    closest_hits,
+    any_hits,
+    build_stats,
+    destroy,
 }};
 
 #if defined(FAULT_WRONG_ABI)

@@ -14,8 +14,8 @@ from ...inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
 from ...inputs.schema import FP_MODE_COLUMN, Results
 from ...mapping.formatting import md_escape
 from ..figures.figures import FIGURES, Skipped
-from .claim_verdicts import summary_markdown
 from .claim_matrix import matrix_markdown
+from .claim_verdicts import summary_markdown
 from .claims_output import ClaimsResult, plain_statements
 from .comparison import ThreeWay
 from .ranking import RANKING_DOC, full_ranking_markdown, ranking_markdown
