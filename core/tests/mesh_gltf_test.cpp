@@ -2,6 +2,7 @@
 // containers), so counts, transforms and the camera are known by hand; the same triangles
 // written as OBJ trace to the same hits.
 #include <gtest/gtest.h>
+#include "mesh_load_error.h"
 
 #include <cmath>
 #include <cstdio>
@@ -99,15 +100,7 @@ protected:
         doc.uri = "data:application/octet-stream;base64," + base64(bytes);
         return write(name, doc.json(bytes.size()));
     }
-    std::string load_error(const std::string& path) {
-        try {
-            load_mesh(path);
-        } catch (const std::runtime_error& e) {
-            return e.what();
-        }
-        ADD_FAILURE() << "load_mesh('" << path << "') did not throw";
-        return "";
-    }
+    std::string load_error(const std::string& path) { return mesh_load_error(path); }
     TempDir temp_{"mesh_gltf_test-"};
     const fs::path& dir_ = temp_.path();
 };

@@ -2,6 +2,7 @@
 // counts, fan triangles and coordinates are known exactly.
 #include "accelbench/scene/mesh_io.h"
 #include "accelbench/scene/mesh_reading.h"
+#include "mesh_load_error.h"
 
 #include "accelbench/base/temp_dir.h"
 
@@ -43,16 +44,7 @@ protected:
         gzclose(out);
         return path;
     }
-    // The message of the exception load_mesh throws (fails the test if it does not).
-    std::string load_error(const std::string& path) {
-        try {
-            load_mesh(path);
-        } catch (const std::runtime_error& e) {
-            return e.what();
-        }
-        ADD_FAILURE() << "load_mesh('" << path << "') did not throw";
-        return "";
-    }
+    std::string load_error(const std::string& path) { return mesh_load_error(path); }
 
     TempDir temp_{"mesh_io_test-"};
     const fs::path& dir_ = temp_.path();

@@ -159,8 +159,8 @@ TEST_F(HostileInputTest, RepetitionsWithoutTheirResultsAreNeverMixedWithANewRun)
 TEST_F(HostileInputTest, MergeRefusesRowsThatAreNotResults) {
     const std::string header =
         "combo_id,params,status,rays,render_s_median,git_sha,git_dirty,compiler,build_type,cpu,"
-        "embree_version,isa,embree_isa\n";
-    const std::string prov = ",abc,false,gcc,Release,cpu,3,sse2,avx2\n";
+        "embree_version,isa,embree_isa,plugin_file,plugin_sha256,plugin_version\n";
+    const std::string prov = ",abc,false,gcc,Release,cpu,3,sse2,avx2,,,\n";
     const std::string good = "a1,,ok,10,0.5" + prov;
     const std::vector<std::pair<std::string, std::string>> cases = {
         {",,ok,10,0.5" + prov, "row 2: empty combo_id"},

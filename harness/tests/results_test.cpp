@@ -120,7 +120,7 @@ const std::string kOldHeader =
     "config,combo_id,accel,params,max_depth,threads,width,status,rays,max_depth,width,height,threads,isa\n";
 const std::string kNewHeader =
     "config,combo_id,accel,label,params,max_depth,threads,width,status,rays,tree_depth,image_width,image_height,"
-    "render_threads,isa,embree_isa\n";
+    "render_threads,isa,embree_isa,plugin_file,plugin_sha256,plugin_version\n";
 
 TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
     TempDir dir("accelbench-convert-test-");
@@ -136,9 +136,9 @@ TEST(ConvertTest, RenamesByPositionKeepingEveryValueAndTheRepetitions) {
     // The label column is added after accel, the registry's label of each row.
     EXPECT_EQ(read_file(new_csv),
               kNewHeader +
-                  "t,1,kdtree,kd-tree,max_depth=5,5,,,ok,10,5,64,48,2,sse2,unknown\n"
-                  "t,2,wbvh,\"wide BVH (4, SIMD)\",width=4,,,4,ok,10,17,64,48,2,\"a,b\",unknown\n"
-                  "t,3,lbvh,LBVH,threads=3,,3,,skipped,,,,,1,sse2,unknown\n");
+                  "t,1,kdtree,kd-tree,max_depth=5,5,,,ok,10,5,64,48,2,sse2,unknown,,,\n"
+                  "t,2,wbvh,\"wide BVH (4, SIMD)\",width=4,,,4,ok,10,17,64,48,2,\"a,b\",unknown,,,\n"
+                  "t,3,lbvh,LBVH,threads=3,,3,,skipped,,,,,1,sse2,unknown,,,\n");
     EXPECT_EQ(read_file(repetitions_path(new_csv)), "combo_id,repetition\n1,1\n2,1\n");
     EXPECT_FALSE(is_old_results_header(read_csv(new_csv).header));
     // A file already new, and the output being the input, are refused.
@@ -186,9 +186,10 @@ TEST(ConvertTest, AFileWithoutTheFloatingPointModeOrEmbreesIsaGetsIeeeAndUnknown
     const std::string new_csv = (dir.path() / "new.csv").string();
     EXPECT_EQ(convert_results(old_csv, new_csv), 2u);
     EXPECT_EQ(read_file(new_csv),
-              "config,combo_id,accel,label,params,status,light,shading,fp_mode,cpu,isa,embree_isa,x\n"
-              "t,1,bvh,BVH,,ok,true,false,ieee,c,avx2,unknown,7\n"
-              "t,2,bvh,BVH,,skipped,,,ieee,c,avx2,unknown,\n");
+              "config,combo_id,accel,label,params,status,light,shading,fp_mode,cpu,isa,embree_isa,plugin_file,"
+              "plugin_sha256,plugin_version,x\n"
+              "t,1,bvh,BVH,,ok,true,false,ieee,c,avx2,unknown,,,,7\n"
+              "t,2,bvh,BVH,,skipped,,,ieee,c,avx2,unknown,,,,\n");
     EXPECT_FALSE(is_old_results_header(read_csv(new_csv).header));
 }
 
