@@ -23,6 +23,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .provenance import (  # noqa: F401  (re-exported: the columns' one home for readers)
+    BUILD_IDENTITY,
+    EMBREE_ISA_COLUMN,
+    ISA_COLUMN,
+    MIXING_COLUMNS,
+    PLUGIN_COLUMNS,
+    PROVENANCE_IDENTITY,
+)
+
 # A row's identity. `ray_set` (camera, or one of RAY_SETS), `render_threads` and
 # `fp_mode` tell apart the rows of one combination in a ray-set, thread-scaling or
 # floating-point-mode run; CSVs from before ray sets get ray_set = camera.
@@ -123,36 +132,6 @@ RENDER_SETTING_COLUMNS = [
 ]
 # Settings that are counts: where a row has one, a whole number of at least 1.
 COUNT_SETTING_COLUMNS = ["render_threads", "image_width", "image_height", "spp"]
-
-# A build's identity: the columns naming the binary that measured a row, as the harness's
-# build_identity_columns() (harness/csv/provenance.h). History keeps builds apart by them:
-# two builds of one commit (a Debug and a Release, two compilers) are two series.
-BUILD_IDENTITY = ["git_sha", "git_dirty", "compiler", "build_type", "isa", "embree_version"]
-# The one rule for mixing, as the harness's mixing_columns(): rows may share a file or a
-# median (merge, --take-column, run --resume, the main job's resume) only when these agree.
-MIXING_COLUMNS = [*BUILD_IDENTITY, "cpu"]
-
-# Rows differing in any of these fields were not measured with the same code on the same
-# machine. `render_threads` and `timestamp` are per-run facts, not identity.
-PROVENANCE_IDENTITY = [
-    "git_sha",
-    "git_dirty",
-    "compiler",
-    "build_type",
-    "cpu",
-    "embree_version",
-    "isa",
-    "embree_isa",
-]
-# The vector extensions compiled in (CMake's ACCELBENCH_ISA), and the instruction set of the
-# kernels Embree picked at run time (the harness's last column); files written before
-# either existed load with "unknown".
-ISA_COLUMN = "isa"
-EMBREE_ISA_COLUMN = "embree_isa"
-# Where a structure loaded from a plugin came from (the harness's --plugin / `plugins:`):
-# its shared library, the file's SHA-256 and the plugin's own version; empty for structures
-# compiled in, and in files written before plugins existed.
-PLUGIN_COLUMNS = ["plugin_file", "plugin_sha256", "plugin_version"]
 
 # The results CSV's columns other than the parameters' (which sit between `params` and
 # `status`, one per parameter name of the registry), in the harness's order, with their kind

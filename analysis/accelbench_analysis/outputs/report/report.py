@@ -14,8 +14,7 @@ from ...inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
 from ...inputs.schema import FP_MODE_COLUMN, Results
 from ...mapping.formatting import md_escape
 from ..figures.figures import FIGURES, Skipped
-from .claim_matrix import matrix_markdown
-from .claim_verdicts import summary_markdown
+from .claim_verdicts import summary_with_matrix
 from .claims_output import ClaimsResult, plain_statements
 from .comparison import ThreeWay
 from .ranking import RANKING_DOC, full_ranking_markdown, ranking_markdown
@@ -96,17 +95,19 @@ def stand_in_lines() -> list[str]:
 
 
 def claims_count_lines(result: ClaimsResult | None) -> list[str]:
-    """The claims' counts near the top (the one summary's count table), linking to the
-    matrix and the claims one by one in the report's section."""
+    """The claims' one summary near the top, as claims.md has it: what a reader must know
+    first, the counts at default and faithful, then every claim under every setting."""
     if result is None or not result.rows:
         return []
     return [
         "",
         "## The report's claims",
         "",
-        *summary_markdown(result.rows),
-        f"The matrix of every claim under every setting, and why each does not hold: "
-        f"[{REPORT_SECTION}]({REPORT_SECTION_ANCHOR}) and [the claims one by one](tables/claims.md).",
+        *plain_statements(result),
+        *summary_with_matrix(result.rows, result.matrix),
+        "",
+        f"Why each does not hold, and the report's tables: [{REPORT_SECTION}]({REPORT_SECTION_ANCHOR}); "
+        "[the claims one by one](tables/claims.md).",
     ]
 
 
@@ -122,21 +123,17 @@ def claims_lines(result: ClaimsResult | None) -> list[str]:
 
 
 def claims_section(result: ClaimsResult | None) -> list[str]:
-    """What a reader must know before the verdicts, the factor matrix (the counts stand at
-    the top), and the claims whose verdict differs on the committed reference run."""
-    if result is None:
+    """The claims whose default verdict differs on the committed reference run (the summary
+    stands at the top)."""
+    if result is None or result.reference is None:
         return []
-    out = ["", "### Every claim under every setting", ""] + plain_statements(result)
-    out += ["The matrix (✓ holds, ✗ does not hold, – not comparable):", ""] + matrix_markdown(result.matrix)
-    if result.reference is not None:
-        dependent = result.machine_dependent()
-        out += [
-            "",
-            "Machine-dependent (holds at default on one run, not on the committed reference run): "
-            + (", ".join(dependent) if dependent else "none")
-            + ".",
-        ]
-    return out
+    dependent = result.machine_dependent()
+    return [
+        "",
+        "Machine-dependent claims (hold at default on one run, not on the committed reference run): "
+        + (", ".join(dependent) if dependent else "none")
+        + ".",
+    ]
 
 
 def cost_model_section(out_dir: Path) -> list[str]:
