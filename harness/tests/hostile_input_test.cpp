@@ -477,7 +477,7 @@ TEST_F(HostileInputTest, ResumeRefusesRowsOfAnotherBuild) {
     d.rows.pop_back();  // one combination left to do
     std::string text = csv_line(d.header);
     for (auto& r : d.rows) {
-        r[sha] = "Debug";
+        r[sha] = r[sha] == "Debug" ? "Release" : "Debug";  // another build type than this build's
         text += csv_line(r);
     }
     write_file(dir.path(), "tiny.csv", text);

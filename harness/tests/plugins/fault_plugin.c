@@ -12,6 +12,15 @@ struct accelbench_structure {
     int unused;
 };
 
+// Dies of SIGSEGV as a faulting plugin would, whatever handler the host installed (a
+// sanitizer's would turn the signal into a report and an exit code).
+#if defined(FAULT_CRASH_IN_BUILD) || defined(FAULT_CRASH_IN_TRACE)
+static void crash(void) {
+    signal(SIGSEGV, SIG_DFL);
+    raise(SIGSEGV);
+}
+#endif
+
 static accelbench_structure* create(const accelbench_param_value* params, uint32_t param_count, char* error,
                                     size_t error_size) {
     (void)params, (void)param_count, (void)error, (void)error_size;
@@ -21,7 +30,7 @@ static accelbench_structure* create(const accelbench_param_value* params, uint32
 static int build(accelbench_structure* s, const accelbench_scene* scene, char* error, size_t error_size) {
     (void)s, (void)scene, (void)error, (void)error_size;
 #if defined(FAULT_CRASH_IN_BUILD)
-    raise(SIGSEGV);
+    crash();
 #elif defined(FAULT_HANG_IN_BUILD)
     for (;;) pause();
 #endif
@@ -32,7 +41,7 @@ static void closest_hits(const accelbench_structure* s, const accelbench_ray* ra
                          uint64_t count, accelbench_ray_counters* counters) {
     (void)s, (void)rays, (void)counters;
 #if defined(FAULT_CRASH_IN_TRACE)
-    if (count > 0) raise(SIGSEGV);
+    if (count > 0) crash();
 #endif
     for (uint64_t i = 0; i < count; ++i) {
         hits[i].prim = ACCELBENCH_INVALID_PRIM;

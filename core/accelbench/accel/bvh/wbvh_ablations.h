@@ -68,7 +68,7 @@ struct WbvhAblationRay {
         for (int a = 0; a < 3; ++a) {
             org[a] = ray.org[a];
             dir[a] = ray.dir[a];
-            inv[a] = 1.0f / ray.dir[a];
+            inv[a] = safe_inverse(ray.dir[a]);  // +-inf for a zero component, as RayPrecomp
             neg_org_inv[a] = -(org[a] * inv[a]);
             const uint32_t upper_first = std::signbit(inv[a]) ? 1u : 0u;
             near_row[a] = uint32_t(a) + 3 * upper_first;
