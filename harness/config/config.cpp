@@ -1,5 +1,5 @@
 // Reading a config: the document's top level and the run's own settings (name,
-// description, repetitions, warmup, timeout_s, errors) here, each other group of keys in
+// description, repetitions, warmup, processes, timeout_s, errors) here, each other group of keys in
 // its section file (config_sections.h), then the limits that need the whole config.
 #include "config/config.h"
 
@@ -47,7 +47,7 @@ bool read_effort(ConfigReader& r, const Fields& f, std::optional<int>& repetitio
 
 namespace {
 
-// name, description, repetitions, warmup, timeout_s, errors.
+// name, description, repetitions, warmup, processes, timeout_s, errors.
 void read_run_settings(ConfigReader& r, const Fields& top) {
     r.cfg.name = fs::path(r.cfg.path).stem().string();
     if (auto* e = top.find("name"))
@@ -62,6 +62,8 @@ void read_run_settings(ConfigReader& r, const Fields& top) {
         if (auto v = read_int(r.c, e->value, "repetitions", 1, 1000)) r.cfg.repetitions = int(*v);
     if (auto* e = top.find("warmup"))
         if (auto v = read_int(r.c, e->value, "warmup", 0, 100)) r.cfg.warmup = int(*v);
+    if (auto* e = top.find("processes"))
+        if (auto v = read_int(r.c, e->value, "processes", 1, 10)) r.cfg.processes = int(*v);
     if (auto* e = top.find("timeout_s"))
         if (auto v = read_number(r.c, e->value, "timeout_s", 0, 1e7, true)) r.cfg.timeout_s = *v;
     if (auto* e = top.find("errors"))
@@ -132,8 +134,8 @@ Config load_config(const std::string& path, const ModelRegistry& models) {
     const YAML::Node root = load_yaml_document(path);
     // `grid:` belongs to the analysis's grid search (analysis/README.md): accepted, unread.
     Fields top(r.c, root, "",
-               {"name", "description", "repetitions", "warmup", "timeout_s", "errors", "render", "ray_sets", "rays",
-                "models", "accelerators", "skip", "grid", "plugins"});
+               {"name", "description", "repetitions", "warmup", "processes", "timeout_s", "errors", "render",
+                "ray_sets", "rays", "models", "accelerators", "skip", "grid", "plugins"});
     if (!top.ok()) throw ConfigError(r.c.issues);
     // Before `accelerators`, which may name the plugins' structures.
     if (auto* e = top.find("plugins")) read_plugins(r, e->value);

@@ -98,6 +98,9 @@ struct Config {
     std::string name;  // `name`, default the file's stem; the CSV's `config` column
     int repetitions = 5;
     int warmup = 1;
+    // Child processes that measure each combination, `repetitions` each, pooled into one
+    // row: the second pass gives the spread between processes (docs/configs.md).
+    int processes = 1;
     double timeout_s = 300;
     // Trace every combination's rays through the `reference` accelerator too and write the
     // error columns; `errors: false` turns it off.

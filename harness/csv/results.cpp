@@ -42,7 +42,8 @@ const ColumnSpec kIdentificationColumns[] = {
 const ColumnSpec kMeasuredColumns[] = {
     {"status", ColumnKind::Text, "", "ok, skipped, error or timeout"},
     {"message", ColumnKind::Text, "", "why a row is not ok"},
-    {"repetitions", ColumnKind::Number, "count", "timed repetitions counted"},
+    {"repetitions", ColumnKind::Number, "count", "timed repetitions counted (over every measuring process)"},
+    {"processes", ColumnKind::Number, "count", "child processes that measured the row, repetitions pooled"},
     {"build_s_median", ColumnKind::Number, "s", "build time, median"},
     {"build_s_mean", ColumnKind::Number, "s", "build time, mean"},
     {"build_s_stddev", ColumnKind::Number, "s", "build time, standard deviation"},
@@ -54,6 +55,8 @@ const ColumnSpec kMeasuredColumns[] = {
     {"render_s_ci_lo", ColumnKind::Number, "s", "render time median, 95% CI low end"},
     {"render_s_ci_hi", ColumnKind::Number, "s", "render time median, 95% CI high end"},
     {"ci_coverage", ColumnKind::Number, "fraction", "exact coverage of the median CIs"},
+    {"build_s_process_gap", ColumnKind::Number, "fraction", "build time: largest / smallest process median - 1"},
+    {"render_s_process_gap", ColumnKind::Number, "fraction", "render time: largest / smallest process median - 1"},
     {"render_cpu_s_median", ColumnKind::Number, "s", "render CPU time, median"},
     {"rays", ColumnKind::Number, "count", "primary (or the set's) rays traced"},
     {"hits", ColumnKind::Number, "count", "rays that hit"},
@@ -289,7 +292,8 @@ std::string old_header_message(const std::string& path, const std::vector<std::s
 }
 
 std::vector<std::string> repetition_columns() {
-    return {"config", "combo_id", "model", "accel", "params", "repetition", "build_s", "render_s"};
+    // `process`: the measuring process of the repetition (1-based; config key `processes`).
+    return {"config", "combo_id", "model", "accel", "params", "repetition", "build_s", "render_s", "process"};
 }
 
 const std::vector<std::string>& provenance_columns() {

@@ -219,7 +219,8 @@ std::string json_combination(const Config& config, const DryRunRow& row) {
     s += ", \"triangles\": " + (row.triangles ? std::to_string(*row.triangles) : std::string("null"));
     s += ", \"skip\": " + (row.skip ? json_quoted(*row.skip) : std::string("null"));
     s += ", \"repetitions\": " + std::to_string(repetitions_of(config, c)) +
-        ", \"warmup\": " + std::to_string(warmup_of(config, c)) + "}";
+        ", \"warmup\": " + std::to_string(warmup_of(config, c)) +
+        ", \"processes\": " + std::to_string(config.processes) + "}";
     return s;
 }
 

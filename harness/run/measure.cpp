@@ -239,7 +239,7 @@ public:
                 render_warm_ups();
             }
             const TraceOutput out = timed_render(st, rep);
-            if (rep == settings_.repetitions) second_counting_render();
+            if (rep == settings_.repetitions && !settings_.timing_only) second_counting_render();
             render_counters(st, out);
         });
     }
@@ -518,6 +518,42 @@ std::map<std::string, std::string> error_columns(const HitErrors& hits, const st
         c["hole_pixels"] = std::to_string(image->hole_pixels);
     }
     return c;
+}
+
+void pool_process(Measurement& into, const Measurement& next, int process) {
+    if (into.status != "ok") return;
+    const std::string which = "process " + std::to_string(process);
+    auto fail = [&](const std::string& status, const std::string& message) {
+        into.status = status;
+        into.message = message;
+        into.stage = next.stage;
+    };
+    if (next.status != "ok") return fail(next.status, which + ": " + next.message);
+    std::string d = build_stats_difference(into.build, next.build);
+    if (d.empty() &&
+        (into.rays != next.rays || into.hits != next.hits || into.shadow_rays != next.shadow_rays ||
+         into.shadow_hits != next.shadow_hits))
+        d = "rays/hits " + std::to_string(into.rays) + "/" + std::to_string(into.hits) + " vs " +
+            std::to_string(next.rays) + "/" + std::to_string(next.hits);
+    if (d.empty() && into.counts.has_value() != next.counts.has_value()) d = "traversal counters present in one only";
+    if (d.empty() && into.counts &&
+        (into.counts->node_visits != next.counts->node_visits || into.counts->prim_tests != next.counts->prim_tests ||
+         into.counts->box_tests != next.counts->box_tests))
+        d = "node_visits/prim_tests " + std::to_string(into.counts->node_visits) + "/" +
+            std::to_string(into.counts->prim_tests) + " vs " + std::to_string(next.counts->node_visits) + "/" +
+            std::to_string(next.counts->prim_tests);
+    if (!d.empty()) return fail("error", "nondeterministic between processes: " + d + " (process 1 vs " + which + ")");
+    if (into.process.empty()) into.process.assign(into.render_s.size(), 1);
+    into.build_s.insert(into.build_s.end(), next.build_s.begin(), next.build_s.end());
+    into.render_s.insert(into.render_s.end(), next.render_s.begin(), next.render_s.end());
+    into.render_cpu_s.insert(into.render_cpu_s.end(), next.render_cpu_s.begin(), next.render_cpu_s.end());
+    into.process.insert(into.process.end(), next.render_s.size(), process);
+    auto rss = [](const Measurement& m) {
+        auto it = m.columns.find("peak_rss_bytes");
+        return it == m.columns.end() ? uint64_t(0) : std::stoull(it->second);
+    };
+    if (rss(next) > rss(into)) into.columns["peak_rss_bytes"] = std::to_string(rss(next));
+    if (!next.json.empty()) into.json += (into.json.empty() ? "" : ",") + next.json;
 }
 
 // ---- the wire form ----------------------------------------------------------------------

@@ -39,6 +39,10 @@ struct MeasureSettings {
     bool show_context = true;       // console: GB's machine description (once per run)
     bool json = false;              // keep GB's JSON run objects in Measurement::json
     double timeout_s = 0;           // > 0: checked at every stage boundary in this process
+    // A later process of a combination measured in several (Config::processes): warm-ups,
+    // the first counting render (its counts are compared with the first process's) and the
+    // timed repetitions; no second counting render, so no error columns.
+    bool timing_only = false;
     // Non-empty: callgrind's --callgrind-out-file; the first counted render repetition is
     // counted with callgrind (instructions.h), its dump described by `callgrind_tag`.
     std::string callgrind_out, callgrind_tag;
@@ -48,6 +52,9 @@ struct Measurement {
     std::string status = "ok";  // ok, error or timeout
     std::string message;
     std::vector<double> build_s, render_s;  // one per counted repetition, seconds (wall)
+    // The measuring process (1-based) of each counted repetition, when several processes
+    // measured the combination (pool_process); empty: all in one.
+    std::vector<int> process;
     // The process's CPU time of each counted render (all render threads together): with
     // render.threads > 1, wall / CPU time says how well the threads were used.
     std::vector<double> render_cpu_s;
@@ -100,6 +107,13 @@ std::map<std::string, std::string> error_columns(const HitErrors& hits, const st
 Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
                     const LoadedModel& model, const RenderSettings& render, const MeasureSettings& settings,
                     const StageFn& stage = {}, std::optional<RaySetKind> ray_set = std::nullopt);
+
+// Pools `next`, the same combination measured again in another process (numbered
+// `process`, 2 and up), into `into`: the repetitions appended with their process number,
+// peak_rss_bytes the larger. Everything deterministic (build statistics, ray and hit counts,
+// traversal counters) must be equal in both, else the result is an error naming the value;
+// a failed `next` fails the whole combination, its message naming the process.
+void pool_process(Measurement& into, const Measurement& next, int process);
 
 // Runs `work` in a forked child process (run_in_child) and returns its Measurement. The
 // child reports each stage it begins; if it runs longer than timeout_s it is killed and the

@@ -69,6 +69,9 @@ public:
         return loaded_ ? &*loaded_ : nullptr;
     }
 
+    // The prepared model as it is now, without preparing it.
+    const LoadedModel* loaded() const { return loaded_ ? &*loaded_ : nullptr; }
+
     std::optional<uint64_t> triangles, vertices;
     // Why the model has no rows; why the reference cannot trace it; which stage of its
     // preparation passed the deadline.
@@ -214,22 +217,40 @@ public:
                 "no error measurement: the reference cannot trace the model: " + model.reference_error;
         } else {
             const auto t0 = Clock::now();
-            r.measurement = measure_combination(c, *loaded);
+            r.measurement = measure_combination(c, *loaded, 1);
             r.measuring_s = seconds_since(t0);
         }
         return r;
     }
 
+    // How many processes measure each combination: the config's `processes`, one under
+    // callgrind (whose count is of one render) and --in-process (there is no other process).
+    int processes() const {
+        return options_.in_process || !options_.callgrind_out.empty() ? 1 : plan_.config.processes;
+    }
+
+    // The same combination measured again in process `process` (2 and up), pooled into its
+    // result; only a measured combination that is ok so far, never a robustness case.
+    void measure_again(CombinationResult& r, const ModelOnDemand& model, int process) {
+        const LoadedModel* loaded = model.loaded();
+        if (!loaded || loaded->robustness_case || r.measurement.status != "ok" || !r.measuring_s) return;
+        const auto t0 = Clock::now();
+        pool_process(r.measurement, measure_combination(r.combination, *loaded, process), process);
+        *r.measuring_s += seconds_since(t0);
+    }
+
 private:
     // Timed (or judged, for a robustness case) in a child process that the time limit can
     // stop, unless --in-process.
-    Measurement measure_combination(const Combination& c, const LoadedModel& model) {
+    // `process` > 1: a later process of the combination, timing only.
+    Measurement measure_combination(const Combination& c, const LoadedModel& model, int process) {
         const AcceleratorInfo* info = find_accelerator(c.accel);
         MeasureSettings ms;
         ms.repetitions = repetitions_of(plan_.config, c);
         ms.warmup = warmup_of(plan_.config, c);
         ms.show_repetitions = options_.show_repetitions;
         ms.show_context = first_measurement_;
+        ms.timing_only = process > 1;
         ms.json = !options_.json_out.empty();
         ms.timeout_s = plan_.config.timeout_s;
         ms.callgrind_out = options_.callgrind_out;
@@ -270,18 +291,32 @@ int run_plan(const RunPlan& plan, const RunOptions& options, const std::vector<R
                      [&](const Combination* c) { return c->model == mi; });
         if (mine.empty()) continue;
         ModelOnDemand model(plan.config.models[mi], plan, mine, reference_wanted, options.in_process);
-        for (const Combination* c : mine) {
-            for (RunSink* s : sinks) s->starting(*c);
-            const CombinationResult result = runner.run_one(*c, model);
+        // With several processes, the model's combinations are measured in turn, then all
+        // again (interleaved, so that a drift in time shows as a gap between processes), and
+        // each is reported once its last process is done.
+        const int processes = runner.processes();
+        std::vector<CombinationResult> pending;
+        // False when an output cannot be written, which ends the run.
+        auto report = [&](const CombinationResult& result) {
             not_loaded |= !result.written();
             errors |= result.written() && result.measurement.status == "error";
             try {
                 for (RunSink* s : sinks) s->report(result);
             } catch (const std::exception& e) {
                 std::fprintf(stderr, "accelbench run: %s\n", e.what());
-                return 2;
+                return false;
             }
+            return true;
+        };
+        for (const Combination* c : mine) {
+            for (RunSink* s : sinks) s->starting(*c);
+            if (processes > 1) pending.push_back(runner.run_one(*c, model));
+            else if (!report(runner.run_one(*c, model))) return 2;
         }
+        for (int p = 2; p <= processes; ++p)
+            for (CombinationResult& r : pending) runner.measure_again(r, model, p);
+        for (const CombinationResult& r : pending)
+            if (!report(r)) return 2;
     }
     for (RunSink* s : sinks) s->finalize();
     return not_loaded ? 2 : errors ? 1 : 0;

@@ -17,7 +17,8 @@ void RepetitionsCsv::report(const CombinationResult& result) {
                       {"params", params},
                       {"repetition", std::to_string(i + 1)},
                       {"build_s", number_text(m.build_s[i])},
-                      {"render_s", number_text(m.render_s[i])}});
+                      {"render_s", number_text(m.render_s[i])},
+                      {"process", std::to_string(m.process.empty() ? 1 : m.process[i])}});
 }
 
 }  // namespace accelbench

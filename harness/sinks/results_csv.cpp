@@ -1,5 +1,8 @@
 #include "sinks/results_csv.h"
 
+#include <algorithm>
+#include <map>
+
 #include "accelbench/accel/baseline/embree_accel.h"
 #include "accelbench/accel/registry.h"
 #include "csv/provenance.h"
@@ -58,6 +61,29 @@ Row identification_row(const Config& config, const CombinationResult& result,
     return r;
 }
 
+// `processes`, and with two or more the gap between the processes' medians of each time:
+// largest / smallest - 1, the spread between processes that the repetitions of one process
+// cannot show.
+void add_process_gaps(Row& r, const Measurement& m) {
+    std::map<int, std::pair<std::vector<double>, std::vector<double>>> by_process;
+    for (size_t i = 0; i < m.render_s.size(); ++i) {
+        auto& [build, render] = by_process[m.process.empty() ? 1 : m.process[i]];
+        build.push_back(m.build_s[i]);
+        render.push_back(m.render_s[i]);
+    }
+    r["processes"] = std::to_string(by_process.size());
+    if (by_process.size() < 2) return;
+    for (const bool build : {true, false}) {
+        double lo = 0, hi = 0;
+        for (const auto& [p, samples] : by_process) {
+            const double median = summarize(build ? samples.first : samples.second).median;
+            lo = lo == 0 ? median : std::min(lo, median);
+            hi = std::max(hi, median);
+        }
+        if (lo > 0) r[build ? "build_s_process_gap" : "render_s_process_gap"] = number_text(hi / lo - 1, 6);
+    }
+}
+
 void add_measurement(Row& r, const Measurement& m) {
     r["status"] = m.status;
     r["message"] = m.message;
@@ -80,6 +106,7 @@ void add_measurement(Row& r, const Measurement& m) {
         if (s.ci_hi) r[prefix + "_ci_hi"] = number_text(*s.ci_hi);
         if (s.coverage) r["ci_coverage"] = number_text(*s.coverage, 6);
     }
+    add_process_gaps(r, m);
     if (!m.render_cpu_s.empty()) r["render_cpu_s_median"] = number_text(summarize(m.render_cpu_s).median);
     r["rays"] = std::to_string(m.rays);
     r["hits"] = std::to_string(m.hits);
