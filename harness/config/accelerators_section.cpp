@@ -114,7 +114,7 @@ void read_accelerator(ConfigReader& r, const YAML::Node& n, const std::string& p
     AcceleratorSpec a;
     a.mark = {r.c.file, n.Mark().line + 1, n.Mark().column + 1};
     a.key_path = path;
-    Fields f(r.c, n, path, {"name", "except", "params", "repetitions", "warmup"});
+    Fields f(r.c, n, path, {"name", "except", "params", "repetitions", "warmup", "processes"});
     const auto* ne = f.require("name");
     if (!ne) return;
     auto name = read_string(r.c, ne->value, f.child("name"));
@@ -128,7 +128,7 @@ void read_accelerator(ConfigReader& r, const YAML::Node& n, const std::string& p
         r.c.error(ne->value, f.child("name"), unknown_name("accelerator", a.name, names, did_you_mean(a.name, names)));
         return;
     }
-    bool ok = read_effort(r, f, a.repetitions, a.warmup);
+    bool ok = read_effort(r, f, a.repetitions, a.warmup, a.processes);
     if (all) {
         if (ok) read_all_form(r, f, a);
         return;

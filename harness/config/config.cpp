@@ -31,8 +31,10 @@ std::string ConfigReader::resolve(const std::string& p) const {
     return (fp.is_absolute() ? fp : fs::path(cfg.dir) / fp).lexically_normal().string();
 }
 
-// `repetitions` and `warmup` of a model or an accelerator entry (for the slow ones).
-bool read_effort(ConfigReader& r, const Fields& f, std::optional<int>& repetitions, std::optional<int>& warmup) {
+// `repetitions`, `warmup` and `processes` of a model or an accelerator entry (for the slow
+// ones).
+bool read_effort(ConfigReader& r, const Fields& f, std::optional<int>& repetitions, std::optional<int>& warmup,
+                 std::optional<int>& processes) {
     bool ok = true;
     if (auto* e = f.find("repetitions")) {
         if (auto v = read_int(r.c, e->value, f.child("repetitions"), 1, 1000)) repetitions = int(*v);
@@ -40,6 +42,10 @@ bool read_effort(ConfigReader& r, const Fields& f, std::optional<int>& repetitio
     }
     if (auto* e = f.find("warmup")) {
         if (auto v = read_int(r.c, e->value, f.child("warmup"), 0, 100)) warmup = int(*v);
+        else ok = false;
+    }
+    if (auto* e = f.find("processes")) {
+        if (auto v = read_int(r.c, e->value, f.child("processes"), 1, 10)) processes = int(*v);
         else ok = false;
     }
     return ok;

@@ -51,7 +51,7 @@ struct ModelSpec {
     std::optional<Camera> camera;                          // overrides the registry's / the auto-fit view
     std::shared_ptr<const RaySet> rays;                    // trace these instead of camera rays
     std::optional<ModelTransformSpec> transform;           // Kind::Registry only
-    std::optional<int> repetitions, warmup;                // override the config's for this model
+    std::optional<int> repetitions, warmup, processes;     // override the config's for this model
     std::string label;                                     // the CSV's `model` column
     std::string key;                                       // config-independent identity (the combination id hashes it)
     SourceMark mark;
@@ -67,8 +67,8 @@ struct ParamAxis {
 
 struct AcceleratorSpec {
     std::string name;
-    std::vector<ParamAxis> axes;             // in the order written
-    std::optional<int> repetitions, warmup;  // override the model's and the config's
+    std::vector<ParamAxis> axes;                        // in the order written
+    std::optional<int> repetitions, warmup, processes;  // override the model's and the config's
     SourceMark mark;
     std::string key_path;  // "accelerators[1]"
 };

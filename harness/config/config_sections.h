@@ -49,7 +49,8 @@ void read_skip_rules(ConfigReader& r, const YAML::Node& n);    // skip_section.c
 
 // `repetitions` and `warmup` of a model or an accelerator entry (for the slow ones);
 // false when one is wrong.
-bool read_effort(ConfigReader& r, const Fields& f, std::optional<int>& repetitions, std::optional<int>& warmup);
+bool read_effort(ConfigReader& r, const Fields& f, std::optional<int>& repetitions, std::optional<int>& warmup,
+                 std::optional<int>& processes);
 
 // ---- parameter values (param_values.cpp) ----------------------------------------------
 

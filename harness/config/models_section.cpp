@@ -149,7 +149,7 @@ bool read_procedural_params(ConfigReader& r, const Fields& f, const ProceduralIn
     return ok;
 }
 
-// The options every mapping form takes: camera, rays, label, repetitions, warmup.
+// The options every mapping form takes: camera, rays, label, repetitions, warmup, processes.
 bool read_model_options(ConfigReader& r, const Fields& f, ModelSpec& m) {
     bool ok = true;
     if (auto* e = f.find("camera")) {
@@ -170,13 +170,13 @@ bool read_model_options(ConfigReader& r, const Fields& f, ModelSpec& m) {
     }
     if (auto* e = f.find("label"))
         if (auto s = read_string(r.c, e->value, f.child("label"))) m.label = *s;
-    ok &= read_effort(r, f, m.repetitions, m.warmup);
+    ok &= read_effort(r, f, m.repetitions, m.warmup, m.processes);
     return ok;
 }
 
 // `{name: ...}`, `{path: ...}` or `{procedural: ...}` with their options.
 void read_model_mapping(ConfigReader& r, const Fields& f, const char* form, ModelSpec m) {
-    std::vector<std::string> allowed = {form, "camera", "rays", "label", "repetitions", "warmup"};
+    std::vector<std::string> allowed = {form, "camera", "rays", "label", "repetitions", "warmup", "processes"};
     const auto* given = f.find(form);
     auto value = read_string(r.c, given->value, f.child(form));
     if (!value) return;

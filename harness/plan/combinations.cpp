@@ -146,6 +146,11 @@ int warmup_of(const Config& config, const Combination& c) {
     return config.accelerators[c.accelerator].warmup.value_or(config.models[c.model].warmup.value_or(config.warmup));
 }
 
+int processes_of(const Config& config, const Combination& c) {
+    return config.accelerators[c.accelerator].processes.value_or(
+        config.models[c.model].processes.value_or(config.processes));
+}
+
 std::optional<std::string> skip_reason(const Config& config, const Combination& c, uint64_t triangles) {
     for (const SkipRule& r : config.skip) {
         if (r.accel && *r.accel != c.accel) continue;

@@ -57,9 +57,10 @@ uint64_t fnv1a64(const std::string& text);
 std::string hex16(uint64_t v);
 
 // How much measuring a combination gets: its accelerator entry's `repetitions` /
-// `warmup`, else its model's, else the config's.
+// `warmup` / `processes`, else its model's, else the config's.
 int repetitions_of(const Config& config, const Combination& c);
 int warmup_of(const Config& config, const Combination& c);
+int processes_of(const Config& config, const Combination& c);
 
 // The reason of the first skip rule that matches, if any.
 std::optional<std::string> skip_reason(const Config& config, const Combination& c, uint64_t triangles);

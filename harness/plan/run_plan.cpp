@@ -220,7 +220,7 @@ std::string json_combination(const Config& config, const DryRunRow& row) {
     s += ", \"skip\": " + (row.skip ? json_quoted(*row.skip) : std::string("null"));
     s += ", \"repetitions\": " + std::to_string(repetitions_of(config, c)) +
         ", \"warmup\": " + std::to_string(warmup_of(config, c)) +
-        ", \"processes\": " + std::to_string(config.processes) + "}";
+        ", \"processes\": " + std::to_string(processes_of(config, c)) + "}";
     return s;
 }
 

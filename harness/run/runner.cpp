@@ -223,17 +223,19 @@ public:
         return r;
     }
 
-    // How many processes measure each combination: the config's `processes`, one under
+    // How many processes measure a combination: its `processes` (processes_of), one under
     // callgrind (whose count is of one render) and --in-process (there is no other process).
-    int processes() const {
-        return options_.in_process || !options_.callgrind_out.empty() ? 1 : plan_.config.processes;
+    int processes(const Combination& c) const {
+        return options_.in_process || !options_.callgrind_out.empty() ? 1 : processes_of(plan_.config, c);
     }
 
     // The same combination measured again in process `process` (2 and up), pooled into its
     // result; only a measured combination that is ok so far, never a robustness case.
     void measure_again(CombinationResult& r, const ModelOnDemand& model, int process) {
         const LoadedModel* loaded = model.loaded();
-        if (!loaded || loaded->robustness_case || r.measurement.status != "ok" || !r.measuring_s) return;
+        if (process > processes(r.combination) || !loaded || loaded->robustness_case || r.measurement.status != "ok" ||
+            !r.measuring_s)
+            return;
         const auto t0 = Clock::now();
         pool_process(r.measurement, measure_combination(r.combination, *loaded, process), process);
         *r.measuring_s += seconds_since(t0);
@@ -294,7 +296,8 @@ int run_plan(const RunPlan& plan, const RunOptions& options, const std::vector<R
         // With several processes, the model's combinations are measured in turn, then all
         // again (interleaved, so that a drift in time shows as a gap between processes), and
         // each is reported once its last process is done.
-        const int processes = runner.processes();
+        int processes = 1;
+        for (const Combination* c : mine) processes = std::max(processes, runner.processes(*c));
         std::vector<CombinationResult> pending;
         // False when an output cannot be written, which ends the run.
         auto report = [&](const CombinationResult& result) {

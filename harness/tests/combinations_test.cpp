@@ -167,10 +167,11 @@ accelerators:
 TEST_F(CombinationsTest, RepetitionsAndWarmupOverridesForTheSlowOnes) {
     const Config c = load("a.yaml", R"yaml(repetitions: 5
 warmup: 2
-models: [igea, {name: stanford-bunny, repetitions: 3}]
+processes: 2
+models: [igea, {name: stanford-bunny, repetitions: 3, processes: 3}]
 accelerators:
   - {name: embree}
-  - {name: brute_force, repetitions: 1, warmup: 0}
+  - {name: brute_force, repetitions: 1, warmup: 0, processes: 1}
 )yaml");
     const auto all = expand(c);
     ASSERT_EQ(all.size(), 4u);
@@ -181,6 +182,10 @@ accelerators:
     EXPECT_EQ(repetitions_of(c, all[2]), 3);  // bunny / embree: the model's
     EXPECT_EQ(warmup_of(c, all[2]), 2);
     EXPECT_EQ(repetitions_of(c, all[3]), 1);
+    EXPECT_EQ(processes_of(c, all[0]), 2);  // the config's
+    EXPECT_EQ(processes_of(c, all[1]), 1);  // the accelerator entry's
+    EXPECT_EQ(processes_of(c, all[2]), 3);  // the model's
+    EXPECT_EQ(processes_of(c, all[3]), 1);
     // How much is measured is not what is measured: ids do not change.
     const auto plain = expand(load("b.yaml", "models: [igea]\naccelerators: [{name: brute_force}]\n"));
     EXPECT_EQ(plain[0].id, all[1].id);

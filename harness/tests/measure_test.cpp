@@ -149,6 +149,56 @@ TEST(MeasureTest, RayFileTracesThoseRays) {
     EXPECT_EQ(m.hits, 1u);
 }
 
+// A later process of a combination: its repetitions join the first's with their process
+// number, and its deterministic values must equal the first's.
+TEST(MeasureTest, ALaterProcessTimesOnlyAndPoolsIntoTheFirst) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo info = BruteForce::info();
+    MeasureSettings later = quick();
+    later.timing_only = true;
+    Measurement first = measure("box/brute_force", info, defaults(info), model, tiny_render(), quick());
+    const Measurement second = measure("box/brute_force", info, defaults(info), model, tiny_render(), later);
+    ASSERT_EQ(first.status, "ok") << first.message;
+    ASSERT_EQ(second.status, "ok") << second.message;
+    EXPECT_EQ(second.counts->prim_tests, first.counts->prim_tests);  // its counting render ran
+    const size_t reps = first.render_s.size();
+    pool_process(first, second, 2);
+    ASSERT_EQ(first.status, "ok") << first.message;
+    EXPECT_EQ(first.render_s.size(), 2 * reps);
+    EXPECT_EQ(first.build_s.size(), 2 * reps);
+    std::vector<int> expected(reps, 1);
+    expected.insert(expected.end(), reps, 2);
+    EXPECT_EQ(first.process, expected);
+}
+
+TEST(MeasureTest, ProcessesThatDisagreeOrFailFailTheRow) {
+    Measurement a;
+    a.render_s = a.build_s = {1.0, 1.1};
+    a.rays = 10;
+    a.build.nodes = 7;
+    Measurement b = a;
+    b.build.nodes = 9;
+    Measurement pooled = a;
+    pool_process(pooled, b, 2);
+    EXPECT_EQ(pooled.status, "error");
+    EXPECT_NE(pooled.message.find("nondeterministic between processes: nodes 7 vs 9"), std::string::npos)
+        << pooled.message;
+
+    b = a;
+    b.hits = 3;
+    pooled = a;
+    pool_process(pooled, b, 3);
+    EXPECT_NE(pooled.message.find("(process 1 vs process 3)"), std::string::npos) << pooled.message;
+
+    b = a;
+    b.status = "timeout";
+    b.message = "exceeded the time limit";
+    pooled = a;
+    pool_process(pooled, b, 2);
+    EXPECT_EQ(pooled.status, "timeout");
+    EXPECT_EQ(pooled.message, "process 2: exceeded the time limit");
+}
+
 TEST(MeasureTest, NondeterministicBuildFailsLoudly) {
     const LoadedModel model = box_model();
     const AcceleratorInfo info = test_accel("drifting", [] { return std::make_unique<DriftingBuild>(); });

@@ -80,6 +80,8 @@ TEST_F(RunTest, WritesOneRowPerCombination) {
     EXPECT_EQ(bf.at(param_column("max_triangles")), "20000");
     EXPECT_EQ(bf.at(param_column("quality")), "");  // not a brute_force parameter
     EXPECT_EQ(bf.at("repetitions"), "2");
+    EXPECT_EQ(bf.at("processes"), "1");
+    EXPECT_EQ(bf.at("render_s_process_gap"), "");  // one process: no gap measured
     EXPECT_EQ(bf.at("rays"), std::to_string(24 * 16));
     EXPECT_EQ(bf.at("ray_source"), "camera");
     EXPECT_EQ(bf.at("image_width"), "24");
@@ -114,6 +116,41 @@ TEST_F(RunTest, WritesOneRowPerCombination) {
     // Raw samples: two per measured combination.
     const CsvData reps = read_csv(repetitions_path(out));
     EXPECT_EQ(reps.rows.size(), 5u * 2u);
+}
+
+// `processes: 2`: each combination measured in two child processes, pooled into one row
+// whose repetitions say which process measured them.
+TEST_F(RunTest, SeveralProcessesPoolIntoOneRowWithTheirGap) {
+    const std::string two = write_file(dir.path(), "two.yaml", R"(name: two
+repetitions: 2
+processes: 2
+render: {width: 24, height: 16}
+models:
+  - {procedural: soup, triangles: 1000, seed: 3}
+accelerators:
+  - {name: brute_force}
+  - {name: embree}
+)");
+    const std::string two_out = (dir.path() / "out" / "two.csv").string();
+    ASSERT_EQ(run({two, "--out", two_out}), 0);
+    const CsvData d = read_csv(two_out);
+    ASSERT_EQ(d.rows.size(), 2u);
+    for (size_t i = 0; i < d.rows.size(); ++i) {
+        const auto r = as_map(d, i);
+        EXPECT_EQ(r.at("status"), "ok") << r.at("message");
+        EXPECT_EQ(r.at("repetitions"), "4");
+        EXPECT_EQ(r.at("processes"), "2");
+        EXPECT_EQ(r.at("ci_coverage"), "0.875");  // [min, max] of four samples
+        EXPECT_FALSE(r.at("build_s_process_gap").empty());
+        EXPECT_FALSE(r.at("render_s_process_gap").empty());
+        EXPECT_GE(std::stod(r.at("render_s_process_gap")), 0.0);
+        EXPECT_EQ(r.at("false_misses"), "0");  // the first process's error trace
+    }
+    const CsvData reps = read_csv(repetitions_path(two_out));
+    ASSERT_EQ(reps.header, repetition_columns());
+    std::map<std::string, int> per_process;
+    for (const auto& row : reps.rows) ++per_process[row.back()];
+    EXPECT_EQ(per_process, (std::map<std::string, int>{{"1", 4}, {"2", 4}}));
 }
 
 // Every row says how wrong it is: the error columns against the reference.
