@@ -79,3 +79,49 @@ def test_ci_labels_show_the_coverage_the_intervals_have():
     assert ci_label([0.75, 0.75]) == "CI 75%"
     assert ci_label([0.75, median_ci(6)[1], float("nan")]) == "CI 75-97%"
     assert ci_label([float("nan"), ""]) == ci_label([]) == "CI"  # one repetition: no interval
+
+
+def with_process_gaps(res: Results, metric: str, gaps: list, processes: list) -> Results:
+    """The rows with the harness's `processes` and `<metric>_s_process_gap` columns."""
+    return Results(rows=res.rows.assign(processes=processes, **{f"{metric}_s_process_gap": gaps}), groups=[])
+
+
+def render_results(*rows: tuple[str, str, float, float, float, float]) -> Results:
+    frame = results(*rows).rows
+    return Results(rows=frame.rename(columns=lambda c: c.replace("build_s", "render_s")), groups=[])
+
+
+def test_the_gap_between_the_processes_that_measured_one_row():
+    # Two child processes measured one row (6 repetitions pooled): their medians lie 12%
+    # apart, while the pooled interval is narrow.
+    res = with_process_gaps(
+        render_results(("wbvh", "table4", 0.030, 0.0297, 0.0303, 0.969)), "render", [0.12], [2]
+    )
+    s = measured_spread(res, ["wbvh"], "render")["wbvh"]
+    assert s.value == pytest.approx(0.12) and s.between_processes == pytest.approx(0.12)
+    assert s.how == "render between processes: 2 processes measured one row"
+    assert widest_gap(res, "render").value == pytest.approx(0.12)
+    # The rows of one config still count when they differ more than a row's own processes.
+    res = with_process_gaps(
+        render_results(
+            ("b", "table4", 0.10, 0.099, 0.101, 0.969), ("b", "table4", 0.13, 0.129, 0.131, 0.969)
+        ),
+        "render",
+        [0.05, 0.02],
+        [2, 2],
+    )
+    s = measured_spread(res, ["b"], "render")["b"]
+    assert s.value == pytest.approx(0.3) and "processes of one config" in s.how
+
+
+def test_an_unknown_process_gap_is_not_a_zero_gap():
+    # Older CSVs (no column) and rows of one process (empty gap) say nothing between
+    # processes: the spread is what the rows show, here the interval alone.
+    one = render_results(("k", "table2", 0.100, 0.096, 0.104, 0.969))
+    for res in (one, with_process_gaps(one, "render", [float("nan")], [1])):
+        s = measured_spread(res, ["k"], "render")["k"]
+        assert s.between_processes == 0 and s.value == pytest.approx(0.04)
+        assert "interval" in s.how
+    # Build's gap never stands for render's.
+    res = with_process_gaps(one, "build", [0.5], [2])
+    assert measured_spread(res, ["k"], "render")["k"].value == pytest.approx(0.04)

@@ -4,11 +4,15 @@ claim's verdict is judged against (`within noise` where its margin lies inside i
 One combination (one `combo_id`: model, structure, parameters, image) may be measured by
 several configs of a run (a table config, the faithful and ablation configs), by the same
 config in several processes (the job's second pass, shards, resumed runs: each row is its
-own measuring process), and always by several repetitions. Its relative spread is the
+own measuring process; and the child processes one row's repetitions are pooled from, the
+`processes` column), and always by several repetitions. Its relative spread is the
 largest of three parts, each relative to the smaller or the middle value:
 
 - between processes: the largest over the smallest median among the rows of one config,
-  minus one (the largest such gap over its configs);
+  minus one (the largest such gap over its configs), or, where larger, the largest
+  `build_s_process_gap` / `render_s_process_gap` of its rows (the harness's max / min - 1
+  of the per-process medians of one row); a row without that gap (one process, older
+  CSVs) adds nothing, it is unknown rather than zero; the `how` text says which;
 - between configs: the largest gap between two rows of different configs (ablation rows
   included), max / min - 1;
 - the repetitions' interval: how far one row's order-statistics interval of the median
