@@ -10,8 +10,9 @@ import pandas as pd
 import pytest
 
 from accelbench_analysis.inputs.schema import Results
-from accelbench_analysis.mapping.formatting import ci_label
+from accelbench_analysis.mapping.formatting import ci_label, repetitions_text
 from accelbench_analysis.mapping.spread import claim_spread, measured_spread, median_ci, widest_gap
+from accelbench_analysis.outputs.report.report import timing_lines
 
 
 def results(*rows: tuple[str, str, float, float, float, float]) -> Results:
@@ -125,3 +126,29 @@ def test_an_unknown_process_gap_is_not_a_zero_gap():
     # Build's gap never stands for render's.
     res = with_process_gaps(one, "build", [0.5], [2])
     assert measured_spread(res, ["k"], "render")["k"].value == pytest.approx(0.04)
+
+
+def test_repetitions_say_how_many_processes_measured_them():
+    pooled = pd.DataFrame(
+        {"config": "table4", "repetitions": [6, 6], "processes": [2, 2], "ci_coverage": 0.96875}
+    )
+    assert repetitions_text(pooled) == "6 repetitions pooled from 2 processes"
+    assert repetitions_text(pooled.assign(repetitions=3, processes=1)) == "3 repetitions in one process"
+    # No column (older CSVs) or an empty cell: unknown, never read as one process.
+    assert repetitions_text(pooled.drop(columns="processes")) == "6 repetitions, processes not recorded"
+    mixed = pd.concat([pooled, pooled.assign(repetitions=1, processes=float("nan")).iloc[:1]])
+    assert repetitions_text(mixed) == (
+        "2 rows of 6 repetitions pooled from 2 processes; 1 row of 1 repetition, processes not recorded"
+    )
+    lines = timing_lines(
+        Results(
+            rows=pd.concat(
+                [pooled, pooled.assign(config="ray-sets", repetitions=3, processes=1, ci_coverage=0.75)]
+            ).assign(status="ok"),
+            groups=[],
+        )
+    )
+    assert lines[1:] == [
+        "  - table4: 6 repetitions pooled from 2 processes; CI 97%",
+        "  - ray-sets: 3 repetitions in one process; CI 75%",
+    ]
