@@ -99,9 +99,12 @@ class _Measurement:
 
 def _interval(rows: list[_Measurement]) -> tuple[float, float | None]:
     """The widest reach of a row's interval from its median, and that interval's coverage
-    (the first row of the widest reach)."""
+    (the first row of the widest reach). A zero median has no relative reach (loading
+    refuses zero times; hand-made frames may hold one)."""
     best, cov = None, None
     for r in rows:
+        if r.median <= 0:
+            continue
         ends = [x for x in (r.hi / r.median - 1, 1 - r.lo / r.median) if not math.isnan(x)]
         if ends and (best is None or max(ends) > best):
             best, cov = max(ends), r.coverage
