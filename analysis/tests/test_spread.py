@@ -10,8 +10,9 @@ import pandas as pd
 import pytest
 
 from accelbench_analysis.inputs.schema import Results
-from accelbench_analysis.mapping.formatting import ci_label
+from accelbench_analysis.mapping.formatting import ci_label, repetitions_text
 from accelbench_analysis.mapping.spread import claim_spread, measured_spread, median_ci, widest_gap
+from accelbench_analysis.outputs.report.report import timing_lines
 
 
 def results(*rows: tuple[str, str, float, float, float, float]) -> Results:
@@ -79,3 +80,75 @@ def test_ci_labels_show_the_coverage_the_intervals_have():
     assert ci_label([0.75, 0.75]) == "CI 75%"
     assert ci_label([0.75, median_ci(6)[1], float("nan")]) == "CI 75-97%"
     assert ci_label([float("nan"), ""]) == ci_label([]) == "CI"  # one repetition: no interval
+
+
+def with_process_gaps(res: Results, metric: str, gaps: list, processes: list) -> Results:
+    """The rows with the harness's `processes` and `<metric>_s_process_gap` columns."""
+    return Results(rows=res.rows.assign(processes=processes, **{f"{metric}_s_process_gap": gaps}), groups=[])
+
+
+def render_results(*rows: tuple[str, str, float, float, float, float]) -> Results:
+    frame = results(*rows).rows
+    return Results(rows=frame.rename(columns=lambda c: c.replace("build_s", "render_s")), groups=[])
+
+
+def test_the_gap_between_the_processes_that_measured_one_row():
+    # Two child processes measured one row (6 repetitions pooled): their medians lie 12%
+    # apart, while the pooled interval is narrow.
+    res = with_process_gaps(
+        render_results(("wbvh", "table4", 0.030, 0.0297, 0.0303, 0.969)), "render", [0.12], [2]
+    )
+    s = measured_spread(res, ["wbvh"], "render")["wbvh"]
+    assert s.value == pytest.approx(0.12) and s.between_processes == pytest.approx(0.12)
+    assert s.how == "render between processes: 2 processes measured one row"
+    assert widest_gap(res, "render").value == pytest.approx(0.12)
+    # The rows of one config still count when they differ more than a row's own processes.
+    res = with_process_gaps(
+        render_results(
+            ("b", "table4", 0.10, 0.099, 0.101, 0.969), ("b", "table4", 0.13, 0.129, 0.131, 0.969)
+        ),
+        "render",
+        [0.05, 0.02],
+        [2, 2],
+    )
+    s = measured_spread(res, ["b"], "render")["b"]
+    assert s.value == pytest.approx(0.3) and "processes of one config" in s.how
+
+
+def test_an_unknown_process_gap_is_not_a_zero_gap():
+    # Older CSVs (no column) and rows of one process (empty gap) say nothing between
+    # processes: the spread is what the rows show, here the interval alone.
+    one = render_results(("k", "table2", 0.100, 0.096, 0.104, 0.969))
+    for res in (one, with_process_gaps(one, "render", [float("nan")], [1])):
+        s = measured_spread(res, ["k"], "render")["k"]
+        assert s.between_processes == 0 and s.value == pytest.approx(0.04)
+        assert "interval" in s.how
+    # Build's gap never stands for render's.
+    res = with_process_gaps(one, "build", [0.5], [2])
+    assert measured_spread(res, ["k"], "render")["k"].value == pytest.approx(0.04)
+
+
+def test_repetitions_say_how_many_processes_measured_them():
+    pooled = pd.DataFrame(
+        {"config": "table4", "repetitions": [6, 6], "processes": [2, 2], "ci_coverage": 0.96875}
+    )
+    assert repetitions_text(pooled) == "6 repetitions pooled from 2 processes"
+    assert repetitions_text(pooled.assign(repetitions=3, processes=1)) == "3 repetitions in one process"
+    # No column (older CSVs) or an empty cell: unknown, never read as one process.
+    assert repetitions_text(pooled.drop(columns="processes")) == "6 repetitions, processes not recorded"
+    mixed = pd.concat([pooled, pooled.assign(repetitions=1, processes=float("nan")).iloc[:1]])
+    assert repetitions_text(mixed) == (
+        "2 rows of 6 repetitions pooled from 2 processes; 1 row of 1 repetition, processes not recorded"
+    )
+    lines = timing_lines(
+        Results(
+            rows=pd.concat(
+                [pooled, pooled.assign(config="ray-sets", repetitions=3, processes=1, ci_coverage=0.75)]
+            ).assign(status="ok"),
+            groups=[],
+        )
+    )
+    assert lines[1:] == [
+        "  - table4: 6 repetitions pooled from 2 processes; CI 97%",
+        "  - ray-sets: 3 repetitions in one process; CI 75%",
+    ]

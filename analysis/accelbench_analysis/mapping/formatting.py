@@ -49,6 +49,35 @@ def ci_label(coverages) -> str:
     return f"CI {values[0]}%" if len(values) == 1 else f"CI {values[0]}-{values[-1]}%"
 
 
+def _measuring_kind(repetitions: float, processes: float) -> str:
+    reps = f"{repetitions:g} repetition{'' if repetitions == 1 else 's'}"
+    if math.isnan(processes):
+        return f"{reps}, processes not recorded"
+    if processes == 1:
+        return f"{reps} in one process"
+    return f"{reps} pooled from {processes:g} processes"
+
+
+def repetitions_text(rows: pd.DataFrame) -> str:
+    """How the timed rows were measured, from their `repetitions` and `processes` columns:
+    "6 repetitions pooled from 2 processes", "3 repetitions in one process"; where the rows
+    differ, each kind with its row count, the most common first. A CSV without `processes`
+    (or a row that leaves it empty) says "processes not recorded": unknown, never one."""
+    if "repetitions" not in rows or rows.empty:
+        return "no timed row"
+    reps = pd.to_numeric(rows["repetitions"], errors="coerce")
+    procs = pd.to_numeric(rows["processes"], errors="coerce") if "processes" in rows else reps * math.nan
+    kinds: dict[str, int] = {}
+    for r, p in zip(reps, procs):
+        if not math.isnan(r):
+            kind = _measuring_kind(r, p)
+            kinds[kind] = kinds.get(kind, 0) + 1
+    if len(kinds) <= 1:
+        return next(iter(kinds), "no timed row")
+    ordered = sorted(kinds.items(), key=lambda kv: -kv[1])
+    return "; ".join(f"{n} row{'' if n == 1 else 's'} of {kind}" for kind, n in ordered)
+
+
 def fmt_measure(median, lo=None, hi=None, sig: int = SIGNIFICANT) -> str:
     """A median with its CI in brackets (coverage: ci_label), the bounds at the median's
     precision."""

@@ -284,6 +284,23 @@ class Picker:
         self.rows = results.measured_rows()
         self.models = set(self.rows["model"])
         self._structures: list[Structure] | None = None
+        # The rows of each (model, accel), in the rows' order, and the answers already
+        # given: a claim asks for the same cell thousands of times (once per noise draw).
+        self._of = dict(tuple(self.rows.groupby(["model", "accel"], sort=False))) if len(self.rows) else {}
+        self._candidates: dict[tuple, pd.DataFrame] = {}
+        self._picks: dict[tuple, Pick] = {}
+        self._depth_sweeps: dict[tuple, str | None] = {}
+
+    def rows_of(self, model: str, accel: str) -> pd.DataFrame:
+        """The rows of one structure on one model (none: an empty frame)."""
+        return self._of.get((model, accel), self.rows.iloc[0:0])
+
+    def depth_sweep_max_prims(self, model: str, depths: list[str]) -> str | None:
+        """depth_sweep_max_prims on the kd-tree's rows of `model`."""
+        key = (model, tuple(depths))
+        if key not in self._depth_sweeps:
+            self._depth_sweeps[key] = depth_sweep_max_prims(self.rows_of(model, "kdtree"), depths)
+        return self._depth_sweeps[key]
 
     def structures(self) -> list[Structure]:
         """The structure table's structures of the comparison, then one structure at its
@@ -314,25 +331,30 @@ class Picker:
         return next(s for s in self.structures() if s.key == key)
 
     def candidates(self, model: str, spec: Spec, variant: str | None = None) -> pd.DataFrame:
-        df = self.rows[(self.rows["model"] == model) & (self.rows["accel"] == spec.accel)]
-        keep = []
-        for _, r in df.iterrows():
-            p = r["param_dict"]
-            ok = all(param_matches(p, r["triangles"], k, v) for k, v in spec.required)
-            if ok and variant is not None:
-                ok = variant_of(p) == variant
-            keep.append(ok)
-        return df[keep] if len(df) else df
+        key = (model, spec, variant)
+        if key not in self._candidates:
+            df = self.rows_of(model, spec.accel)
+            keep = [
+                all(param_matches(p, tri, k, v) for k, v in spec.required)
+                and (variant is None or variant_of(p) == variant)
+                for p, tri in zip(df["param_dict"], df["triangles"])
+            ]
+            self._candidates[key] = df[keep] if len(df) else df
+        return self._candidates[key]
 
     def variants(self, models: list[str], spec: Spec) -> list[str]:
         """Traversal variants present for this spec on any of the models."""
-        seen = set()
-        for m in models:
-            for _, r in self.candidates(m, spec).iterrows():
-                seen.add(variant_of(r["param_dict"]))
+        seen = {variant_of(p) for m in models for p in self.candidates(m, spec)["param_dict"]}
         return sorted(seen, key=lambda v: (v != "", v != "ordered", v))
 
     def pick(self, model: str, spec: Spec, variant: str | None = None) -> Pick:
+        """The row of the cell (the same Pick every time it is asked: read it, never change it)."""
+        key = (model, spec, variant)
+        if key not in self._picks:
+            self._picks[key] = self._pick(model, spec, variant)
+        return self._picks[key]
+
+    def _pick(self, model: str, spec: Spec, variant: str | None) -> Pick:
         cands = self.candidates(model, spec, variant)
         if cands.empty:
             return Pick(None, "no row", self._what_exists(model, spec))
@@ -371,7 +393,7 @@ class Picker:
         return Pick(chosen, notes=notes)
 
     def _what_exists(self, model: str, spec: Spec) -> list[str]:
-        df = self.rows[(self.rows["model"] == model) & (self.rows["accel"] == spec.accel)]
+        df = self.rows_of(model, spec.accel)
         if df.empty:
             return []
         shown = sorted(set(df["params"]))[:3]
@@ -392,16 +414,15 @@ def variant_label(label: str, variant: str, variants: list[str]) -> str:
     return f"{label} [traversal={variant}]"
 
 
-def depth_sweep_max_prims(picker: Picker, model: str, depths: list[str]) -> str | None:
-    """The max_prims value at which our kd-tree depth sweep was run.
+def depth_sweep_max_prims(rows: pd.DataFrame, depths: list[str]) -> str | None:
+    """The max_prims value at which our kd-tree depth sweep was run (`rows`: the kd-tree's
+    rows on one model).
 
     The report does not state the maxPrims of its depth sweep. Ours is whichever max_prims
     covers the most of the report's depths on this model (ties: the smallest value).
     """
-    df = picker.rows[(picker.rows["model"] == model) & (picker.rows["accel"] == "kdtree")]
     cover: dict[str, set[str]] = {}
-    for _, r in df.iterrows():
-        p = r["param_dict"]
+    for p in rows["param_dict"]:
         if p.get("max_depth") in depths and "max_prims" in p:
             cover.setdefault(p["max_prims"], set()).add(p["max_depth"])
     if not cover:
@@ -421,6 +442,6 @@ def setting_spec(setting: str, structure: str, picker: Picker, model: str, depth
     name, value = parsed
     if name == "max_prims":
         return Spec("kdtree", (("max_prims", value), ("max_depth", AUTO)), KD_PREFERRED)
-    fixed = depth_sweep_max_prims(picker, model, depths)
+    fixed = picker.depth_sweep_max_prims(model, depths)
     req = (("max_depth", value),) + ((("max_prims", fixed),) if fixed is not None else ())
     return Spec("kdtree", req, KD_PREFERRED)

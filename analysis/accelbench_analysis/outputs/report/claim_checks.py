@@ -128,6 +128,7 @@ class OurSource:
             for s in report_nums.loc[report_nums["table"] == 2, "setting"]
             if s.startswith("maxDepth=")
         ]
+        self._specs: dict[tuple[str, str, str], tuple[Spec, str | None]] = {}
         self.begin()
 
     def begin(self) -> None:
@@ -151,6 +152,12 @@ class OurSource:
         """The spec of one of the report's settings ("default", a Table 2 setting, or
         "threads=N": Table 3's setting built on N threads) at this source's setting, and
         the traversal variant to read (the setting's, else the preferred one measured)."""
+        key = (model, structure, setting)
+        if key not in self._specs:
+            self._specs[key] = self._spec(model, structure, setting)
+        return self._specs[key]
+
+    def _spec(self, model: str, structure: str, setting: str) -> tuple[Spec, str | None]:
         threads = setting.partition("=")[2] if setting.startswith("threads=") else None
         ours = self.model(model)
         spec = setting_spec("default" if threads else setting, structure, self.picker, ours, self.depths)

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ...inputs.report_numbers import REPORT_MACHINE, REPORT_MODELS
 from ...inputs.schema import FP_MODE_COLUMN, Results
-from ...mapping.formatting import md_escape
+from ...mapping.formatting import ci_label, md_escape, repetitions_text
 from ..figures.figures import FIGURES, Skipped
 from .claim_verdicts import summary_with_matrix
 from .claims_output import ClaimsResult, plain_statements
@@ -83,8 +83,25 @@ def provenance_lines(results: Results) -> list[str]:
     )
     if ts:
         out.append(f"- **Measured:** {ts[0]}" + (f" to {ts[-1]}" if ts[-1] != ts[0] else ""))
+    out += timing_lines(results)
     out.append("- **CSV:** " + ", ".join(f"`{f}`" for f in results.files))
     return out
+
+
+def timing_lines(results: Results) -> list[str]:
+    """How each config's timed rows were measured (repetitions, the processes they were
+    pooled from, the intervals' coverage), configs measured alike on one line."""
+    rows = results.ok()
+    if rows.empty or "config" not in rows:
+        return []
+    alike: dict[str, list[str]] = {}
+    for config, part in rows.groupby("config", sort=False):
+        how = f"{repetitions_text(part)}; {ci_label(part.get('ci_coverage', []))}"
+        alike.setdefault(how, []).append(str(config))
+    return [
+        "- **Timed rows:** each time is the median of its row's repetitions, its interval the "
+        "median's order-statistics interval (CI: its exact coverage, `ci_coverage`)"
+    ] + [f"  - {', '.join(configs)}: {how}" for how, configs in alike.items()]
 
 
 def stand_in_lines() -> list[str]:

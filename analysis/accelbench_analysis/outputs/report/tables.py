@@ -45,6 +45,7 @@ from ...mapping.formatting import (
     fmt_measure,
     fmt_sig,
     is_missing,
+    repetitions_text,
     to_latex,
     to_markdown,
 )
@@ -71,10 +72,12 @@ def run_ci_label(results: Results) -> str:
     return ci_label(results.ok().get("ci_coverage", pd.Series(dtype=float)))
 
 
-def ci_caption(results: Results) -> str:
-    """The caption's words for the intervals: their coverage, or that there are none."""
+def ci_caption(results: Results, shown: pd.DataFrame) -> str:
+    """The caption's words for the intervals: their coverage, or that there are none, and
+    how the rows the table shows (`shown`) were measured (repetitions, processes)."""
     label = run_ci_label(results)
-    return "no interval (one repetition)" if label == "CI" else f"{label[3:]} coverage"
+    reps = repetitions_text(shown[~shown.index.duplicated()])
+    return f"no interval; {reps}" if label == "CI" else f"{label[3:]} coverage; {reps}"
 
 
 def subcolumns(results: Results) -> list[str]:
@@ -256,7 +259,7 @@ def model_table(
     caption = (
         f"Report's Table {number} beside our measurement of the same structures "
         f"(plus the binned-SAH BVH and Embree). Each model: our median with its "
-        f"confidence interval ({ci_caption(results)}), the report's number, "
+        f"confidence interval ({ci_caption(results, picked_rows(picks.values()))}), the report's number, "
         f"and ours/report."
     )
     main = report_table(f"table{number}", title, caption, groups, header, rows, fixed + notes, results)
@@ -475,7 +478,7 @@ def table2(
         f"The report's Table 2 (kd-tree parameters on the Stanford bunny) beside ours. "
         f"Model: ours {fmt_count(tri)} triangles / {fmt_count(vert)} vertices; the "
         f"report's #Primitives {fmt_count(prims)}. Each metric: our median with its "
-        f"confidence interval ({ci_caption(results)}), the report's number, ours/report."
+        f"confidence interval ({ci_caption(results, picked_rows(row_picks))}), the report's number, ours/report."
     )
     fixed = table2_notes(results, report_nums, ablations, fixed_mp, row_picks)
     doc = report_table(
