@@ -227,6 +227,11 @@ constexpr AddedColumn kAddedColumns[] = {
     {"plugin_file", "embree_isa", ""},
     {"plugin_sha256", "plugin_file", ""},
     {"plugin_version", "plugin_sha256", ""},
+    // Older rows were measured in one process each, but a skipped or failed row has no
+    // measurement at all: the count is left empty (not recorded), as are the gaps.
+    {"processes", "repetitions", ""},
+    {"build_s_process_gap", "ci_coverage", ""},
+    {"render_s_process_gap", "build_s_process_gap", ""},
 };
 
 // The added columns `header` lacks (those whose predecessor it has).
