@@ -30,7 +30,7 @@ import pandas as pd
 from ...inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results
 from ...mapping.formatting import md_escape
 from ...mapping.selection import EMBREE_PREFERRED, label_of
-from ...mapping.structures import baseline_accels
+from ...mapping.structures import baseline_accels, table_row
 from ...mapping.styles import Styles
 from .interactive import ray_sets_spec, thread_scaling_spec, write_figure
 
@@ -62,13 +62,24 @@ def without_thread_scaling(results: Results) -> tuple[Results, list[str]]:
     return replace(results, rows=results.rows[~mask]), [note]
 
 
+def table_or_csv_label(accel: str, params: dict, csv_label) -> str:
+    """The structure table's label of a row's structure; for an accelerator the table lacks
+    (a plugin's, not loaded when the table was read) the row's own `label` column."""
+    if table_row(accel) is None and isinstance(csv_label, str) and csv_label:
+        return csv_label
+    return label_of(accel, params)
+
+
 def structure_labels(rows: pd.DataFrame) -> pd.Series:
     """The structure table's label of each row's structure ("wide BVH (8, SIMD)"), plus the
     parameters that vary among the rows of one label ("Embree [robust=true]"), so that two
     settings never share a label. A `threads` parameter follows the render thread count (a
     workload setting, not the structure's)."""
+    csv_labels = rows["label"] if "label" in rows.columns else pd.Series("", index=rows.index)
     base = pd.Series(
-        [label_of(a, p) for a, p in zip(rows["accel"], rows["param_dict"])], index=rows.index, dtype=object
+        [table_or_csv_label(a, p, c) for a, p, c in zip(rows["accel"], rows["param_dict"], csv_labels)],
+        index=rows.index,
+        dtype=object,
     )
     labels = base.copy()
     for _, group in rows.groupby(base):
@@ -111,7 +122,7 @@ def ray_set_rows(results: Results) -> pd.DataFrame:
     return rows
 
 
-def _baseline_row(group: pd.DataFrame) -> pd.Series | None:
+def baseline_row(group: pd.DataFrame) -> pd.Series | None:
     """Embree's row of one model, set and workload: the only one, else the one at Embree's
     defaults; None when there is none or no single one."""
     embree = group[group["accel"].isin(baseline_accels())]
@@ -140,7 +151,7 @@ def ray_set_table(rows: pd.DataFrame) -> pd.DataFrame:
     parts = []
     for _, g in rows.groupby(["model", "workload", "ray_set"], observed=True, sort=False):
         t = g[cols].copy()
-        base = _baseline_row(g)
+        base = baseline_row(g)
         t["embree_mrays_per_s"] = float("nan") if base is None else base["mrays_per_s"]
         parts.append(t)
     t = pd.concat(parts) if parts else pd.DataFrame(columns=cols + ["embree_mrays_per_s"])
