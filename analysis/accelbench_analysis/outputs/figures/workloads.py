@@ -175,10 +175,30 @@ def ranking(rows: pd.DataFrame) -> pd.DataFrame:
     return r
 
 
-def _md_table(header: list[str], body: list[list[str]]) -> list[str]:
+def md_table(header: list[str], body: list[list[str]]) -> list[str]:
     out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     out += ["| " + " | ".join(row) + " |" for row in body]
     return out
+
+
+def cells_per_set(rows: pd.DataFrame, sets: list[str], cell) -> list[str]:
+    """One structure's cells, one per ray set: `cell` of its row in that set, "-" where it
+    has none."""
+    out = []
+    for rs in sets:
+        hit = rows[rows["ray_set"] == rs]
+        out.append("-" if hit.empty else cell(hit.iloc[0]))
+    return out
+
+
+def _mrays_cell(r: pd.Series) -> str:
+    cell = f"{r['mrays_per_s']:.3g}"
+    if pd.notna(r["ratio_to_embree"]):
+        cell += f" ({r['ratio_to_embree']:.2f}x)"
+    wrong = (r["false_misses"] if pd.notna(r["false_misses"]) else 0) + (
+        r["false_hits"] if pd.notna(r["false_hits"]) else 0
+    )
+    return cell + (f" [{int(wrong)} wrong]" if wrong else "")
 
 
 def ray_set_markdown(table: pd.DataFrame) -> str:
@@ -202,24 +222,8 @@ def ray_set_markdown(table: pd.DataFrame) -> str:
         out += [f"## {md_escape(panel)}", ""]
         body = []
         for structure, s in g.groupby("structure"):
-            cells = [md_escape(structure)]
-            for rs in sets:
-                hit = s[s["ray_set"] == rs]
-                if hit.empty:
-                    cells.append("-")
-                    continue
-                r = hit.iloc[0]
-                cell = f"{r['mrays_per_s']:.3g}"
-                if pd.notna(r["ratio_to_embree"]):
-                    cell += f" ({r['ratio_to_embree']:.2f}x)"
-                wrong = (r["false_misses"] if pd.notna(r["false_misses"]) else 0) + (
-                    r["false_hits"] if pd.notna(r["false_hits"]) else 0
-                )
-                if wrong:
-                    cell += f" [{int(wrong)} wrong]"
-                cells.append(cell)
-            body.append(cells)
-        out += _md_table(["structure"] + sets, body) + [""]
+            body.append([md_escape(structure), *cells_per_set(s, sets, _mrays_cell)])
+        out += md_table(["structure"] + sets, body) + [""]
     return "\n".join(out)
 
 
@@ -240,17 +244,10 @@ def ranking_markdown(rank: pd.DataFrame) -> str:
         order += sorted(set(g["structure"]) - set(order))
         for structure in order:
             s = g[g["structure"] == structure]
-            cells = [md_escape(structure)]
-            for rs in sets:
-                hit = s[s["ray_set"] == rs]
-                cells.append(
-                    "-"
-                    if hit.empty
-                    else f"{int(hit.iloc[0]['rank'])}" + ("*" if hit.iloc[0]["changed"] else "")
-                )
-            body.append(cells)
+            rank = cells_per_set(s, sets, lambda r: f"{int(r['rank'])}" + ("*" if r["changed"] else ""))
+            body.append([md_escape(structure), *rank])
         changed = [rs for rs in sets if g[(g["ray_set"] == rs)]["changed"].any()]
-        out += _md_table(["structure"] + sets, body)
+        out += md_table(["structure"] + sets, body)
         out += ["", "Order changes in: " + (", ".join(changed) if changed else "none") + ".", ""]
     return "\n".join(out)
 
@@ -311,7 +308,7 @@ def thread_scaling_markdown(rows: pd.DataFrame) -> str:
                     f"{r['efficiency']:.2f}" if pd.notna(r["efficiency"]) else "-",
                 ]
             )
-        out += _md_table(
+        out += md_table(
             [
                 "structure",
                 "threads",

@@ -26,7 +26,14 @@ from ...inputs.schema import CAMERA_SET, RAY_SETS, Results
 from ...mapping.formatting import md_escape
 from ...mapping.structures import role_of
 from ..figures.interactive import peers_spec, write_figure
-from ..figures.workloads import baseline_row, hue_palette, structure_labels, workload_labels
+from ..figures.workloads import (
+    baseline_row,
+    cells_per_set,
+    hue_palette,
+    md_table,
+    structure_labels,
+    workload_labels,
+)
 
 PEERS_DOC = "tables/peers.md"
 PEERS_CSV = "tables/peers.csv"
@@ -108,6 +115,16 @@ def _wrong(values: pd.Series) -> str:
     return "-" if values.isna().all() else f"{int(values.fillna(0).sum()):,}"
 
 
+def _ratio_cell(r: pd.Series) -> str:
+    """A structure's cell in one set: its trace ratio and rank, its wrong answers, or the
+    status of a failed row."""
+    if r["status"] != "ok":
+        return f"**{md_escape(r['status'])}**"
+    cell = "-" if pd.isna(r["trace_ratio"]) else f"{r['trace_ratio']:.2f} ({int(r['rank'])})"
+    wrong = sum(int(r[c]) for c in WRONG if c in r and pd.notna(r[c]))
+    return cell + (f" [{wrong:,} wrong]" if wrong else "")
+
+
 def _panel_lines(g: pd.DataFrame, sets: list[str]) -> list[str]:
     """One panel's table: the structures by the geometric mean of their trace ratios."""
     order = (
@@ -115,28 +132,23 @@ def _panel_lines(g: pd.DataFrame, sets: list[str]) -> list[str]:
         .apply(lambda r: float(np.exp(np.log(r.dropna()).mean())) if r.notna().any() else np.inf)
         .sort_values(kind="stable")
     )
-    header = ["rank", "structure", "from", *sets, "build", *[c.replace("_", " ") for c in WRONG]]
-    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    body = []
     for place, (structure, mean) in enumerate(order.items(), 1):
         s = g[g["structure"] == structure]
-        cells = [str(place) if np.isfinite(mean) else "-", md_escape(structure), md_escape(s["from"].iloc[0])]
-        for rs in sets:
-            hit = s[s["ray_set"] == rs]
-            if hit.empty:
-                cells.append("-")
-                continue
-            r = hit.iloc[0]
-            if r["status"] != "ok":
-                cells.append(f"**{md_escape(r['status'])}**")
-                continue
-            cell = "-" if pd.isna(r["trace_ratio"]) else f"{r['trace_ratio']:.2f} ({int(r['rank'])})"
-            wrong = sum(int(r[c]) for c in WRONG if c in r and pd.notna(r[c]))
-            cells.append(cell + (f" [{wrong:,} wrong]" if wrong else ""))
         build = s["build_ratio"].dropna()
-        cells.append(f"{build.median():.2f}" if len(build) else "-")
-        cells += [_wrong(s[c]) if c in s else "-" for c in WRONG]
-        out.append("| " + " | ".join(cells) + " |")
-    return out
+        body.append(
+            [
+                str(place) if np.isfinite(mean) else "-",
+                md_escape(structure),
+                md_escape(s["from"].iloc[0]),
+                *cells_per_set(s, sets, _ratio_cell),
+                f"{build.median():.2f}" if len(build) else "-",
+                *[_wrong(s[c]) if c in s else "-" for c in WRONG],
+            ]
+        )
+    return md_table(
+        ["rank", "structure", "from", *sets, "build", *[c.replace("_", " ") for c in WRONG]], body
+    )
 
 
 def peers_markdown(table: pd.DataFrame) -> str:
