@@ -31,7 +31,7 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 
 .PHONY: help deps deps-python deps-tools deps-browser venv build models test test-cpp test-python \
         reproduce-tables reference-run test-sanitize regress update-baseline grid-search robustness \
-        history clean slurm-deps slurm-submit test-slurm
+        peers history clean slurm-deps slurm-submit test-slurm
 
 # `make help`: every target with a `## what it does` comment after its rule, in file order.
 help: ## this list
@@ -79,6 +79,7 @@ $(BUILD_DIR)/build.ninja: CMakeLists.txt | deps
 
 build: $(BUILD_DIR)/build.ninja ## the CLI (build/accelbench), its tests and accel_bench (the default)
 	ninja -C $(BUILD_DIR) -j $(JOBS)
+	@[ -d $(PEERS_SRC) ] || echo "build: no $(PEERS_SRC): the peers' plugins (tinybvh, bvh v2) are not built"
 
 # The core library, its public headers, the plugin header and the CMake package
 # (find_package(accelbench CONFIG): accelbench::core, accelbench::plugin) under PREFIX.
@@ -256,6 +257,24 @@ robustness: build models venv ## the extreme-case catalogue's verdicts (configs/
 	set -o pipefail; $(ACCELBENCH) run --out $(ROBUSTNESS_DIR)/robustness.csv configs/robustness.yaml \
 	  | tee $(ROBUSTNESS_DIR)/robustness.log | sed -n '/^Robustness verdicts/,$$p'
 	$(ANALYSIS) robustness --csv $(ROBUSTNESS_DIR)/robustness.csv --out $(ROBUSTNESS_DIR)
+
+# ---- the open peers ------------------------------------------------------------------
+# configs/peers.yaml: ours, Embree and the open peers (tinybvh's BVH, BVH4_CPU, BVH8_CPU and
+# bvh v2, plugins built by `make build` into build/peers/ from PEERS_SRC, see
+# examples/plugins/peers) on the bench models and every ray set, single-threaded; then the
+# analysis's `all` into the same folder (REPORT.md and index.html, its peers table and
+# figure). Always a fresh run (about 5 minutes on 2 cores). Writes results/peers/.
+PEERS_SRC     ?= ../shared/peers
+PEERS_DIR     ?= results/peers
+PEER_PLUGINS  := $(BUILD_DIR)/peers/tinybvh.so $(BUILD_DIR)/peers/bvh2.so
+
+peers: build models venv ## the open peers (tinybvh, bvh v2) beside ours and Embree (configs/peers.yaml)
+	@for p in $(PEER_PLUGINS); do [ -f $$p ] || { \
+	  echo "peers: $$p not built: $(PEERS_SRC) lacks the peers' sources (see examples/plugins/peers)" >&2; exit 2; }; done
+	mkdir -p $(PEERS_DIR)
+	rm -f $(PEERS_DIR)/peers.csv $(PEERS_DIR)/peers.reps.csv $(PEERS_DIR)/peers.inputs.csv
+	$(ACCELBENCH) run --out $(PEERS_DIR)/peers.csv configs/peers.yaml > $(PEERS_DIR)/peers.log
+	$(ANALYSIS) all $(PEERS_DIR)/peers.csv --out $(PEERS_DIR)
 
 # ---- Slurm ------------------------------------------------------------------------
 # `make slurm-submit CONFIG=configs/NAME.yaml SHARDS=N`: an array job of N tasks, task i

@@ -210,11 +210,12 @@ def report(src: Sources, out: Path) -> list[Path]:
 
 def analyse_all(src: Sources, out: Path) -> list[Path]:
     """Tables, claims, figures, the three-way comparison, REPORT.md and index.html, plus the
-    ray-set and thread-scaling outputs."""
+    ray-set and thread-scaling outputs and, when plugins were measured, the peers'."""
     from .outputs.figures.workloads import write_workloads
+    from .outputs.report.peers import write_peers
 
     data = load(src)
-    written = write_workloads(data.everything, out)
+    written = write_workloads(data.everything, out) + write_peers(data.everything, out)
     claim_rows = comparison = None
     if data.of_the_report:  # the report's tables, claims and comparison have rows to show
         written += write_tables_of(data, out)

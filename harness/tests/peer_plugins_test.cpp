@@ -4,6 +4,7 @@
 // their sources; skipped, saying so, where it has not.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "accelbench/accel/registry.h"
@@ -14,13 +15,26 @@
 namespace accelbench {
 namespace {
 
+// The procedural scenes, and the forest shrunk by 2^-12 (about 0.01 across, as the bench
+// models' are 0.1-0.3): its triangles as small as the 871k dragon's, where a triangle
+// test with an absolute bound on its determinant (tinybvh's BVH layout, unless its plugin
+// scales the rays) misses them.
+Scene peer_scene(const std::string& kind) {
+    if (kind != "small forest") return make_procedural(kind, {{"triangles", "20000"}, {"seed", "3"}});
+    Scene scene = make_procedural("forest", {{"triangles", "20000"}, {"seed", "3"}});
+    for (Vec3& v : scene.vertices) v = v * std::ldexp(1.0f, -12);
+    scene.name = "small forest";
+    scene.finalize();
+    return scene;
+}
+
 void expect_peer_agrees(const char* file,
                         const std::vector<std::pair<const char*, std::map<std::string, std::string>>>& runs) {
     const std::string path = std::string(ACCELBENCH_PEER_PLUGIN_DIR) + "/" + file;
     if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not built: ../shared/peers lacks its library";
     load_plugin_file(path);
-    for (const char* kind : {"forest", "city", "soup"}) {
-        const Scene scene = make_procedural(kind, {{"triangles", "20000"}, {"seed", "3"}});
+    for (const char* kind : {"forest", "city", "soup", "small forest"}) {
+        const Scene scene = peer_scene(kind);
         const std::vector<Ray> rays = test::probe_rays(scene, 3000);
         for (const auto& [name, params] : runs) {
             auto accel = make_accelerator(name, params);

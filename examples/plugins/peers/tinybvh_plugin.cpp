@@ -7,6 +7,8 @@
 #define TINYBVH_IMPLEMENTATION
 #include <tiny_bvh.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <memory>
 #include <type_traits>
@@ -44,26 +46,56 @@ struct Structure {
     Params params;
     std::vector<bvhvec4> vertices;
     Layout bvh;
+    float dir_scale = 1;  // direction_scale() of the scene
 };
+
+// The power of two every ray direction is multiplied by before tinybvh sees it. The layout
+// BVH tests triangles by Moeller-Trumbore (tiny_bvh.h, MOLLER_TRUMBORE_TEST) and rejects
+// every determinant below 1e-6 in absolute value; the determinant grows with the triangle's
+// area times |dir|, so in a scene of small extent every small triangle is refused (on the
+// 871k-triangle dragon, 47,253 of 307,200 primary rays missed or hit a farther triangle).
+// Scaling the direction by 2^k so that |dir| * diagonal^2 is about 2^20 makes that bound
+// relative to the scene: only triangles below ~5e-13 of the diagonal squared are refused.
+// A power of two is exact in floating point: every product of the traversal and the
+// triangle tests scales by an exact power of two (the hits and barycentrics are the same
+// bits; t comes back divided by 2^k, multiplied back exactly). Never below 1 (a scene
+// larger than 2^10 has no such triangles to lose) nor above 2^40 (far from overflow).
+// tinybvh's WATERTIGHT_TRITEST would avoid the bound, but 1.6.7's TriOccludes does not
+// compile with it (its opacity-map code uses the Moeller-Trumbore test's u, v).
+float direction_scale(const std::vector<bvhvec4>& vertices) {
+    if (vertices.empty()) return 1;
+    bvhvec3 lo = vertices[0], hi = vertices[0];
+    for (const bvhvec4& v : vertices)
+        lo = tinybvh::tinybvh_min(lo, bvhvec3(v)), hi = tinybvh::tinybvh_max(hi, bvhvec3(v));
+    const float diagonal2 = tinybvh::tinybvh_dot(hi - lo, hi - lo);
+    if (!(diagonal2 > 0)) return 1;
+    const long k = std::lround(std::log2(double(1 << 20) / double(diagonal2)));
+    return std::ldexp(1.0f, int(std::clamp(k, 0L, 40L)));
+}
 
 // A tinybvh ray for ours: tinybvh has no tmin, so the origin moves to tmin (0 for camera
 // rays: unchanged) and the distances are measured from there; the direction is not
-// normalized (tinybvh's constructor would), so t stays in the units of ours.
+// normalized (tinybvh's constructor would) but scaled by `dir_scale`, so tinybvh's t is
+// ours divided by it.
 struct PeerRay {
     tinybvh::Ray ray;
-    float tmin, tmax;
+    float tmin, tmax;  // tmax in tinybvh's units
+    float scale;
+
+    float our_t() const { return ray.hit.t * scale + tmin; }
 };
 
-PeerRay peer_ray(const accelbench_ray& r) {
+PeerRay peer_ray(const accelbench_ray& r, float dir_scale) {
     PeerRay p;
+    p.scale = dir_scale;
     p.tmin = r.tmin > 0 && std::isfinite(r.tmin) ? r.tmin : 0.0f;
     const bvhvec3 d(r.dir[0], r.dir[1], r.dir[2]);
     p.ray.O = bvhvec3(r.org[0] + p.tmin * d.x, r.org[1] + p.tmin * d.y, r.org[2] + p.tmin * d.z);
-    p.ray.D = d;
-    p.ray.rD = bvhvec3(tinybvh::tinybvh_safercp(d.x), tinybvh::tinybvh_safercp(d.y), tinybvh::tinybvh_safercp(d.z));
+    p.ray.D = d * dir_scale;
+    p.ray.rD = tinybvh::tinybvh_safercp(p.ray.D);
     p.ray.mask = RAY_MASK_INTERSECT_ALL;
     p.ray.instIdx = 0;
-    p.tmax = r.tmax - p.tmin;
+    p.tmax = (r.tmax - p.tmin) / dir_scale;
     p.ray.hit.t = p.tmax;
     p.ray.hit.u = p.ray.hit.v = 0;
     p.ray.hit.prim = ACCELBENCH_INVALID_PRIM;
@@ -94,6 +126,7 @@ int build(accelbench_structure* handle, const accelbench_scene* scene, char* err
         s.vertices.resize(scene->vertex_count);
         for (uint64_t i = 0; i < scene->vertex_count; ++i)
             s.vertices[i] = bvhvec4(scene->vertices[3 * i], scene->vertices[3 * i + 1], scene->vertices[3 * i + 2], 0);
+        s.dir_scale = direction_scale(s.vertices);
         if (scene->triangle_count == 0) return;  // nothing to build: every ray misses
         builder_bvh(s.bvh).threadedBuild = s.params.threaded_build;
         const bvhvec4slice slice(s.vertices.data(), uint32_t(s.vertices.size()), sizeof(bvhvec4));
@@ -120,11 +153,11 @@ void closest_hits(const accelbench_structure* handle, const accelbench_ray* rays
     for (uint64_t i = 0; i < count; ++i) {
         hits[i] = peer_plugin::miss();
         if (s.vertices.empty() || !peer_plugin::traceable(rays[i])) continue;
-        PeerRay p = peer_ray(rays[i]);
+        PeerRay p = peer_ray(rays[i], s.dir_scale);
         if (!(p.tmax > 0)) continue;
         s.bvh.Intersect(p.ray);
         if (p.ray.hit.t < p.tmax && p.ray.hit.prim != ACCELBENCH_INVALID_PRIM)
-            hits[i] = {p.ray.hit.prim, p.ray.hit.t + p.tmin, p.ray.hit.u, p.ray.hit.v};
+            hits[i] = {p.ray.hit.prim, p.our_t(), p.ray.hit.u, p.ray.hit.v};
     }
 }
 
@@ -135,7 +168,7 @@ void any_hits(const accelbench_structure* handle, const accelbench_ray* rays, ui
     for (uint64_t i = 0; i < count; ++i) {
         occluded[i] = 0;
         if (s.vertices.empty() || !peer_plugin::traceable(rays[i])) continue;
-        const PeerRay p = peer_ray(rays[i]);
+        const PeerRay p = peer_ray(rays[i], s.dir_scale);
         if (p.tmax > 0) occluded[i] = s.bvh.IsOccluded(p.ray) ? 1 : 0;
     }
 }

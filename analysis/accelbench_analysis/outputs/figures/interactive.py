@@ -385,3 +385,54 @@ def thread_scaling_spec(rows: pd.DataFrame, palette: dict[str, str]) -> dict:
             ],
         },
     }
+
+
+def peers_spec(table: pd.DataFrame, sets: list[str], palette: dict[str, str]) -> dict:
+    """report.peers.peer_table's ok rows: each structure's trace time over Embree's per ray
+    set, a panel per model (log scale; the rule at 1 is Embree), the shape saying where the
+    structure comes from (ours, Embree, a plugin)."""
+    data = table.assign(origin=table["from"].map(lambda f: "plugin" if f.startswith("plugin") else f))
+    x = {"field": "ray_set", "type": "nominal", "sort": sets, "title": "ray set", "axis": {"labelAngle": 0}}
+    y = {**log("trace_ratio", "trace time / Embree's (log)"), "axis": {"format": ".2~f"}}
+    tooltip = [
+        {"field": "model", "type": "nominal"},
+        {"field": "structure", "type": "nominal"},
+        {"field": "from", "type": "nominal"},
+        {"field": "ray_set", "type": "nominal", "title": "ray set"},
+        number("trace_ratio", "trace / Embree", ".3f"),
+        number("rank", "rank in the set", "d"),
+        number("build_ratio", "build / Embree", ".3f"),
+        number("false_misses", "false misses", ",d"),
+        number("false_hits", "false hits", ",d"),
+        number("prim_mismatches", "wrong primitives", ",d"),
+    ]
+    return {
+        "$schema": SCHEMA,
+        "title": "Trace time against Embree per ray set: ours, Embree and the plugins' structures",
+        "data": {"values": records(data, list(data.columns))},
+        "facet": {"field": "panel", "type": "nominal", "sort": unique(table["panel"]), "title": None},
+        "columns": 3,
+        "spec": {
+            **PANEL,
+            "layer": [
+                {
+                    "mark": {"type": "rule", "strokeDash": [4, 3], "color": "grey"},
+                    "encoding": {"y": {"datum": 1}},
+                },
+                picked_layer(
+                    {"type": "line", "point": {"filled": True, "size": 50}},
+                    x,
+                    y,
+                    colour("structure", palette),
+                    tooltip,
+                    # Ours and Embree solid, the plugins' structures dashed.
+                    strokeDash={
+                        "field": "origin",
+                        "type": "nominal",
+                        "title": "from",
+                        "scale": {"domain": ["ours", "Embree", "plugin"], "range": [[1, 0], [1, 0], [5, 3]]},
+                    },
+                ),
+            ],
+        },
+    }

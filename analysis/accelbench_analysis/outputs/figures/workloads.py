@@ -30,7 +30,7 @@ import pandas as pd
 from ...inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results
 from ...mapping.formatting import md_escape
 from ...mapping.selection import EMBREE_PREFERRED, label_of
-from ...mapping.structures import baseline_accels
+from ...mapping.structures import baseline_accels, table_row
 from ...mapping.styles import Styles
 from .interactive import ray_sets_spec, thread_scaling_spec, write_figure
 
@@ -62,13 +62,24 @@ def without_thread_scaling(results: Results) -> tuple[Results, list[str]]:
     return replace(results, rows=results.rows[~mask]), [note]
 
 
+def table_or_csv_label(accel: str, params: dict, csv_label) -> str:
+    """The structure table's label of a row's structure; for an accelerator the table lacks
+    (a plugin's, not loaded when the table was read) the row's own `label` column."""
+    if table_row(accel) is None and isinstance(csv_label, str) and csv_label:
+        return csv_label
+    return label_of(accel, params)
+
+
 def structure_labels(rows: pd.DataFrame) -> pd.Series:
     """The structure table's label of each row's structure ("wide BVH (8, SIMD)"), plus the
     parameters that vary among the rows of one label ("Embree [robust=true]"), so that two
     settings never share a label. A `threads` parameter follows the render thread count (a
     workload setting, not the structure's)."""
+    csv_labels = rows["label"] if "label" in rows.columns else pd.Series("", index=rows.index)
     base = pd.Series(
-        [label_of(a, p) for a, p in zip(rows["accel"], rows["param_dict"])], index=rows.index, dtype=object
+        [table_or_csv_label(a, p, c) for a, p, c in zip(rows["accel"], rows["param_dict"], csv_labels)],
+        index=rows.index,
+        dtype=object,
     )
     labels = base.copy()
     for _, group in rows.groupby(base):
@@ -111,7 +122,7 @@ def ray_set_rows(results: Results) -> pd.DataFrame:
     return rows
 
 
-def _baseline_row(group: pd.DataFrame) -> pd.Series | None:
+def baseline_row(group: pd.DataFrame) -> pd.Series | None:
     """Embree's row of one model, set and workload: the only one, else the one at Embree's
     defaults; None when there is none or no single one."""
     embree = group[group["accel"].isin(baseline_accels())]
@@ -140,7 +151,7 @@ def ray_set_table(rows: pd.DataFrame) -> pd.DataFrame:
     parts = []
     for _, g in rows.groupby(["model", "workload", "ray_set"], observed=True, sort=False):
         t = g[cols].copy()
-        base = _baseline_row(g)
+        base = baseline_row(g)
         t["embree_mrays_per_s"] = float("nan") if base is None else base["mrays_per_s"]
         parts.append(t)
     t = pd.concat(parts) if parts else pd.DataFrame(columns=cols + ["embree_mrays_per_s"])
@@ -164,10 +175,30 @@ def ranking(rows: pd.DataFrame) -> pd.DataFrame:
     return r
 
 
-def _md_table(header: list[str], body: list[list[str]]) -> list[str]:
+def md_table(header: list[str], body: list[list[str]]) -> list[str]:
     out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     out += ["| " + " | ".join(row) + " |" for row in body]
     return out
+
+
+def cells_per_set(rows: pd.DataFrame, sets: list[str], cell) -> list[str]:
+    """One structure's cells, one per ray set: `cell` of its row in that set, "-" where it
+    has none."""
+    out = []
+    for rs in sets:
+        hit = rows[rows["ray_set"] == rs]
+        out.append("-" if hit.empty else cell(hit.iloc[0]))
+    return out
+
+
+def _mrays_cell(r: pd.Series) -> str:
+    cell = f"{r['mrays_per_s']:.3g}"
+    if pd.notna(r["ratio_to_embree"]):
+        cell += f" ({r['ratio_to_embree']:.2f}x)"
+    wrong = (r["false_misses"] if pd.notna(r["false_misses"]) else 0) + (
+        r["false_hits"] if pd.notna(r["false_hits"]) else 0
+    )
+    return cell + (f" [{int(wrong)} wrong]" if wrong else "")
 
 
 def ray_set_markdown(table: pd.DataFrame) -> str:
@@ -191,24 +222,8 @@ def ray_set_markdown(table: pd.DataFrame) -> str:
         out += [f"## {md_escape(panel)}", ""]
         body = []
         for structure, s in g.groupby("structure"):
-            cells = [md_escape(structure)]
-            for rs in sets:
-                hit = s[s["ray_set"] == rs]
-                if hit.empty:
-                    cells.append("-")
-                    continue
-                r = hit.iloc[0]
-                cell = f"{r['mrays_per_s']:.3g}"
-                if pd.notna(r["ratio_to_embree"]):
-                    cell += f" ({r['ratio_to_embree']:.2f}x)"
-                wrong = (r["false_misses"] if pd.notna(r["false_misses"]) else 0) + (
-                    r["false_hits"] if pd.notna(r["false_hits"]) else 0
-                )
-                if wrong:
-                    cell += f" [{int(wrong)} wrong]"
-                cells.append(cell)
-            body.append(cells)
-        out += _md_table(["structure"] + sets, body) + [""]
+            body.append([md_escape(structure), *cells_per_set(s, sets, _mrays_cell)])
+        out += md_table(["structure"] + sets, body) + [""]
     return "\n".join(out)
 
 
@@ -229,17 +244,10 @@ def ranking_markdown(rank: pd.DataFrame) -> str:
         order += sorted(set(g["structure"]) - set(order))
         for structure in order:
             s = g[g["structure"] == structure]
-            cells = [md_escape(structure)]
-            for rs in sets:
-                hit = s[s["ray_set"] == rs]
-                cells.append(
-                    "-"
-                    if hit.empty
-                    else f"{int(hit.iloc[0]['rank'])}" + ("*" if hit.iloc[0]["changed"] else "")
-                )
-            body.append(cells)
+            rank = cells_per_set(s, sets, lambda r: f"{int(r['rank'])}" + ("*" if r["changed"] else ""))
+            body.append([md_escape(structure), *rank])
         changed = [rs for rs in sets if g[(g["ray_set"] == rs)]["changed"].any()]
-        out += _md_table(["structure"] + sets, body)
+        out += md_table(["structure"] + sets, body)
         out += ["", "Order changes in: " + (", ".join(changed) if changed else "none") + ".", ""]
     return "\n".join(out)
 
@@ -300,7 +308,7 @@ def thread_scaling_markdown(rows: pd.DataFrame) -> str:
                     f"{r['efficiency']:.2f}" if pd.notna(r["efficiency"]) else "-",
                 ]
             )
-        out += _md_table(
+        out += md_table(
             [
                 "structure",
                 "threads",

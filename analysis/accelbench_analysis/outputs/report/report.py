@@ -17,6 +17,7 @@ from ..figures.figures import FIGURES, Skipped
 from .claim_verdicts import summary_with_matrix
 from .claims_output import ClaimsResult, plain_statements
 from .comparison import ThreeWay
+from .peers import PEERS_CSV, PEERS_DOC, PEERS_FIGURE
 from .ranking import RANKING_DOC, full_ranking_markdown, ranking_markdown
 
 TABLE_CAPTIONS = {
@@ -218,6 +219,13 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
             "occlusion, diffuse bounces, random rays; each structure also as a ratio to "
             "Embree), the [ranking of structures by ray set](tables/ray_set_ranking.md) "
             "marking where their order changes, and [the figure](figures/ray_sets.png)."
+        )
+    if (out_dir / PEERS_DOC).is_file():
+        out.append(
+            f"- [The open peers beside ours and Embree]({PEERS_DOC}): the structures loaded "
+            "from plugins (tinybvh, bvh v2, ...) and every other structure of the same models, "
+            "ranked per ray set by trace time over Embree's, with the build time over Embree's "
+            f"and every wrong answer ([CSV]({PEERS_CSV}), [figure]({PEERS_FIGURE}))."
         )
     if (out_dir / "tables" / "thread_scaling.md").is_file():
         out.append(
