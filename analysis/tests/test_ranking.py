@@ -12,6 +12,7 @@ import pytest
 from synthetic import row, write_csv
 
 from accelbench_analysis.inputs.load import load_results
+from accelbench_analysis.outputs.report.ranking import APART_TITLE as APART
 from accelbench_analysis.outputs.report.ranking import ranking_markdown, ranking_table
 from accelbench_analysis.outputs.report.ranking_rows import Ratio, geomean, ratios
 
@@ -62,8 +63,9 @@ def first_table(lines: list[str]) -> list[list[str]]:
     return [[c.strip() for c in line.strip("|").split(" | ")] for line in lines[start:end]]
 
 
-def section(lines: list[str], heading: str) -> list[str]:
-    i = lines.index(heading)
+def section(lines: list[str], title: str) -> list[str]:
+    """The lines after the paragraph that opens with this bold title."""
+    i = next(i for i, line in enumerate(lines) if line.startswith(f"**{title}.**"))
     return lines[i + 1 :]
 
 
@@ -73,7 +75,7 @@ def test_ablations_and_baseline_variants_are_never_ranked_and_have_their_table(t
     ranked = [r[0] for r in table[2:]]
     assert ranked == ["wide BVH (8, SIMD)", "Embree", "BVH (median)"]
     assert [r[1] for r in table[2:]] == ["1", "2", "3"]
-    apart = first_table(section(lines, "### Ablations and baseline variants: what the guarantees cost"))
+    apart = first_table(section(lines, APART))
     cells = {r[0]: r[1:] for r in apart[2:]}
     assert list(cells) == [
         "wide BVH (8, SIMD, ablation fma) ÷ wide BVH (8, SIMD)",
@@ -94,10 +96,11 @@ def test_ablations_and_baseline_variants_are_never_ranked_and_have_their_table(t
         cells["wide BVH (8, SIMD, ablation moeller) ÷ wide BVH (8, SIMD)"],
         cells["wide BVH (8, SIMD, ablation moeller) ÷ Embree"],
     )
-    assert own[0].startswith("0.800 [") and embree[0].startswith("0.640 [")
-    assert cells["Embree (robust=true) ÷ Embree"][0].startswith("1.20 [")
-    note = next(line for line in lines if line.startswith("- What each changes"))
-    assert "leaf_test=moeller (its structure: wide BVH (8, SIMD))" in note and "robust=true" in note
+    # ± the larger side of the interval: 2% on each median, 0.8 * 1.02 / 0.98 = 0.833 (+4.1%).
+    assert own[0] == "0.800 ±4.1%" and embree[0] == "0.640 ±4.1%"
+    assert cells["Embree (robust=true) ÷ Embree"][0] == "1.20 ±4.1%"
+    lead = next(line for line in lines if line.startswith("**Ablations"))
+    assert "here node_test=fma, leaf_test=moeller" in lead
 
 
 def test_the_ablations_own_structure_is_the_row_beside_it(tmp_path):
@@ -115,8 +118,7 @@ def test_the_ablations_own_structure_is_the_row_beside_it(tmp_path):
 def test_a_run_without_ablations_or_variants_has_no_such_table(tmp_path):
     rows = [r for r in ROWS if "ablation" not in r[2] and r[1] is not ROBUST]
     lines = ranking_markdown(run_csv(tmp_path / "run.csv", rows))
-    assert not [line for line in lines if line.startswith("### ")]
-    assert not any("guarantees" in line for line in lines)
+    assert not any("guarantees" in line or "ablation" in line.lower() for line in lines)
     assert [r[0] for r in first_table(lines)[2:]] == ["wide BVH (8, SIMD)", "Embree", "BVH (median)"]
 
 
@@ -124,20 +126,14 @@ def test_the_first_table_stays_narrow_for_many_scenes_and_ray_sets(tmp_path):
     models = [f"scene-{i}" for i in range(12)]
     results = run_csv(tmp_path / "run.csv", ROWS, models=models, sets=("camera", *RAY_SETS))
     header, table, notes, _ = ranking_table(ratios(results))
-    assert header == [
-        "structure",
-        "rank",
-        "camera (12 scenes)",
-        *[f"{s} (12 scenes)" for s in RAY_SETS],
-        "build (12 scenes)",
-    ]
+    assert header == ["structure", "rank", "camera (12)", *[f"{s} (12)" for s in RAY_SETS], "build (12)"]
     assert all(len(r) == len(header) for r in table)
     lines = ranking_markdown(results)
-    apart = first_table(section(lines, "### Ablations and baseline variants: what the guarantees cost"))
+    apart = first_table(section(lines, APART))
     assert len(apart[0]) == 1 + 6 + 1
     # Per ray set, the geometric mean of equal ratios is that ratio.
     wide = next(r for r in table if r[0] == "wide BVH (8, SIMD)")
-    assert all(c.startswith("0.800 [") for c in wide[2:8])
+    assert all(c == "0.800 ±4.1%" for c in wide[2:8])
 
 
 def test_a_cell_without_a_ratio_has_one_mark_and_the_notes_say_why(tmp_path):
@@ -150,11 +146,15 @@ def test_a_cell_without_a_ratio_has_one_mark_and_the_notes_say_why(tmp_path):
     assert not any(re.search(r"skipped|timeout|not measured", c) for r in table for c in r)
     text = "\n".join(lines)
     assert "Did not finish: wide BVH (8, SIMD) on igea · camera: timeout" in text
-    assert "1 row skipped by their configs" in text
+    assert "No ratio: 1 row skipped by their configs" in text
 
 
 def test_the_mean_of_ratios_takes_the_mean_of_their_interval_ends():
     m = geomean([Ratio(2.0, 1.0, 4.0), Ratio(8.0, 4.0, 16.0), Ratio(math.nan, math.nan, math.nan)])
     assert m.value == pytest.approx(4.0) and m.lo == pytest.approx(2.0) and m.hi == pytest.approx(8.0)
-    assert m.text() == "4.00 [2.00–8.00]"
-    assert geomean([]).text() == "—"
+    assert m.text() == "4.00 [2.00–8.00]" and m.short() == "4.00 ±100%"
+    assert geomean([]).text() == "—" == geomean([]).short()
+    # ± the larger side, in per cent rounded up: never narrower than the interval.
+    assert Ratio(1.0, 0.95, 1.012).short() == "1.00 ±5.0%"
+    assert Ratio(0.5, 0.49, 0.5004).short() == "0.500 ±2.0%"
+    assert Ratio(2.0, 1.9, 2.246).short() == "2.00 ±13%"

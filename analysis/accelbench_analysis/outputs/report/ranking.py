@@ -12,6 +12,7 @@ settings shows on each scene the setting it has a ratio on most widely."""
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 
 import pandas as pd
@@ -30,6 +31,7 @@ from .ranking_rows import (
 )
 
 RANKING_DOC = "tables/ranking.md"
+APART_TITLE = "Ablations and baseline variants: what the guarantees cost"
 # Up to this many trace and build columns, one per scene and ray set; beyond, one per ray set.
 SCENE_COLUMNS = 8
 
@@ -49,27 +51,32 @@ class Series:
     trace: dict[str, Ratio]
     build: dict[str, Ratio]
 
-    def cell(self, col: Column) -> str:
+    def cell(self, col: Column, short: bool = True) -> str:
+        """The geometric mean of its ratios in the column (± form when short, else the
+        interval's ends), "(k/n)" when it has a ratio on only k of the column's n keys."""
         source = self.build if col.build else self.trace
         got = [source[k] for k in col.keys if k in source and source[k].ok()]
         if not got:
             return NO_RATIO
+        mean = geomean(got)
         partial = len(col.keys) > 1 and len(got) < len(col.keys)
-        return geomean(got).text() + (f" ({len(got)}/{len(col.keys)})" if partial else "")
+        return (mean.short() if short else mean.text()) + (
+            f" ({len(got)}/{len(col.keys)})" if partial else ""
+        )
 
 
 def _series(rows: pd.DataFrame, name: str, trace: str = "trace", build: str = "build") -> Series:
     """A row of a table from the shown rows of one name: build from each model's first workload."""
     by_model: dict[str, Ratio] = {}
-    for _, x in rows.iterrows():
+    for x in rows.to_dict("records"):
         by_model.setdefault(x["model"], x[build])
-    return Series(name, {w: x[trace] for w, x in zip(rows["workload"], rows.to_dict("records"))}, by_model)
+    return Series(name, {x["workload"]: x[trace] for x in rows.to_dict("records")}, by_model)
 
 
 def columns(r: pd.DataFrame) -> tuple[list[Column], bool]:
     """The tables' columns over the workloads with a ratio: per scene and ray set (and one
-    build column per scene) when they are few, else one per ray set and one build column.
-    Returns the columns and whether they are per scene."""
+    build column per scene) when they are few, else one per ray set and one build column,
+    each titled with its number of scenes. Returns the columns and whether per scene."""
     rated = r[(r["status"] == "ok") & r["has_baseline"]]
     workloads = list(dict.fromkeys(rated["workload"]))
     models = list(dict.fromkeys(rated["model"]))
@@ -80,12 +87,8 @@ def columns(r: pd.DataFrame) -> tuple[list[Column], bool]:
     for w, g in zip(rated["workload"], rated["group"]):
         if w not in groups.setdefault(g, []):
             groups[g].append(w)
-    trace = [Column(f"{g} ({_scenes(len(ws))})", tuple(ws)) for g, ws in groups.items()]
-    return trace + [Column(f"build ({_scenes(len(models))})", tuple(models), build=True)], False
-
-
-def _scenes(n: int) -> str:
-    return f"{n} scene" + ("s" if n != 1 else "")
+    trace = [Column(f"{g} ({len(ws)})", tuple(ws)) for g, ws in groups.items()]
+    return trace + [Column(f"build ({len(models)})", tuple(models), build=True)], False
 
 
 def ranked_series(r: pd.DataFrame) -> tuple[list[tuple[float, Series]], int, int]:
@@ -105,54 +108,50 @@ def ranked_series(r: pd.DataFrame) -> tuple[list[tuple[float, Series]], int, int
     return scored, len(common), len(everything)
 
 
-def apart_series(r: pd.DataFrame) -> list[tuple[Series, str]]:
+def apart_series(r: pd.DataFrame) -> tuple[list[Series], list[str]]:
     """The ablations and baseline variants: per setting one row against its own structure
-    (ablations only) and one against Embree; with what the setting changes."""
+    (ablations only) and one against Embree; and what each ablation changes."""
     rows = shown(r[r["kind"].isin([ABLATION, BASELINE_VARIANT])]).sort_values(
         ["kind", "structure"], kind="stable"
     )
-    out = []
+    series, changes = [], []
     for name, g in rows.groupby("structure", sort=False):
         first = g.iloc[0]
-        changes = f"{name}: {first['changes'] or 'no parameter'}"
         if first["kind"] == ABLATION:
-            changes += f" (its structure: {first['of']})"
-            out.append((_series(g, f"{name} ÷ {first['of']}", "own_trace", "own_build"), changes))
-        out.append((_series(g, f"{name} ÷ Embree"), changes))
-    return out
+            changes.append(first["changes"] or f"{name}: no parameter")
+            series.append(_series(g, f"{name} ÷ {first['of']}", "own_trace", "own_build"))
+        series.append(_series(g, f"{name} ÷ Embree"))
+    return series, changes
 
 
 def ranking_table(r: pd.DataFrame) -> tuple[list[str], list[list[str]], list[str], str]:
     """The first table: header, rows (structure, rank, a cell per column), notes and the
     sentence saying what it ranks by."""
-    cols, per_scene = columns(r)
+    cols, _ = columns(r)
     scored, common, total = ranked_series(r)
     rows = [
         [s.name, str(i + 1) if v == v else NO_RATIO, *[s.cell(c) for c in cols]]
         for i, (v, s) in enumerate(scored)
     ]
     basis = (
-        f"the {common} scene and ray set pairs on which every structure has a ratio"
-        + (f" (of {total} with a ratio)" if common < total else "")
+        f"the {common} scene and ray set pairs every structure has a ratio on"
+        + (f" (of {total})" if common < total else "")
         if common
         else "each one's own scene and ray set pairs (no pair has a ratio of every structure)"
     )
-    notes = [_legend(rows, per_scene, cols)]
-    notes += _settings_note(r)
-    notes += _left_out_notes(r)
+    notes = _legend(rows) + _settings_note(r) + _left_out_notes(r)
     return ["structure", "rank", *[c.title for c in cols]], rows, notes, basis
 
 
-def _legend(rows: list[list[str]], per_scene: bool, cols: list[Column]) -> str:
-    text = f"{NO_RATIO}: no ratio (not measured there beside an Embree row)"
-    if not per_scene:
-        text += (
-            "; a cell is the geometric mean of the structure's ratios on the column's scenes, its "
-            f"interval the mean of their interval ends (every scene: {RANKING_DOC})"
-        )
-        if any("/" in c and c.endswith(")") for row in rows for c in row[2:]):
-            text += "; (k/n): over the k of the column's n scenes it has a ratio on"
-    return text + "."
+def _legend(rows: list[list[str]]) -> list[str]:
+    """The marks a table's cells use, said only when some cell uses them."""
+    cells = [c for row in rows for c in row[2:]]
+    marks = []
+    if NO_RATIO in cells:
+        marks.append(f"{NO_RATIO}: no ratio (not measured there beside an Embree row)")
+    if any(re.search(r"\(\d+/\d+\)$", c) for c in cells):
+        marks.append("(k/n): the mean over the k of the column's n scenes it has a ratio on")
+    return ["; ".join(marks) + "."] if marks else []
 
 
 def _settings_note(r: pd.DataFrame) -> list[str]:
@@ -164,32 +163,35 @@ def _settings_note(r: pd.DataFrame) -> list[str]:
         return []
     counts = ", ".join(f"{name} {n}" for name, n in several.items())
     return [
-        f"Measured at several settings ({counts}): each ratio is of the setting with a ratio on "
-        f"the most scenes and ray sets, of those measured on that one (every setting: {RANKING_DOC})."
+        f"Several settings ({counts}): on each scene and ray set, the ratio is of the one with a "
+        f"ratio on the most of them (all: {RANKING_DOC})."
     ]
 
 
 def _left_out_notes(r: pd.DataFrame) -> list[str]:
-    """What has no ratio and why: scenes without an Embree row, rows that did not finish."""
-    notes = []
+    """What has no ratio and why, in one note: scenes without an Embree row, rows at render
+    settings Embree was not measured at, rows skipped by their configs; and those that did
+    not finish, named (a failure is a finding)."""
     if not r["has_baseline"].any():
         return [
             "No Embree row in this run: no ratio can be formed (add `embree` to the config's accelerators)."
         ]
     rated = set(r.loc[r["has_baseline"], "workload"])
-    lacking = [w for w in dict.fromkeys(r["workload"]) if w not in rated]
-    if lacking:
-        notes.append(
-            f"No Embree row on {', '.join(lacking)}: no ratio there ({RANKING_DOC} lists their rows)."
+    parts = []
+    lacking = r[~r["workload"].isin(rated)].drop_duplicates("workload")
+    if len(lacking):
+        where = "; ".join(
+            f"{group} rays of {', '.join(g['model'])}" for group, g in lacking.groupby("group", sort=False)
         )
+        parts.append(f"no Embree row on {where}")
     beside = r[(r["status"] == "ok") & ~r["has_baseline"] & r["workload"].isin(rated)]
     if len(beside):
         configs = ", ".join(f"{c}: {n}" for c, n in beside["config"].value_counts(sort=False).items())
-        notes.append(
-            f"{len(beside)} rows at render settings no Embree row was measured at ({configs}) have "
-            f"no ratio ({RANKING_DOC} lists them)."
-        )
+        parts.append(f"{_n(len(beside), 'row')} at render settings without an Embree row ({configs})")
     skipped = int((r["status"] == "skipped").sum())
+    if skipped:
+        parts.append(f"{_n(skipped, 'row')} skipped by their configs")
+    notes = [f"No ratio: {'; '.join(parts)} (all in {RANKING_DOC})."] if parts else []
     failed = r[~r["status"].isin(["ok", "skipped"])]
     if len(failed):
         named = ", ".join(
@@ -197,11 +199,11 @@ def _left_out_notes(r: pd.DataFrame) -> list[str]:
         )
         more = f" and {len(failed) - 6} more" if len(failed) > 6 else ""
         notes.append(f"Did not finish: {named}{more} ({RANKING_DOC} has their messages).")
-    if skipped:
-        notes.append(
-            f"{skipped} row{'s' if skipped != 1 else ''} skipped by their configs (each says why in its `message`) are not measurements."
-        )
     return notes
+
+
+def _n(count: int, what: str) -> str:
+    return f"{count} {what}" + ("s" if count != 1 else "")
 
 
 def _coverage(r: pd.DataFrame) -> str:
@@ -214,18 +216,17 @@ def ranking_markdown(results: Results) -> list[str]:
     if r.empty:
         return ["## Ranking against Embree", "", "This run measured no structure on a scene."]
     header, table, notes, basis = ranking_table(r)
-    per_scene = header[2].startswith("trace: ")
     what = (
-        "per scene and ray set (`trace: SCENE · RAYS`) and its build time per scene (`build: SCENE`)"
-        if per_scene
-        else "per ray set, as the geometric mean over the scenes, and its build time over the scenes"
+        "per scene and ray set (`trace: SCENE · RAYS`) and per scene (`build: SCENE`)"
+        if header[2].startswith("trace: ")
+        else "per ray set, the geometric mean over the column's (n) scenes"
     )
     out = [
         "## Ranking against Embree",
         "",
-        f"Each structure's trace time {what}, divided by Embree's beside it in this run, with the "
-        f"ratio's interval ({_coverage(r)} of each median, divided end by end); below 1 is faster than "
-        f"Embree. Ranked by the geometric mean of the trace ratios over {basis}.",
+        f"Trace and build time {what}, as ratios to Embree's in this run (below 1: faster); ±: the "
+        f"larger side of the ratio's interval ({_coverage(r)} medians divided end by end). Ranked by "
+        f"the mean trace ratio over {basis}.",
         "",
         *md_table(header, table, align="lr"),
         "",
@@ -236,26 +237,19 @@ def ranking_markdown(results: Results) -> list[str]:
 
 def apart_markdown(r: pd.DataFrame) -> list[str]:
     """The ablations and baseline variants beside the ranking; nothing when the run has none."""
-    series = apart_series(r)
+    series, changes = apart_series(r)
     if not series:
         return []
     cols, _ = columns(r[r["kind"].isin([ABLATION, BASELINE_VARIANT])])
-    rows = [[s.name, *[s.cell(c) for c in cols]] for s, _ in series]
-    changes = list(dict.fromkeys(c for _, c in series))
+    rows = [[s.name, *[s.cell(c) for c in cols]] for s in series]
+    said = f"here {', '.join(changes)}: " if changes else ""
     return [
         "",
-        "### Ablations and baseline variants: what the guarantees cost",
-        "",
-        "Not ranked: settings that are not structures of their own. An ablation is a structure at a "
-        "setting its label marks as not the structure (a test without the guarantee of its default), "
-        "shown against its structure beside it and against Embree; a baseline variant is Embree at "
-        "another of its settings than the one every ratio divides by. Ratios and means as above.",
+        f"**{APART_TITLE}.** Not ranked. An ablation ({said}a setting its label marks as not its "
+        "structure) against its structure beside it and against Embree; a baseline variant (Embree "
+        "at another setting than the ratios') against Embree.",
         "",
         *md_table(["setting ÷ what", *[c.title for c in cols]], rows, align="l"),
-        "",
-        note_item(
-            "What each changes: " + "; ".join(changes) + " (`accelbench list` describes every parameter)."
-        ),
     ]
 
 
@@ -263,12 +257,12 @@ def scene_tables(r: pd.DataFrame) -> list[str]:
     """tables/ranking.md's first part: per ray set, the ranked structures (then the ablations
     and variants) with one column per scene; then the build times per scene."""
     scored, _, _ = ranked_series(r)
-    series = [s for _, s in scored] + [s for s, _ in apart_series(r)]
+    series = [s for _, s in scored] + apart_series(r)[0]
     rated = r[(r["status"] == "ok") & r["has_baseline"]]
     out = []
     for group, g in rated.groupby("group", sort=False):
         cols = [Column(m, (w,)) for m, w in dict.fromkeys(zip(g["model"], g["workload"]))]
-        rows = [[s.name, *[s.cell(c) for c in cols]] for s in series]
+        rows = [[s.name, *[s.cell(c, short=False) for c in cols]] for s in series]
         rows = [row for row in rows if any(c != NO_RATIO for c in row[1:])]
         out += [f"## {group}: trace time ÷ Embree's, per scene", ""]
         out += md_table(["structure", *[c.title for c in cols]], rows)
@@ -276,7 +270,8 @@ def scene_tables(r: pd.DataFrame) -> list[str]:
     cols = [Column(m, (m,), build=True) for m in dict.fromkeys(rated["model"])]
     out += ["## Build time ÷ Embree's, per scene", ""]
     out += md_table(
-        ["structure", *[c.title for c in cols]], [[s.name, *[s.cell(c) for c in cols]] for s in series]
+        ["structure", *[c.title for c in cols]],
+        [[s.name, *[s.cell(c, short=False) for c in cols]] for s in series],
     )
     return out + [""]
 

@@ -51,6 +51,17 @@ class Ratio:
             return f"{fmt_sig(self.value, 3)} [{fmt_sig(self.lo, 3)}–{fmt_sig(self.hi, 3)}]"
         return fmt_sig(self.value, 3)
 
+    def short(self) -> str:
+        """The ratio and ± the larger side of its interval in per cent of it, rounded up to
+        two digits (never narrower than the interval): "0.981 ±1.4%"."""
+        if not self.ok():
+            return NO_RATIO
+        if not (self.lo == self.lo and self.hi == self.hi):
+            return fmt_sig(self.value, 3)
+        side = 100 * max(1 - self.lo / self.value, self.hi / self.value - 1, 0.0)
+        pct = f"{math.ceil(side - 1e-9):.0f}" if side >= 10 else f"{math.ceil(side * 10 - 1e-9) / 10:.1f}"
+        return f"{fmt_sig(self.value, 3)} ±{pct}%"
+
 
 NONE = Ratio(math.nan, math.nan, math.nan)
 
