@@ -59,7 +59,7 @@ def run_csv(path, rows, models=("stanford-bunny", "igea"), sets=("camera",), sta
 
 def first_table(lines: list[str]) -> list[list[str]]:
     start = next(i for i, line in enumerate(lines) if line.startswith("|"))
-    end = next(i for i in range(start, len(lines)) if not lines[i].startswith("|"))
+    end = next((i for i in range(start, len(lines)) if not lines[i].startswith("|")), len(lines))
     return [[c.strip() for c in line.strip("|").split(" | ")] for line in lines[start:end]]
 
 

@@ -242,12 +242,11 @@ def apart_markdown(r: pd.DataFrame) -> list[str]:
         return []
     cols, _ = columns(r[r["kind"].isin([ABLATION, BASELINE_VARIANT])])
     rows = [[s.name, *[s.cell(c) for c in cols]] for s in series]
-    said = f"here {', '.join(changes)}: " if changes else ""
+    said = f" (here {', '.join(changes)})" if changes else ""
     return [
         "",
-        f"**{APART_TITLE}.** Not ranked. An ablation ({said}a setting its label marks as not its "
-        "structure) against its structure beside it and against Embree; a baseline variant (Embree "
-        "at another setting than the ratios') against Embree.",
+        f"**{APART_TITLE}.** Not ranked: each ablation{said} against its structure beside it and "
+        "against Embree; each baseline variant (Embree at another setting) against Embree.",
         "",
         *md_table(["setting ÷ what", *[c.title for c in cols]], rows, align="l"),
     ]
