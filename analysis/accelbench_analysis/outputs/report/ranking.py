@@ -163,7 +163,7 @@ def _settings_note(r: pd.DataFrame) -> list[str]:
         return []
     counts = ", ".join(f"{name} {n}" for name, n in several.items())
     return [
-        f"Several settings ({counts}): on each scene and ray set, the ratio is of the one with a "
+        f"Several settings ({counts}): on each scene and ray set, the ratio is of the setting with a "
         f"ratio on the most of them (all: {RANKING_DOC})."
     ]
 
@@ -304,7 +304,7 @@ def full_ranking_markdown(results: Results) -> str:
             for _, x in g.iterrows()
         ]
         header = ["structure", "kind", "parameters", "trace ÷ Embree", "build ÷ Embree", "no ratio because"]
-        out += md_table(header, rows, align="lll") + [""]
+        out += md_table(header, rows, align="lllrrl") + [""]
     return "\n".join(out)
 
 
