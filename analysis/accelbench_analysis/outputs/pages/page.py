@@ -5,7 +5,7 @@ from assets/ beside this file; Vega, Vega-Lite and vega-embed are inlined from t
 vl-convert-python package (analysis/requirements.txt pins it), never fetched from a CDN;
 PNGs are embedded as data: URIs.
 
-A table of class `data` gets a filter box and sortable headers; a `<div class="vega">`
+A table of class `data` gets sortable headers and, past 10 rows, a filter box; a `<div class="vega">`
 followed by a `<script type="application/json" class="vega-spec">` is drawn with
 vegaEmbed. When every figure is drawn, the page sets `data-charts="ready"` on <html>
 (or "failed" after a console error), which the browser test waits for."""

@@ -147,7 +147,7 @@ def run_page_html(run_dir: Path) -> str:
     charts = any(spec_path(f).is_file() for f in p.shown if f.suffix == ".png")
     note = (
         f"{html.escape(run_dir.name)}: this directory's REPORT.md with its tables and figures, "
-        "self-contained (it opens offline). Tables sort by a click on a column and filter by words."
+        "self-contained (it opens offline). Tables sort by a click on a column; long ones filter by words."
     )
     return page(f"accelbench results — {run_dir.name}", "\n".join(body), nav=nav, charts=charts, note=note)
 

@@ -1,198 +1,314 @@
-"""The answer a run gives first: per scene and ray set, each structure's trace and build
-time as a ratio to Embree's in the same run, ranked.
+"""The answer a run gives first: each structure's trace and build time as a ratio to
+Embree's in the same run, ranked (ranking_rows.py makes the ratios and says what each row
+is).
 
-Ratios, never seconds: a ratio to the baseline measured beside it on the same machine and
-rays is what carries from one machine to another. A ratio's interval divides the two
-medians' 95% intervals end by end (the row's low end by Embree's high end, and the other
-way round), so it is wider than either, never narrower. Rows are the CSV's own `label`
-(the registry's name for a structure and the parameters that make it one); a structure
-measured at several other settings in the run is shown at the setting measured on the most
-scenes and ray sets, and tables/ranking.md lists every setting."""
+The ranking holds the structures only: the table's declared variants and the baseline at
+the setting every ratio divides by. Ablations and baseline variants follow it in a table of
+their own ("what the guarantees cost"), each against its own structure and against Embree,
+never ranked among the structures. A run of few scenes and ray sets shows one column per
+scene and ray set; a wider one one column per ray set, the geometric mean over its scenes,
+and tables/ranking.md has every scene and every setting. A structure measured at several
+settings shows on each scene the setting it has a ratio on most widely."""
 
 from __future__ import annotations
 
-import math
+import re
 from dataclasses import dataclass
 
 import pandas as pd
 
-from ...inputs.schema import RENDER_SETTING_COLUMNS, Results, parse_params
-from ...mapping.formatting import fmt_sig, md_table, note_item
+from ...inputs.schema import Results, parse_params
+from ...mapping.formatting import ci_label, md_table, note_item
+from .ranking_rows import (
+    ABLATION,
+    BASELINE_VARIANT,
+    NO_RATIO,
+    STRUCTURE,
+    Ratio,
+    geomean,
+    ratios,
+    shown,
+)
 
-BASELINE = "embree"
 RANKING_DOC = "tables/ranking.md"
+APART_TITLE = "Ablations and baseline variants: what the guarantees cost"
+# Up to this many trace and build columns, one per scene and ray set; beyond, one per ray set.
+SCENE_COLUMNS = 8
+
+
+@dataclass(frozen=True)
+class Column:
+    title: str
+    keys: tuple[str, ...]  # the workloads whose ratios it means (the models, for build)
+    build: bool = False
 
 
 @dataclass
-class Ratio:
-    value: float
-    lo: float
-    hi: float
+class Series:
+    """One table row: a name and its ratios by workload (trace) and by model (build)."""
 
-    def text(self) -> str:
-        if not self.value == self.value:
-            return "—"
-        if self.lo == self.lo and self.hi == self.hi:
-            return f"{fmt_sig(self.value, 3)} [{fmt_sig(self.lo, 3)}–{fmt_sig(self.hi, 3)}]"
-        return fmt_sig(self.value, 3)
+    name: str
+    trace: dict[str, Ratio]
+    build: dict[str, Ratio]
 
-
-def _ratio(row: pd.Series, base: pd.Series | None, measure: str) -> Ratio:
-    if base is None:
-        return Ratio(math.nan, math.nan, math.nan)
-    m, b = row[f"{measure}_median"], base[f"{measure}_median"]
-    if not (m > 0 and b > 0):
-        return Ratio(math.nan, math.nan, math.nan)
-    lo_r, hi_r = row[f"{measure}_ci_lo"], row[f"{measure}_ci_hi"]
-    lo_b, hi_b = base[f"{measure}_ci_lo"], base[f"{measure}_ci_hi"]
-    lo = lo_r / hi_b if lo_r > 0 and hi_b > 0 else math.nan
-    hi = hi_r / lo_b if hi_r > 0 and lo_b > 0 else math.nan
-    return Ratio(m / b, lo, hi)
-
-
-def _workload(row: pd.Series) -> str:
-    """The column a row's ratio goes in: its scene and ray set (and threads, when not 1)."""
-    text = f"{row['model']} · {row.get('ray_set', '') or 'camera'}"
-    threads = row.get("render_threads", math.nan)
-    if threads == threads and float(threads) != 1:
-        text += f" · {float(threads):g} threads"
-    return text
-
-
-def _structure(row: pd.Series) -> str:
-    return row.get("label", "") or row["accel"]
-
-
-def ratios(results: Results) -> pd.DataFrame:
-    """One row per measured row of the run (catalogue cases aside): its workload, structure,
-    parameters, status and both ratios to the Embree row of the same scene, rays and render
-    settings (the first by parameters when there are several, as regress does)."""
-    df = results.measured_rows().copy()
-    if df.empty:
-        return pd.DataFrame()
-    settings = ["model", "ray_set", *RENDER_SETTING_COLUMNS]
-    ok = df[df["status"] == "ok"]
-    base: dict[tuple, pd.Series] = {}
-    for _, e in ok[ok["accel"] == BASELINE].sort_values("params").iterrows():
-        base.setdefault(tuple(str(e.get(c, "")) for c in settings), e)
-    out = []
-    for _, r in df.iterrows():
-        e = base.get(tuple(str(r.get(c, "")) for c in settings)) if r["status"] == "ok" else None
-        out.append(
-            {
-                "workload": _workload(r),
-                "model": r["model"],
-                "structure": _structure(r),
-                "accel": r["accel"],
-                "params": r["params"],
-                "status": r["status"],
-                "trace": _ratio(r, e, "render_s"),
-                "build": _ratio(r, e, "build_s"),
-                "has_baseline": e is not None,
-            }
+    def cell(self, col: Column, short: bool = True) -> str:
+        """The geometric mean of its ratios in the column (± form when short, else the
+        interval's ends), "(k/n)" when it has a ratio on only k of the column's n keys."""
+        source = self.build if col.build else self.trace
+        got = [source[k] for k in col.keys if k in source and source[k].ok()]
+        if not got:
+            return NO_RATIO
+        mean = geomean(got)
+        partial = len(col.keys) > 1 and len(got) < len(col.keys)
+        return (mean.short() if short else mean.text()) + (
+            f" ({len(got)}/{len(col.keys)})" if partial else ""
         )
-    return pd.DataFrame(out)
 
 
-def _shown_setting(r: pd.DataFrame) -> pd.DataFrame:
-    """Per structure and workload, one row: of the structure's settings measured there, the
-    one measured on the most workloads in the run (ties: the first parameters text), so a
-    structure keeps one setting wherever it can."""
-    reach = r.groupby(["structure", "params"])["workload"].nunique().rename("reach").reset_index()
-    ordered = r.merge(reach, on=["structure", "params"]).sort_values(
-        ["structure", "workload", "reach", "params"], ascending=[True, True, False, True]
+def _series(rows: pd.DataFrame, name: str, trace: str = "trace", build: str = "build") -> Series:
+    """A row of a table from the shown rows of one name: build from each model's first workload."""
+    by_model: dict[str, Ratio] = {}
+    for x in rows.to_dict("records"):
+        by_model.setdefault(x["model"], x[build])
+    return Series(name, {x["workload"]: x[trace] for x in rows.to_dict("records")}, by_model)
+
+
+def columns(r: pd.DataFrame) -> tuple[list[Column], bool]:
+    """The tables' columns over the workloads with a ratio: per scene and ray set (and one
+    build column per scene) when they are few, else one per ray set and one build column,
+    each titled with its number of scenes. Returns the columns and whether per scene."""
+    rated = r[(r["status"] == "ok") & r["has_baseline"]]
+    workloads = list(dict.fromkeys(rated["workload"]))
+    models = list(dict.fromkeys(rated["model"]))
+    if len(workloads) + len(models) <= SCENE_COLUMNS:
+        trace = [Column(f"trace: {w}", (w,)) for w in workloads]
+        return trace + [Column(f"build: {m}", (m,), build=True) for m in models], True
+    groups: dict[str, list[str]] = {}
+    for w, g in zip(rated["workload"], rated["group"]):
+        if w not in groups.setdefault(g, []):
+            groups[g].append(w)
+    trace = [Column(f"{g} ({len(ws)})", tuple(ws)) for g, ws in groups.items()]
+    return trace + [Column(f"build ({len(models)})", tuple(models), build=True)], False
+
+
+def ranked_series(r: pd.DataFrame) -> tuple[list[tuple[float, Series]], int, int]:
+    """The structures (kind "structure"), ranked by the geometric mean of their trace ratios
+    over the workloads every one of them has a ratio on (each over its own where they share
+    none). Returns (score, series) best first, the number of those workloads and of all."""
+    main = shown(r[r["kind"] == STRUCTURE])
+    series = [_series(g, name) for name, g in main.groupby("structure", sort=False)]
+    keys = [{w for w, t in s.trace.items() if t.ok()} for s in series]
+    common = set.intersection(*keys) if keys else set()
+    everything = set().union(*keys) if keys else set()
+    scored = []
+    for s, mine in zip(series, keys):
+        score = geomean([s.trace[w] for w in (common or mine)]).value
+        scored.append((score, s))
+    scored.sort(key=lambda x: (not x[0] == x[0], x[0], x[1].name))
+    return scored, len(common), len(everything)
+
+
+def apart_series(r: pd.DataFrame) -> tuple[list[Series], list[str]]:
+    """The ablations and baseline variants: per setting one row against its own structure
+    (ablations only) and one against Embree; and what each ablation changes."""
+    rows = shown(r[r["kind"].isin([ABLATION, BASELINE_VARIANT])]).sort_values(
+        ["kind", "structure"], kind="stable"
     )
-    return ordered.drop_duplicates(["structure", "workload"]).drop(columns="reach")
+    series, changes = [], []
+    for name, g in rows.groupby("structure", sort=False):
+        first = g.iloc[0]
+        if first["kind"] == ABLATION:
+            changes.append(first["changes"] or f"{name}: no parameter")
+            series.append(_series(g, f"{name} ÷ {first['of']}", "own_trace", "own_build"))
+        series.append(_series(g, f"{name} ÷ Embree"))
+    return series, changes
 
 
-def _geomean(values: list[float]) -> float:
-    v = [x for x in values if x == x and x > 0]
-    return math.exp(sum(math.log(x) for x in v) / len(v)) if v else math.nan
-
-
-def ranking_table(r: pd.DataFrame) -> tuple[list[str], list[list[str]], list[str]]:
-    """The first table: structures ranked by the geometric mean of their trace ratios, one
-    trace column per workload and one build column per scene. Returns header, rows and
-    notes (settings not shown, rows without a ratio)."""
-    shown = _shown_setting(r)
-    workloads = list(dict.fromkeys(r["workload"]))
-    models = list(dict.fromkeys(r["model"]))
-    rows = []
-    for structure, g in shown.groupby("structure", sort=False):
-        trace = {w: x["trace"].iloc[0] for w, x in g.groupby("workload")}
-        build = {m: x["build"].iloc[0] for m, x in g.groupby("model")}
-        score = _geomean([t.value for t in trace.values()])
-        status = {w: x["status"].iloc[0] for w, x in g.groupby("workload")}
-        cells = [
-            trace[w].text() if w in trace and status[w] == "ok" else status.get(w, "not measured")
-            for w in workloads
-        ]
-        cells += [build[m].text() if m in build else "not measured" for m in models]
-        rows.append((score, structure, cells))
-    rows.sort(key=lambda x: (not x[0] == x[0], x[0], x[1]))
-    header = [
-        "structure",
-        "rank",
-        *[f"trace: {w}" for w in workloads],
-        *[f"build: {m}" for m in models],
+def ranking_table(r: pd.DataFrame) -> tuple[list[str], list[list[str]], list[str], str]:
+    """The first table: header, rows (structure, rank, a cell per column), notes and the
+    sentence saying what it ranks by."""
+    cols, _ = columns(r)
+    scored, common, total = ranked_series(r)
+    rows = [
+        [s.name, str(i + 1) if v == v else NO_RATIO, *[s.cell(c) for c in cols]]
+        for i, (v, s) in enumerate(scored)
     ]
-    table = [[name, str(i + 1) if s == s else "—", *cells] for i, (s, name, cells) in enumerate(rows)]
-    notes = []
-    settings = r.groupby("structure", sort=False)["params"].nunique()
+    basis = (
+        f"the {common} scene and ray set pairs every structure has a ratio on"
+        + (f" (of {total})" if common < total else "")
+        if common
+        else "each one's own scene and ray set pairs (no pair has a ratio of every structure)"
+    )
+    notes = _legend(rows) + _settings_note(r) + _left_out_notes(r)
+    return ["structure", "rank", *[c.title for c in cols]], rows, notes, basis
+
+
+def _legend(rows: list[list[str]]) -> list[str]:
+    """The marks a table's cells use, said only when some cell uses them."""
+    cells = [c for row in rows for c in row[2:]]
+    marks = []
+    if NO_RATIO in cells:
+        marks.append(f"{NO_RATIO}: no ratio (not measured there beside an Embree row)")
+    if any(re.search(r"\(\d+/\d+\)$", c) for c in cells):
+        marks.append("(k/n): the mean over the k of the column's n scenes it has a ratio on")
+    return ["; ".join(marks) + "."] if marks else []
+
+
+def _settings_note(r: pd.DataFrame) -> list[str]:
+    """The structures measured at several settings, and which one a cell shows."""
+    rated = r[(r["kind"] == STRUCTURE) & (r["status"] == "ok") & r["has_baseline"]]
+    settings = rated.groupby("structure", sort=False)["params"].nunique()
     several = settings[settings > 1]
-    if not several.empty:
-        notes.append(
-            "Measured at several settings: "
-            + ", ".join(f"{name} {n}" for name, n in several.items())
-            + "; each cell shows, of those measured there, the one measured most widely (every "
-            f"setting: {RANKING_DOC}, under More of this run)."
-        )
+    if several.empty:
+        return []
+    counts = ", ".join(f"{name} {n}" for name, n in several.items())
+    return [
+        f"Several settings ({counts}): on each scene and ray set, the ratio is of the setting with a "
+        f"ratio on the most of them (all: {RANKING_DOC})."
+    ]
+
+
+def _left_out_notes(r: pd.DataFrame) -> list[str]:
+    """What has no ratio and why, in one note: scenes without an Embree row, rows at render
+    settings Embree was not measured at, rows skipped by their configs; and those that did
+    not finish, named (a failure is a finding)."""
     if not r["has_baseline"].any():
-        notes.append(
+        return [
             "No Embree row in this run: no ratio can be formed (add `embree` to the config's accelerators)."
+        ]
+    rated = set(r.loc[r["has_baseline"], "workload"])
+    parts = []
+    lacking = r[~r["workload"].isin(rated)].drop_duplicates("workload")
+    if len(lacking):
+        where = "; ".join(
+            f"{group} rays of {', '.join(g['model'])}" for group, g in lacking.groupby("group", sort=False)
         )
-    return header, table, notes
+        parts.append(f"no Embree row on {where}")
+    beside = r[(r["status"] == "ok") & ~r["has_baseline"] & r["workload"].isin(rated)]
+    if len(beside):
+        configs = ", ".join(f"{c}: {n}" for c, n in beside["config"].value_counts(sort=False).items())
+        parts.append(f"{_n(len(beside), 'row')} at render settings without an Embree row ({configs})")
+    skipped = int((r["status"] == "skipped").sum())
+    if skipped:
+        parts.append(f"{_n(skipped, 'row')} skipped by their configs")
+    notes = [f"No ratio: {'; '.join(parts)} (all in {RANKING_DOC})."] if parts else []
+    failed = r[~r["status"].isin(["ok", "skipped"])]
+    if len(failed):
+        named = ", ".join(
+            f"{x['structure']} on {x['workload']}: {x['status']}" for _, x in failed.head(6).iterrows()
+        )
+        more = f" and {len(failed) - 6} more" if len(failed) > 6 else ""
+        notes.append(f"Did not finish: {named}{more} ({RANKING_DOC} has their messages).")
+    return notes
+
+
+def _n(count: int, what: str) -> str:
+    return f"{count} {what}" + ("s" if count != 1 else "")
+
+
+def _coverage(r: pd.DataFrame) -> str:
+    return ci_label(r.loc[r["status"] == "ok", "ci_coverage"]) if "ci_coverage" in r else "CI"
 
 
 def ranking_markdown(results: Results) -> list[str]:
-    """The section REPORT.md opens with."""
+    """The section REPORT.md opens with: the ranking, then the ablations and variants."""
     r = ratios(results)
     if r.empty:
         return ["## Ranking against Embree", "", "This run measured no structure on a scene."]
-    header, table, notes = ranking_table(r)
-    return [
+    header, table, notes, basis = ranking_table(r)
+    what = (
+        "per scene and ray set (`trace: SCENE · RAYS`) and per scene (`build: SCENE`)"
+        if header[2].startswith("trace: ")
+        else "per ray set, the geometric mean over the column's (n) scenes"
+    )
+    out = [
         "## Ranking against Embree",
         "",
-        "Each structure's trace time (per scene and ray set: `trace: SCENE · RAYS`) and build "
-        "time (per scene: `build: SCENE`) divided by Embree's in this run, with the 95% interval "
-        "of the ratio; below 1 is faster than Embree. Ranked by the geometric mean of the trace "
-        "ratios.",
+        f"Trace and build time {what}, as ratios to Embree's in this run (below 1: faster); ±: the "
+        f"larger side of the ratio's interval ({_coverage(r)} medians divided end by end). Ranked by "
+        f"the mean trace ratio over {basis}.",
         "",
         *md_table(header, table, align="lr"),
         "",
         *[note_item(n) for n in notes],
     ]
+    return out + apart_markdown(r)
+
+
+def apart_markdown(r: pd.DataFrame) -> list[str]:
+    """The ablations and baseline variants beside the ranking; nothing when the run has none."""
+    series, changes = apart_series(r)
+    if not series:
+        return []
+    cols, _ = columns(r[r["kind"].isin([ABLATION, BASELINE_VARIANT])])
+    rows = [[s.name, *[s.cell(c) for c in cols]] for s in series]
+    said = f" (here {', '.join(changes)})" if changes else ""
+    return [
+        "",
+        f"**{APART_TITLE}.** Not ranked: each ablation{said} against its structure beside it and "
+        "against Embree; each baseline variant (Embree at another setting) against Embree.",
+        "",
+        *md_table(["setting ÷ what", *[c.title for c in cols]], rows, align="l"),
+    ]
+
+
+def scene_tables(r: pd.DataFrame) -> list[str]:
+    """tables/ranking.md's first part: per ray set, the ranked structures (then the ablations
+    and variants) with one column per scene; then the build times per scene."""
+    scored, _, _ = ranked_series(r)
+    series = [s for _, s in scored] + apart_series(r)[0]
+    rated = r[(r["status"] == "ok") & r["has_baseline"]]
+    out = []
+    for group, g in rated.groupby("group", sort=False):
+        cols = [Column(m, (w,)) for m, w in dict.fromkeys(zip(g["model"], g["workload"]))]
+        rows = [[s.name, *[s.cell(c, short=False) for c in cols]] for s in series]
+        rows = [row for row in rows if any(c != NO_RATIO for c in row[1:])]
+        out += [f"## {group}: trace time ÷ Embree's, per scene", ""]
+        out += md_table(["structure", *[c.title for c in cols]], rows)
+        out.append("")
+    cols = [Column(m, (m,), build=True) for m in dict.fromkeys(rated["model"])]
+    out += ["## Build time ÷ Embree's, per scene", ""]
+    out += md_table(
+        ["structure", *[c.title for c in cols]],
+        [[s.name, *[s.cell(c, short=False) for c in cols]] for s in series],
+    )
+    return out + [""]
 
 
 def full_ranking_markdown(results: Results) -> str:
-    """tables/ranking.md: every setting of every structure, per workload, ranked."""
+    """tables/ranking.md: every scene, then every setting of every structure per scene and
+    ray set, ranked."""
     r = ratios(results)
     out = ["# Every structure and setting against Embree", ""]
     if r.empty:
         return "\n".join(out + ["This run measured no structure on a scene.", ""])
+    out += [
+        f"Ratios to Embree's row beside each ({_coverage(r)} intervals divided end by end); "
+        f"{NO_RATIO}: no ratio. Ablations and baseline variants are named with what they are divided by.",
+        "",
+    ]
+    out += scene_tables(r)
+    out += ["## Every setting", ""]
     for workload, g in r.groupby("workload", sort=False):
         g = g.assign(key=[t.value for t in g["trace"]]).sort_values(["key", "structure"], na_position="last")
-        out += [f"## {workload}", ""]
+        out += [f"### {workload}", ""]
         rows = [
             [
                 x["structure"],
+                x["kind"],
                 ", ".join(f"{k}={v}" for k, v in parse_params(x["params"]).items()),
-                x["trace"].text() if x["status"] == "ok" else x["status"],
-                x["build"].text() if x["status"] == "ok" else "",
+                x["trace"].text(),
+                x["build"].text(),
+                _why_none(x),
             ]
             for _, x in g.iterrows()
         ]
-        out += md_table(["structure", "parameters", "trace ×Embree", "build ×Embree"], rows, align="ll") + [
-            ""
-        ]
+        header = ["structure", "kind", "parameters", "trace ÷ Embree", "build ÷ Embree", "no ratio because"]
+        out += md_table(header, rows, align="lllrrl") + [""]
     return "\n".join(out)
+
+
+def _why_none(x: pd.Series) -> str:
+    if x["status"] != "ok":
+        return f"{x['status']}: {x['message']}" if x["message"] else x["status"]
+    return "" if x["has_baseline"] else "no Embree row at its render settings"

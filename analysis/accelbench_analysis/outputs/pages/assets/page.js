@@ -184,10 +184,24 @@
     if (target) target.scrollIntoView({ behavior: "auto", block: "start" });
   });
 
+  // A table of at most this many rows is read whole: it sorts, but gets no filter box (the
+  // box would take a line of the first screen for nothing).
+  var SHOWN_WHOLE = 10;
+
+  function bodyRows(table) {
+    var n = 0;
+    Array.prototype.forEach.call(table.tBodies, function (body) {
+      Array.prototype.forEach.call(body.rows, function (r) {
+        if (!r.classList.contains("section")) n++;
+      });
+    });
+    return n;
+  }
+
   function start() {
     Array.prototype.forEach.call(document.querySelectorAll("table.data"), function (t) {
       makeSortable(t);
-      addFilter(t);
+      if (bodyRows(t) > SHOWN_WHOLE) addFilter(t);
     });
     drawCharts().then(
       function () {
