@@ -218,7 +218,7 @@ def ranking_markdown(results: Results) -> list[str]:
     header, table, notes, basis = ranking_table(r)
     what = (
         "per scene and ray set (`trace: SCENE · RAYS`) and per scene (`build: SCENE`)"
-        if header[2].startswith("trace: ")
+        if any(h.startswith(("trace: ", "build: ")) for h in header[2:])
         else "per ray set, the geometric mean over the column's (n) scenes"
     )
     out = [
