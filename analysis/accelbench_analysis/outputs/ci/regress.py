@@ -454,7 +454,8 @@ def _provenance_lines(role: str, results: Results) -> list[str]:
         lines.append(
             f"{role}: commit {g.fields['git_sha']}"
             f"{' (dirty)' if g.fields['git_dirty'] == 'true' else ''}, cpu "
-            f"{g.fields['cpu']}, {g.fields['compiler']}, {g.fields['build_type']}, "
+            f"{g.fields['cpu']}, {g.fields['compiler']}, {g.fields['build_type']} "
+            f"(flags {g.fields['compile_flags']}), "
             f"Embree {g.fields['embree_version']}{when} ({g.rows} rows of "
             f"{', '.join(g.files)})"
         )
