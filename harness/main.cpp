@@ -32,15 +32,17 @@ const Command kCommands[] = {
 // `accelbench --version`: the build's identity as its rows record it (the project has no
 // release numbers: the commit is the version).
 int version() {
-    std::string sha, dirty, compiler, build_type;
+    std::string sha, dirty, compiler, build_type, flags;
     for (const auto& [name, value] : accelbench::provenance_values()) {
         if (name == "git_sha") sha = value;
         if (name == "git_dirty") dirty = value;
         if (name == "compiler") compiler = value;
         if (name == "build_type") build_type = value;
+        if (name == "compile_flags") flags = value;
     }
-    std::printf("accelbench commit %s%s, %s build, %s\n", sha.c_str(),
-                dirty == "true" ? " (with uncommitted changes)" : "", build_type.c_str(), compiler.c_str());
+    std::printf("accelbench commit %s%s, %s build (%s), %s\n", sha.c_str(),
+                dirty == "true" ? " (with uncommitted changes)" : "", build_type.c_str(), flags.c_str(),
+                compiler.c_str());
     return 0;
 }
 

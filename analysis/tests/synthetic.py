@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from accelbench_analysis.inputs.schema import (
+    COMPILE_FLAGS_COLUMN,
     COUNT_COLUMNS,
     EMBREE_ISA_COLUMN,
     ERROR_MEMORY_VERDICT_COLUMNS,
@@ -45,6 +46,7 @@ PROVENANCE = {
     "git_dirty": "false",
     "compiler": "gcc 12.2.0",
     "build_type": "RelWithDebInfo",
+    "compile_flags": "-O3 -g -DNDEBUG -march=native -mno-avx512f -ffp-contract=off",
     "cpu": "Test CPU @ 2.0GHz",
     "render_threads": "1",
     "embree_version": "3.13.5",
@@ -56,8 +58,11 @@ PROVENANCE = {
 }
 
 # The harness writes the floating-point mode, the provenance columns, then `isa` and
-# `embree_isa` last. Files from before the first and the last lack them (drop=...).
-PROVENANCE_TAIL = [FP_MODE_COLUMN] + PROVENANCE_COLUMNS + [ISA_COLUMN, EMBREE_ISA_COLUMN]
+# `embree_isa` last, and compile_flags after build_type. Files from before any of them lack
+# it (drop=...).
+_REQUIRED_TAIL = [FP_MODE_COLUMN] + PROVENANCE_COLUMNS + [ISA_COLUMN, EMBREE_ISA_COLUMN]
+_AT = _REQUIRED_TAIL.index("build_type") + 1
+PROVENANCE_TAIL = _REQUIRED_TAIL[:_AT] + [COMPILE_FLAGS_COLUMN] + _REQUIRED_TAIL[_AT:]
 
 MODELS = {  # name: (triangles, vertices)
     "stanford-bunny": (69451, 35947),

@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pandas as pd
 import pytest
 from synthetic import BVH, row, write_csv
 from test_reproduce import ACCELBENCH, NOW, tiny_job
@@ -120,21 +121,48 @@ def test_runs_page_and_history_skip_each_bad_file_and_name_it(tmp_path, capsys):
     assert (tmp_path / "history" / "history.csv").is_file()
 
 
-def test_history_keeps_two_builds_of_one_commit_apart(tmp_path):
+@pytest.mark.parametrize(
+    "field, values",
+    [("build_type", ("Release", "Debug")), ("compile_flags", ("-O2 -g", "-O3 -g -march=native"))],
+)
+def test_history_keeps_two_builds_of_one_commit_apart(tmp_path, field, values):
     results = tmp_path / "results"
-    for name, build_type, render in (("a", "Release", 0.2), ("b", "Debug", 2.0)):
+    for name, value, render in (("a", values[0], 0.2), ("b", values[1], 2.0)):
         d = results / "runs" / f"slurm-{name}"
         d.mkdir(parents=True)
         rows = [
-            row("stanford-bunny", "bvh", BVH, build=0.1, render=render, nodes=9, build_type=build_type),
-            row("stanford-bunny", "embree", {"threads": "1"}, build=0.05, render=0.1, build_type=build_type),
+            row("stanford-bunny", "bvh", BVH, build=0.1, render=render, nodes=9, **{field: value}),
+            row("stanford-bunny", "embree", {"threads": "1"}, build=0.05, render=0.1, **{field: value}),
         ]
         write_csv(d / "r.csv", rows)
     c = update(results, tmp_path / "history", tmp_path)
     h = c.history[(c.history["measure"] == "render_s") & (c.history["accel"] == "bvh")]
     assert sorted(h["value"]) == [0.2, 2.0]  # two medians, not one of both
     assert h["commit"].nunique() == 1 and h["build"].nunique() == 2
-    assert all(("Debug" in s) != ("Release" in s) for s in h["series"])
+    assert all((values[0] in s) != (values[1] in s) for s in h["series"])
+
+
+def test_history_collected_before_the_flags_keeps_those_rows_apart(tmp_path):
+    results = tmp_path / "results"
+    d = results / "runs" / "slurm-a"
+    d.mkdir(parents=True)
+    rows = [
+        row("stanford-bunny", "bvh", BVH, build=0.1, render=0.2, nodes=9),
+        row("stanford-bunny", "embree", {"threads": "1"}, build=0.05, render=0.1),
+    ]
+    write_csv(d / "r.csv", rows)
+    out = tmp_path / "history"
+    update(results, out, tmp_path)
+    # The store as a history from before the column wrote it, then a new run of a known build.
+    store = pd.read_csv(out / "collected.csv", dtype=str, keep_default_na=False)
+    store.drop(columns=["compile_flags"]).to_csv(out / "collected.csv", index=False)
+    d = results / "runs" / "slurm-b"
+    d.mkdir(parents=True)
+    write_csv(d / "r.csv", rows)
+    c = update(results, out, tmp_path)
+    assert sorted(set(c.rows["compile_flags"])) == sorted({"unknown", rows[0]["prov"]["compile_flags"]})
+    h = c.history[(c.history["measure"] == "render_s") & (c.history["accel"] == "bvh")]
+    assert len(h) == 2 and h["build"].nunique() == 2
 
 
 def test_markdown_from_data_is_text_and_its_links_stay_inside():

@@ -11,7 +11,7 @@ from accelbench_analysis.inputs.schema import ContractError, parse_params, read_
 BUNNY_BVH = {"split": "median", "max_prims": "1", "max_depth": "50", "threads": "1"}
 
 
-def minimal(tmp_path, name="run.csv", **prov):
+def minimal(tmp_path, name="run.csv", drop=(), **prov):
     rows = [
         row(
             "stanford-bunny",
@@ -27,7 +27,7 @@ def minimal(tmp_path, name="run.csv", **prov):
         ),
         row("stanford-bunny", "embree", {"threads": "1"}, build=0.1, render=0.5, **prov),
     ]
-    return write_csv(tmp_path / name, rows)
+    return write_csv(tmp_path / name, rows, drop=drop)
 
 
 def test_loads_the_parameter_and_the_measured_depth_by_name(tmp_path):
@@ -128,6 +128,23 @@ def test_mixed_commits_and_machines_are_flagged(tmp_path):
     assert any("more than one file" in w for w in res.warnings)
 
 
+def test_builds_differing_only_in_flags_are_two_groups(tmp_path):
+    a = minimal(tmp_path, "a.csv", compile_flags="-O2")
+    b = minimal(tmp_path, "b.csv", compile_flags="-O2 -march=native")
+    res = load_results([a, b])
+    assert res.mixed and [g.label for g in res.groups] == ["A", "B"]
+    text = " ".join(res.warnings)
+    assert "(differing in compile_flags)" in text and "flags -O2 -march=native" in text
+
+
+def test_a_file_from_before_the_flags_is_a_build_of_its_own(tmp_path):
+    old = minimal(tmp_path, "old.csv", drop=("compile_flags",))
+    assert "compile_flags" not in old.read_text().splitlines()[0].split(",")
+    assert set(read_csv(old)["compile_flags"]) == {"unknown"}
+    res = load_results([old, minimal(tmp_path, "new.csv")])
+    assert res.mixed and "(differing in compile_flags)" in " ".join(res.warnings)
+
+
 def test_dirty_tree_and_debug_build_are_flagged(tmp_path):
     res = load_results([minimal(tmp_path, git_dirty="true", build_type="Debug")])
     text = " ".join(res.warnings)
@@ -162,7 +179,7 @@ def test_error_columns_optional(tmp_path, realistic):
 def test_ragged_csv_is_a_contract_error(tmp_path):
     path = minimal(tmp_path)
     path.write_text(path.read_text() + "a,b,c" + ",x" * 200 + "\n")
-    with pytest.raises(ContractError, match=r"line 4 \(row 3\): 203 fields but the header has 57"):
+    with pytest.raises(ContractError, match=r"line 4 \(row 3\): 203 fields but the header has 58"):
         read_csv(path)
 
 

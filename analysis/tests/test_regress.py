@@ -248,6 +248,14 @@ def test_two_consecutive_exceedances_fail(run, capsys):
     assert "| stanford-bunny / kdtree | 4.00 | 8.00 | 2.0000 | 7.20 | FAIL |" in out
 
 
+def test_a_baseline_from_before_the_flags_is_compared_and_says_so(run, capsys):
+    # Regress compares builds on purpose; a baseline without compile_flags is not refused.
+    code, out = regress(run("base", drop=("compile_flags",)), run("cur"), capsys=capsys)
+    assert code == 0 and out.startswith("# Regression check: PASS")
+    assert "(flags unknown)" in out and f"(flags {PROVENANCE['compile_flags']})" in out
+    assert "built with different compiler flags (baseline: ['unknown']; current: [" in out
+
+
 def test_exceedance_after_a_good_measurement_is_a_warning(run, capsys):
     base, first, second = run("base"), run("first"), run("second", slower(2.0))
     code, out = regress(base, second, "--history", first, capsys=capsys)

@@ -85,6 +85,7 @@ def test_decide_resumes_only_an_unfinished_run_of_the_same_build_and_job(tmp_pat
     for other, said in (
         (dict(PROV, git_dirty="true"), "git_dirty: false -> true"),
         (dict(PROV, isa="avx2"), "isa: (absent) -> avx2"),
+        (dict(PROV, compile_flags="-O2"), "compile_flags: (absent) -> -O2"),
     ):
         d = decide(runs, JOB, other, False, NOW)
         assert not d.resume and said in d.reason and d.run_dir != unfinished

@@ -8,6 +8,9 @@
 #ifndef ACCELBENCH_BUILD_TYPE
 #define ACCELBENCH_BUILD_TYPE "unknown"
 #endif
+#ifndef ACCELBENCH_COMPILE_FLAGS
+#define ACCELBENCH_COMPILE_FLAGS "unknown"
+#endif
 
 namespace accelbench {
 
@@ -65,10 +68,15 @@ std::string compiled_isa() {
 
 std::vector<std::pair<std::string, std::string>> provenance_values() {
     const Provenance& p = provenance();
-    return {{"git_sha", p.git_sha},   {"git_dirty", p.git_dirty ? "true" : "false"},
-            {"compiler", p.compiler}, {"build_type", p.build_type},
-            {"cpu", p.cpu},           {"embree_version", p.embree_version},
-            {"isa", p.isa},           {"embree_isa", p.embree_isa}};
+    return {{"git_sha", p.git_sha},
+            {"git_dirty", p.git_dirty ? "true" : "false"},
+            {"compiler", p.compiler},
+            {"build_type", p.build_type},
+            {"compile_flags", p.compile_flags},
+            {"cpu", p.cpu},
+            {"embree_version", p.embree_version},
+            {"isa", p.isa},
+            {"embree_isa", p.embree_isa}};
 }
 
 std::string row_embree_isa(const std::string& accel, const ParamSet& params, const std::optional<std::string>& shared) {
@@ -85,8 +93,8 @@ std::optional<std::string> embree_isa_of_rows(const std::vector<std::string>& ma
 }
 
 const std::vector<std::string>& build_identity_columns() {
-    static const std::vector<std::string> columns = {"git_sha",    "git_dirty", "compiler",
-                                                     "build_type", "isa",       "embree_version"};
+    static const std::vector<std::string> columns = {"git_sha",       "git_dirty", "compiler",      "build_type",
+                                                     "compile_flags", "isa",       "embree_version"};
     return columns;
 }
 
@@ -112,6 +120,7 @@ const Provenance& provenance() {
         p.compiler = "unknown";
 #endif
         p.build_type = ACCELBENCH_BUILD_TYPE;
+        p.compile_flags = ACCELBENCH_COMPILE_FLAGS;
         p.cpu = cpu_model();
         p.embree_version = EmbreeAccel::version();
         p.isa = compiled_isa();

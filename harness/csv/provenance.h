@@ -1,6 +1,7 @@
-// Where a measurement came from: the commit, whether the tree was dirty, the compiler,
-// build type, CPU, Embree version, the vector ISA compiled in and the one Embree's kernels run. Every CSV row carries these columns so results
-// from different builds or machines are never silently mixed.
+// Where a measurement came from: the commit, whether the tree was dirty, the compiler, build
+// type and compiler flags, CPU, Embree version, the vector ISA compiled in and the one
+// Embree's kernels run. Every CSV row carries these columns so results from different
+// builds or machines are never silently mixed.
 #pragma once
 
 #include <optional>
@@ -17,6 +18,10 @@ struct Provenance {
     bool git_dirty = false;
     std::string compiler;
     std::string build_type;
+    // The compiler flags that change the code (CMakeLists.txt's ACCELBENCH_COMPILE_FLAGS:
+    // CMAKE_CXX_FLAGS, the build type's flags and the options of every target, such as
+    // -march), e.g. "-O3 -g -DNDEBUG -march=native -mno-avx512f -ffp-contract=off".
+    std::string compile_flags;
     std::string cpu;
     std::string embree_version;
     // The vector extensions our code was compiled for (ACCELBENCH_ISA), e.g.
@@ -34,7 +39,8 @@ struct Provenance {
 const Provenance& provenance();
 
 // A build's identity: the provenance columns that name the binary that measured a row
-// (git_sha, git_dirty, compiler, build_type, isa, embree_version). The one list.
+// (git_sha, git_dirty, compiler, build_type, compile_flags, isa, embree_version). The one
+// list; `accelbench columns --identity` prints it.
 const std::vector<std::string>& build_identity_columns();
 
 // The one rule for mixing: rows may share a file or a median (merge, merge --take-column,
@@ -42,6 +48,7 @@ const std::vector<std::string>& build_identity_columns();
 // machine (cpu). Not embree_isa: that is Embree's run-time choice on this build and CPU
 // (under valgrind, which a --take-column source runs under, it sees no AVX-512), nor
 // render_threads and timestamp, which are per run. --allow-mixed allows it everywhere.
+// `accelbench columns --mixing` prints it.
 const std::vector<std::string>& mixing_columns();
 
 // The provenance columns of every results CSV row (results.h's provenance_columns(), in

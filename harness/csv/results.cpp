@@ -97,6 +97,8 @@ const ColumnSpec kMeasuredColumns[] = {
     {"git_dirty", ColumnKind::Text, "", "provenance: code differs from the commit"},
     {"compiler", ColumnKind::Text, "", "provenance: compiler and version"},
     {"build_type", ColumnKind::Text, "", "provenance: CMake build type"},
+    {"compile_flags", ColumnKind::Text, "",
+     "provenance: compiler flags that change the code (CMake's, the build type's, -march)"},
     {"cpu", ColumnKind::Text, "", "provenance: CPU model"},
     {"render_threads", ColumnKind::Number, "count", "threads the render ran on"},
     {"embree_version", ColumnKind::Text, "", "provenance: Embree version"},
@@ -232,6 +234,8 @@ constexpr AddedColumn kAddedColumns[] = {
     {"processes", "repetitions", ""},
     {"build_s_process_gap", "ci_coverage", ""},
     {"render_s_process_gap", "build_s_process_gap", ""},
+    // Which flags compiled an older row's binary was not recorded: unknown, a build of its own.
+    {"compile_flags", "build_type", "unknown"},
 };
 
 // The added columns `header` lacks (those whose predecessor it has).
@@ -302,8 +306,9 @@ std::vector<std::string> repetition_columns() {
 }
 
 const std::vector<std::string>& provenance_columns() {
-    static const std::vector<std::string> cols = {"git_sha", "git_dirty",      "compiler", "build_type",
-                                                  "cpu",     "embree_version", "isa",      "embree_isa"};
+    static const std::vector<std::string> cols = {"git_sha",        "git_dirty",     "compiler",
+                                                  "build_type",     "compile_flags", "cpu",
+                                                  "embree_version", "isa",           "embree_isa"};
     return cols;
 }
 

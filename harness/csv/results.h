@@ -61,7 +61,8 @@ const std::vector<RenamedColumn>& renamed_columns();
 
 // Whether `header` is a results header from before the renames (an old name after
 // `status`, where only measured and global columns are), before the label column, or
-// before the added columns fp_mode (after shading) and embree_isa (after isa).
+// before the added columns fp_mode (after shading), embree_isa (after isa), the plugin's
+// and compile_flags (after build_type).
 bool is_old_results_header(const std::vector<std::string>& header);
 // For an old header: "<path>: written before ... renamed: max_depth -> tree_depth, ...;
 // convert it with `accelbench convert-csv <path> NEW`". Empty for any other header.
@@ -70,7 +71,7 @@ std::string old_header_message(const std::string& path, const std::vector<std::s
 // `old_csv` rewritten to `new_csv` with the renamed columns' new names, every value kept,
 // and its .reps.csv (unchanged: no renamed column) copied beside when there is one. A
 // missing label gets the registry's; a missing fp_mode "ieee" (older rows traced in IEEE
-// mode), a missing embree_isa "unknown". Then checks `new_csv`: re-read, same header but
+// mode), a missing embree_isa or compile_flags "unknown". Then checks `new_csv`: re-read, same header but
 // the renames and added columns, same rows, every value equal.
 // Throws std::runtime_error for a file that is not an old results file (a current one
 // included) or a failed check. Returns the row count.

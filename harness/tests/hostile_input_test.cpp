@@ -158,9 +158,9 @@ TEST_F(HostileInputTest, RepetitionsWithoutTheirResultsAreNeverMixedWithANewRun)
 // provenance), each with one hostile row.
 TEST_F(HostileInputTest, MergeRefusesRowsThatAreNotResults) {
     const std::string header =
-        "combo_id,params,status,rays,render_s_median,git_sha,git_dirty,compiler,build_type,cpu,"
+        "combo_id,params,status,rays,render_s_median,git_sha,git_dirty,compiler,build_type,compile_flags,cpu,"
         "embree_version,isa,embree_isa,plugin_file,plugin_sha256,plugin_version\n";
-    const std::string prov = ",abc,false,gcc,Release,cpu,3,sse2,avx2,,,\n";
+    const std::string prov = ",abc,false,gcc,Release,-O3,cpu,3,sse2,avx2,,,\n";
     const std::string good = "a1,,ok,10,0.5" + prov;
     const std::vector<std::pair<std::string, std::string>> cases = {
         {",,ok,10,0.5" + prov, "row 2: empty combo_id"},
@@ -469,23 +469,32 @@ accelerators: [{name: bvh}]
     EXPECT_EQ(rows[0].first, "ok") << rows[0].second;
 }
 
-// --resume appends only to rows of this build (the rule merge applies), or with --allow-mixed.
+// --resume appends only to rows of this build (the rule merge applies), or with --allow-mixed:
+// not to another build type's, nor to rows of the same build type with other flags (-O2
+// where this build has -O3, or `unknown`: a file from before the column, converted).
 TEST_F(HostileInputTest, ResumeRefusesRowsOfAnotherBuild) {
     ASSERT_EQ(run({config, "--out", out}).code, 0);
-    CsvData d = read_csv(out);
-    const size_t sha = size_t(std::find(d.header.begin(), d.header.end(), "build_type") - d.header.begin());
-    d.rows.pop_back();  // one combination left to do
-    std::string text = csv_line(d.header);
-    for (auto& r : d.rows) {
-        r[sha] = r[sha] == "Debug" ? "Release" : "Debug";  // another build type than this build's
-        text += csv_line(r);
+    const CsvData measured = read_csv(out);
+    for (const auto& [column, other] : std::vector<std::pair<std::string, std::string>>{
+             {"build_type", "Debug"}, {"compile_flags", "-O2"}, {"compile_flags", "unknown"}}) {
+        CsvData d = measured;
+        const size_t at = size_t(std::find(d.header.begin(), d.header.end(), column) - d.header.begin());
+        ASSERT_LT(at, d.header.size()) << column;
+        d.rows.pop_back();  // one combination left to do
+        std::string text = csv_line(d.header);
+        for (auto& r : d.rows) {
+            ASSERT_NE(r[at], other) << column;  // another value than this build's
+            r[at] = other;
+            text += csv_line(r);
+        }
+        write_file(dir.path(), "tiny.csv", text);
+        const Outcome o = run({config, "--out", out, "--resume"});
+        EXPECT_EQ(o.code, 2);
+        EXPECT_TRUE(contains(o.err, "column " + column + " differs")) << o.err;
+        EXPECT_TRUE(contains(o.err, "'" + other + "' (" + out + ")")) << o.err;
+        EXPECT_TRUE(contains(o.err, "(this build)")) << o.err;
+        EXPECT_EQ(read_file(out), text);  // nothing appended
     }
-    write_file(dir.path(), "tiny.csv", text);
-    const Outcome o = run({config, "--out", out, "--resume"});
-    EXPECT_EQ(o.code, 2);
-    EXPECT_TRUE(contains(o.err, "column build_type differs")) << o.err;
-    EXPECT_TRUE(contains(o.err, "(this build)")) << o.err;
-    EXPECT_EQ(read_file(out), text);  // nothing appended
     EXPECT_EQ(run({config, "--out", out, "--resume", "--allow-mixed"}).code, 0);
     EXPECT_EQ(read_csv(out).rows.size(), 2u);
 }

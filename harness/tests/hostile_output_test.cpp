@@ -90,8 +90,9 @@ class TakeColumnTest : public ::testing::Test {
 protected:
     TempDir dir{"accelbench-hostile-output-"};
     static constexpr const char* kHeader =
-        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
-    const std::string prov = ",abc,false,gcc 12,Release,x,4.3,avx2,avx2\n";
+        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,compile_flags,cpu,embree_version,isa,"
+        "embree_isa\n";
+    const std::string prov = ",abc,false,gcc 12,Release,-O3,x,4.3,avx2,avx2\n";
     std::string write_run(const std::string& name, const std::string& rows) {
         const std::string p = write_file(dir.path(), name, kHeader + rows);
         write_inputs(p, {{"config", std::string(64, 'c'), "ci"}});

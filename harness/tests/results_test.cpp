@@ -193,6 +193,41 @@ TEST(ConvertTest, AFileWithoutTheFloatingPointModeOrEmbreesIsaGetsIeeeAndUnknown
     EXPECT_FALSE(is_old_results_header(read_csv(new_csv).header));
 }
 
+// A file from before compile_flags: the flags of the build that measured it are not known.
+// Converted, its rows say `unknown`, a build of their own that merges with no known one.
+TEST(ConvertTest, AFileFromBeforeTheFlagsGetsUnknownAndMixesWithNoKnownBuild) {
+    TempDir dir("accelbench-convert-test-");
+    const std::string prov = "git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa";
+    const std::string plugins = ",plugin_file,plugin_sha256,plugin_version\n";
+    const auto old_csv = write_file(dir.path(), "old.csv",
+                                    "config,combo_id,accel,label,params,status," + prov + plugins +
+                                        "t,1,bvh,BVH,,ok,abc,false,gcc 12,RelWithDebInfo,c,3.13.5,avx2,avx2,,,\n");
+    write_inputs(old_csv, {{"config", std::string(64, 'c'), "t"}});
+    EXPECT_NE(old_header_message(old_csv, read_csv(old_csv).header).find("before the columns compile_flags"),
+              std::string::npos);
+    const std::string new_csv = (dir.path() / "new.csv").string();
+    EXPECT_EQ(convert_results(old_csv, new_csv), 1u);
+    const std::string header =
+        "config,combo_id,accel,label,params,status,git_sha,git_dirty,compiler,build_type,compile_flags,cpu,"
+        "embree_version,isa,embree_isa" +
+        plugins;
+    EXPECT_EQ(read_file(new_csv),
+              header + "t,1,bvh,BVH,,ok,abc,false,gcc 12,RelWithDebInfo,unknown,c,3.13.5,avx2,avx2,,,\n");
+    const auto known =
+        write_file(dir.path(), "known.csv",
+                   header + "t,2,bvh,BVH,,ok,abc,false,gcc 12,RelWithDebInfo,-O3,c,3.13.5,avx2,avx2,,,\n");
+    write_inputs(known, {{"config", std::string(64, 'c'), "t"}});
+    const std::string merged = (dir.path() / "merged.csv").string();
+    try {
+        merge_results(merged, {new_csv, known}, false);
+        ADD_FAILURE() << "merged unknown flags with known ones";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("column compile_flags differs"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("'unknown' (" + new_csv + ")"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(merge_results(merged, {new_csv, known}, true), 2u);
+}
+
 TEST(ConvertTest, ResumeAndMergeOfAnOldFileSayWhatWasRenamedAndHowToConvert) {
     TempDir dir("accelbench-convert-test-");
     const auto old_csv = write_file(dir.path(), "old.csv", kOldHeader + "t,1,bvh,,,,,ok,1,3,8,8,1,sse2\n");
@@ -247,11 +282,14 @@ TEST(ResultsTest, ResumeCutsATruncatedLineAndForgetsUnfinishedRepetitions) {
 class MergeTest : public ::testing::Test {
 protected:
     TempDir dir{"accelbench-merge-test-"};
-    std::string shard(const std::string& name, const std::vector<std::pair<std::string, std::string>>& rows) {
-        std::string text = "combo_id,status,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
+    std::string shard(const std::string& name, const std::vector<std::pair<std::string, std::string>>& rows,
+                      const std::string& flags = "-O3") {
+        std::string text =
+            "combo_id,status,git_sha,git_dirty,compiler,build_type,compile_flags,cpu,embree_version,isa,embree_isa\n";
         std::string reps = "combo_id,repetition\n";
         for (const auto& [id, sha] : rows) {
-            text += id + ",ok," + sha + ",false,gcc 12,RelWithDebInfo,\"Xeon, 2 cores\",3.13.5,sse2,avx2\n";
+            text +=
+                id + ",ok," + sha + ",false,gcc 12,RelWithDebInfo," + flags + ",\"Xeon, 2 cores\",3.13.5,sse2,avx2\n";
             reps += id + ",1\n";
         }
         write_file(dir.path(), name + ".reps.csv", reps);
@@ -263,7 +301,8 @@ protected:
     // A run's results file with the instructions column, as make regress's timed and
     // callgrind runs write it; both runs of one config share their record of inputs.
     static constexpr const char* kInstructionsHeader =
-        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,cpu,embree_version,isa,embree_isa\n";
+        "combo_id,status,instructions,git_sha,git_dirty,compiler,build_type,compile_flags,cpu,embree_version,isa,"
+        "embree_isa\n";
     std::string write_run(const std::string& name, const std::string& rows) {
         const std::string path = write_file(dir.path(), name, kInstructionsHeader + rows);
         write_inputs(path, {{"config", std::string(64, 'c'), "ci"}});
@@ -278,7 +317,7 @@ TEST_F(MergeTest, JoinsShardsAndTheirRepetitions) {
     const CsvData m = read_csv(out());
     ASSERT_EQ(m.rows.size(), 3u);
     EXPECT_EQ(m.rows[2][0], "3");
-    EXPECT_EQ(m.rows[2][6], "Xeon, 2 cores");
+    EXPECT_EQ(m.rows[2][7], "Xeon, 2 cores");
     EXPECT_EQ(read_csv(repetitions_path(out())).rows.size(), 3u);
 }
 
@@ -296,6 +335,29 @@ TEST_F(MergeTest, RefusesMixedProvenanceUnlessAllowed) {
     EXPECT_EQ(merge_results(out(), {a, b}, true), 2u);
 }
 
+// Two builds of one commit, build type and compiler differing only in their flags (-O2
+// against -O3, an added -march=native) are two builds: merge and --take-column refuse them.
+TEST_F(MergeTest, RefusesBuildsDifferingOnlyInFlagsUnlessAllowed) {
+    const auto a = shard("a", {{"1", "abc"}});
+    for (const std::string flags : {"-O2", "-O3 -march=native"}) {
+        const auto b = shard("b", {{"2", "abc"}}, flags);
+        try {
+            merge_results(out(), {a, b}, false);
+            ADD_FAILURE() << "merged -O3 with " << flags;
+        } catch (const std::runtime_error& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("column compile_flags differs"), std::string::npos) << what;
+            EXPECT_NE(what.find("'" + flags + "' (" + b + ")"), std::string::npos) << what;
+        }
+        EXPECT_FALSE(fs::exists(out()));
+    }
+    EXPECT_EQ(merge_results(out(), {a, shard("b", {{"2", "abc"}}, "-O2")}, true), 2u);
+    const auto timed = write_run("timed.csv", "1,ok,,abc,false,gcc 12,RelWithDebInfo,-O3,x,3.13.5,sse2,avx2\n");
+    const auto cg = write_run("cg.csv", "1,ok,100,abc,false,gcc 12,RelWithDebInfo,-O2,x,3.13.5,sse2,avx2\n");
+    EXPECT_THROW(take_column((dir.path() / "t.csv").string(), timed, cg, "instructions", false), std::runtime_error);
+    EXPECT_EQ(take_column((dir.path() / "t.csv").string(), timed, cg, "instructions", true), 1u);
+}
+
 TEST_F(MergeTest, RefusesACombinationInTwoInputs) {
     const auto a = shard("a", {{"1", "abc"}});
     const auto b = shard("b", {{"1", "abc"}});
@@ -305,7 +367,7 @@ TEST_F(MergeTest, RefusesACombinationInTwoInputs) {
 // The timed run's rows with the instructions of a callgrind run, matched by combo_id.
 TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
     const std::string header = kInstructionsHeader;
-    const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,avx2\n";
+    const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,-O3,x,3.13.5,sse2,avx2\n";
     const auto timed = write_run("timed.csv", "1,ok," + prov + "2,ok," + prov + "3,skipped," + prov);
     write_file(dir.path(), "timed.reps.csv", "combo_id,repetition\n1,1\n");
     const auto cg = write_run("cg.csv", "2,ok,200" + prov + "1,ok,100" + prov + "3,skipped," + prov);
@@ -313,7 +375,7 @@ TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
     EXPECT_EQ(read_file(out()), header + "1,ok,100" + prov + "2,ok,200" + prov + "3,skipped," + prov);
     EXPECT_EQ(read_file(repetitions_path(out())), "combo_id,repetition\n1,1\n");
     EXPECT_THROW(take_column(out(), timed, cg, "no_such_column", false), std::runtime_error);
-    const auto other = write_run("other.csv", "1,ok,100,def,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,avx2\n");
+    const auto other = write_run("other.csv", "1,ok,100,def,false,gcc 12,RelWithDebInfo,-O3,x,3.13.5,sse2,avx2\n");
     EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
     const auto twice = write_run("twice.csv", "1,ok,100" + prov + "1,ok,101" + prov);
     EXPECT_THROW(take_column(out(), timed, twice, "instructions", false), std::runtime_error);
@@ -323,13 +385,13 @@ TEST_F(MergeTest, TakeColumnCopiesOneColumnByComboId) {
 // same build differs from the timed run in embree_isa only, and the timed run's value stays.
 TEST_F(MergeTest, TakeColumnAcceptsAnotherEmbreeIsaAndKeepsTheTimedRuns) {
     const std::string header = kInstructionsHeader;
-    const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,x,3.13.5,sse2,";
+    const std::string prov = ",abc,false,gcc 12,RelWithDebInfo,-O3,x,3.13.5,sse2,";
     const auto timed = write_run("timed.csv", "1,ok," + prov + "avx512\n");
     const auto cg = write_run("cg.csv", "1,ok,100" + prov + "avx2\n");
     EXPECT_EQ(take_column(out(), timed, cg, "instructions", false), 1u);
     EXPECT_EQ(read_file(out()), header + "1,ok,100" + prov + "avx512\n");
     // Any other provenance column still refuses.
-    const auto other = write_run("other.csv", "1,ok,100,abc,false,gcc 12,RelWithDebInfo,x,3.13.5,avx2,avx2\n");
+    const auto other = write_run("other.csv", "1,ok,100,abc,false,gcc 12,RelWithDebInfo,-O3,x,3.13.5,avx2,avx2\n");
     EXPECT_THROW(take_column(out(), timed, other, "instructions", false), std::runtime_error);
 }
 

@@ -5,7 +5,7 @@ analysis/README.md for the column list). Loading checks that contract before any
 computed: a file missing required columns, with an unknown status or with text where a
 number belongs is rejected with an error that names the file, the columns and the rows.
 
-Provenance (git_sha, git_dirty, compiler, build_type, cpu, embree_version, isa, embree_isa) is grouped: rows
+Provenance (PROVENANCE_IDENTITY: the build's identity, cpu and embree_isa) is grouped: rows
 that differ in any of these fields belong to different groups, labelled A, B, ... in file
 order. More than one group is never an error (comparing two machines is legitimate), but
 it is never silent either: every output carries a warning, table cells are tagged with
@@ -25,11 +25,13 @@ import pandas as pd
 
 from .provenance import (  # noqa: F401  (re-exported: the columns' one home for readers)
     BUILD_IDENTITY,
+    COMPILE_FLAGS_COLUMN,
     EMBREE_ISA_COLUMN,
     ISA_COLUMN,
     MIXING_COLUMNS,
     PLUGIN_COLUMNS,
     PROVENANCE_IDENTITY,
+    UNKNOWN,
 )
 
 # A row's identity. `ray_set` (camera, or one of RAY_SETS), `render_threads` and
@@ -189,6 +191,7 @@ RESULT_CSV_COLUMNS: list[tuple[str, str]] = [
     ("git_dirty", "text"),
     ("compiler", "text"),
     ("build_type", "text"),
+    (COMPILE_FLAGS_COLUMN, "text"),
     ("cpu", "text"),
     ("render_threads", "number"),
     ("embree_version", "text"),
@@ -249,7 +252,8 @@ class ProvenanceGroup:
         dirty = " (dirty)" if self.fields["git_dirty"] == "true" else ""
         return (
             f"{self.label}: commit {sha[:12]}{dirty}, cpu {self.fields['cpu']}, "
-            f"{self.fields['compiler']}, {self.fields['build_type']}, isa {self.fields['isa']}, "
+            f"{self.fields['compiler']}, {self.fields['build_type']}, flags {self.fields['compile_flags']}, "
+            f"isa {self.fields['isa']}, "
             f"Embree {self.fields['embree_version']} (kernels {self.fields['embree_isa']}) ({self.rows} rows from "
             f"{', '.join(self.files)})"
         )
@@ -581,9 +585,9 @@ def read_csv(path: str | Path) -> pd.DataFrame:
         keys = df.loc[dup, KEY_COLUMNS].drop_duplicates().head(3).to_dict("records")
         raise ContractError(f"{path}: the key ({', '.join(KEY_COLUMNS)}) must be unique; repeated: {keys}")
     df["source"] = str(path)
-    for col in (ISA_COLUMN, EMBREE_ISA_COLUMN):
+    for col in (ISA_COLUMN, EMBREE_ISA_COLUMN, COMPILE_FLAGS_COLUMN):
         if col not in df.columns:
-            df[col] = "unknown"
+            df[col] = UNKNOWN
     for col in PLUGIN_COLUMNS:
         df[col] = df[col].fillna("").astype(str) if col in df.columns else ""
     for col in PROVENANCE_IDENTITY + ["timestamp"]:

@@ -32,7 +32,16 @@ import pandas as pd
 
 from ...inputs.load import is_companion
 from ...inputs.run_json import skipped
-from ...inputs.schema import BUILD_IDENTITY, KEY_COLUMNS, ContractError, Results, parse_params, read_csv
+from ...inputs.schema import (
+    BUILD_IDENTITY,
+    COMPILE_FLAGS_COLUMN,
+    KEY_COLUMNS,
+    UNKNOWN,
+    ContractError,
+    Results,
+    parse_params,
+    read_csv,
+)
 from ...mapping.selection import label_of
 from .regress import ERROR_COUNTS, EXACT_COUNTS, RENDER_SETTING_COLUMNS, embree_ratios
 
@@ -165,9 +174,10 @@ def collect(results: Path, out: Path) -> tuple[pd.DataFrame, pd.DataFrame, list[
     text = [*IDENTITY, *PROVENANCE, "kind", "run", "structure"]
     new = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=[*text, *MEASURES])
     if store.is_file():
-        new = pd.concat(
-            [pd.read_csv(store, dtype=str, keep_default_na=False), new.astype({c: str for c in text})]
-        )
+        stored = pd.read_csv(store, dtype=str, keep_default_na=False)
+        if COMPILE_FLAGS_COLUMN not in stored.columns:  # collected before the column: not known
+            stored[COMPILE_FLAGS_COLUMN] = UNKNOWN
+        new = pd.concat([stored, new.astype({c: str for c in text})])
     new[MEASURES] = new[MEASURES].apply(pd.to_numeric, errors="coerce")
     new = new.astype({c: str for c in text}).drop_duplicates(IDENTITY, keep="last")
     return new.reset_index(drop=True), pd.DataFrame(states, columns=["file", "state"]), notes
@@ -251,9 +261,14 @@ def series_labels(df: pd.DataFrame) -> pd.Series:
 
 
 def build_text(rows: pd.DataFrame) -> pd.Series:
-    """The build beside its commit: build type, compiler, ISA and Embree, e.g.
-    "RelWithDebInfo, gcc 12.2.0, avx2, Embree 4.3.0"."""
-    return rows[BUILD_FIELDS].astype(str).agg(lambda r: ", ".join(r[:-1]) + f", Embree {r.iloc[-1]}", axis=1)
+    """The build beside its commit: compiler, build type, flags, ISA and Embree, e.g.
+    "gcc 12.2.0, RelWithDebInfo, flags -O3 -g -DNDEBUG, avx2, Embree 4.3.0"."""
+    named = {COMPILE_FLAGS_COLUMN: "flags ", "embree_version": "Embree "}
+    return (
+        rows[BUILD_FIELDS]
+        .astype(str)
+        .agg(lambda r: ", ".join(named.get(c, "") + v for c, v in r.items()), axis=1)
+    )
 
 
 def history(collected: pd.DataFrame, repo: Path) -> pd.DataFrame:

@@ -454,7 +454,8 @@ def _provenance_lines(role: str, results: Results) -> list[str]:
         lines.append(
             f"{role}: commit {g.fields['git_sha']}"
             f"{' (dirty)' if g.fields['git_dirty'] == 'true' else ''}, cpu "
-            f"{g.fields['cpu']}, {g.fields['compiler']}, {g.fields['build_type']}, "
+            f"{g.fields['cpu']}, {g.fields['compiler']}, {g.fields['build_type']} "
+            f"(flags {g.fields['compile_flags']}), "
             f"Embree {g.fields['embree_version']}{when} ({g.rows} rows of "
             f"{', '.join(g.files)})"
         )
@@ -489,13 +490,18 @@ def compare(
 
     provenance = [line for role, r in loaded.items() for line in _provenance_lines(role, r)]
     warnings = [f"{role}: {w}" for role, r in loaded.items() for w in r.warnings]
-    cpus = {role: {g.fields["cpu"] for g in r.groups} for role, r in loaded.items()}
-    if any(c != cpus["baseline"] for c in cpus.values()):
-        warnings.append(
-            "the files were measured on different CPUs "
-            f"({'; '.join(f'{k}: {sorted(v)}' for k, v in cpus.items())}): tier 3 "
-            f"ratios to Embree may differ for that reason alone"
-        )
+    # Compared across builds on purpose, but never silently: another machine or other flags
+    # (a baseline from before compile_flags reads "unknown") move times and instructions.
+    for column, what, tiers_moved in (
+        ("cpu", "measured on different CPUs", "tier 3 ratios to Embree"),
+        ("compile_flags", "built with different compiler flags", "tier 2 instructions and tier 3 ratios"),
+    ):
+        seen = {role: {g.fields[column] for g in r.groups} for role, r in loaded.items()}
+        if any(v != seen["baseline"] for v in seen.values()):
+            warnings.append(
+                f"the files were {what} ({'; '.join(f'{k}: {sorted(v)}' for k, v in seen.items())}): "
+                f"{tiers_moved} may differ for that reason alone"
+            )
     matched_by = (
         "combo_id" if by_id else "(config, model, accel, params): not every file has a combo_id column"
     )

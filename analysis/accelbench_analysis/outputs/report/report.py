@@ -69,7 +69,8 @@ def provenance_lines(results: Results) -> list[str]:
         out.append(
             f"  **Commit:** `{f['git_sha']}`"
             + (" **(dirty work tree)**" if f["git_dirty"] == "true" else "")
-            + f"; {f['compiler']}, {f['build_type']}; Embree {f['embree_version']}; {g.rows} rows"
+            + f"; {f['compiler']}, {f['build_type']} (flags `{f['compile_flags']}`)"
+            + f"; Embree {f['embree_version']}; {g.rows} rows"
         )
         # A ratio against Embree is also a ratio of instruction sets: say which each side ran.
         out.append(
