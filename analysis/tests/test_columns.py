@@ -14,12 +14,10 @@ import pytest
 
 from accelbench_analysis.inputs.schema import (
     BUILD_IDENTITY,
-    COMPILE_FLAGS_COLUMN,
     MIXING_COLUMNS,
     PROVENANCE_IDENTITY,
     REQUIRED_COLUMNS,
     RESULT_CSV_COLUMNS,
-    UNKNOWN,
     read_csv,
 )
 
@@ -43,10 +41,6 @@ def committed_csvs() -> list[Path]:
 
 
 COMMITTED_CSVS = committed_csvs()
-# Columns a committed file measured before they existed may lack (the baseline is kept
-# across builds on purpose; the next re-measurement adds them), with the value the loader
-# and `accelbench convert-csv` give its rows.
-MEASURED_BEFORE = {COMPILE_FLAGS_COLUMN: UNKNOWN}
 needs_binary = pytest.mark.skipif(not ACCELBENCH.is_file(), reason=f"{ACCELBENCH} not built")
 
 
@@ -92,13 +86,11 @@ def test_every_committed_csv_reads_by_name_with_pandas_and_dictreader(path):
     assert len(rows) == len(df)
     assert all(len(r) == len(header) and None not in r for r in rows)  # no field lost or extra
     if is_results_file(header):
-        missing = [c for c in documented_columns() if c not in header and c not in MEASURED_BEFORE]
+        missing = [c for c in documented_columns() if c not in header]
         assert not missing, f"{path}: documented columns missing: {missing}"
         # The analysis's loader reads it; DictReader and pandas agree on every cell.
         loaded = read_csv(path)
         assert len(loaded) == len(rows)
-        for c, value in MEASURED_BEFORE.items():
-            assert c in header or set(loaded[c]) == {value}, c
         for i in (0, len(rows) - 1):
             assert [rows[i][c] for c in header] == list(df.iloc[i])
 
