@@ -11,10 +11,12 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <initializer_list>
 #include <iostream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 namespace accelbench {
 
@@ -81,29 +83,40 @@ std::string build_stats_difference(const BuildStats& a, const BuildStats& b) {
     return "";
 }
 
-std::string ray_count_difference(const TraceOutput& a, const TraceOutput& b) {
-    auto cmp = [](const char* what, uint64_t x, uint64_t y) {
-        return x == y ? std::string() : std::string(what) + " " + std::to_string(x) + " vs " + std::to_string(y);
-    };
-    for (const std::string& d :
-         {cmp("rays", a.rays, b.rays), cmp("hits", a.hits, b.hits), cmp("shadow_rays", a.shadow_rays, b.shadow_rays),
-          cmp("shadow_hits", a.shadow_hits, b.shadow_hits)})
-        if (!d.empty()) return d;
+// "what x vs y" for the first of the named counts that differ; empty when all are equal.
+std::string count_difference(std::initializer_list<std::tuple<std::string, uint64_t, uint64_t>> counts) {
+    for (const auto& [what, x, y] : counts)
+        if (x != y) return what + " " + std::to_string(x) + " vs " + std::to_string(y);
     return "";
 }
 
+// Ray and hit counts of two renders (TraceOutput) or two measurements (Measurement).
+template <class Counted>
+std::string ray_count_difference(const Counted& a, const Counted& b) {
+    return count_difference({{"rays", a.rays, b.rays},
+                             {"hits", a.hits, b.hits},
+                             {"shadow_rays", a.shadow_rays, b.shadow_rays},
+                             {"shadow_hits", a.shadow_hits, b.shadow_hits}});
+}
+
+std::string stats_difference(const std::string& prefix, const RayStats& a, const RayStats& b) {
+    return count_difference({{prefix + "node_visits", a.node_visits, b.node_visits},
+                             {prefix + "box_tests", a.box_tests, b.box_tests},
+                             {prefix + "prim_tests", a.prim_tests, b.prim_tests}});
+}
+
 std::string counter_difference(const TraceOutput& a, const TraceOutput& b) {
-    auto cmp = [](const std::string& what, uint64_t x, uint64_t y) {
-        return x == y ? std::string() : what + " " + std::to_string(x) + " vs " + std::to_string(y);
-    };
-    for (const std::string& d : {cmp("primary node_visits", a.primary_stats.node_visits, b.primary_stats.node_visits),
-                                 cmp("primary box_tests", a.primary_stats.box_tests, b.primary_stats.box_tests),
-                                 cmp("primary prim_tests", a.primary_stats.prim_tests, b.primary_stats.prim_tests),
-                                 cmp("shadow node_visits", a.shadow_stats.node_visits, b.shadow_stats.node_visits),
-                                 cmp("shadow box_tests", a.shadow_stats.box_tests, b.shadow_stats.box_tests),
-                                 cmp("shadow prim_tests", a.shadow_stats.prim_tests, b.shadow_stats.prim_tests)})
-        if (!d.empty()) return d;
-    return "";
+    if (auto d = stats_difference("primary ", a.primary_stats, b.primary_stats); !d.empty()) return d;
+    return stats_difference("shadow ", a.shadow_stats, b.shadow_stats);
+}
+
+// Every deterministic value of two measurements of one combination: build statistics, ray
+// and hit counts, the traversal counters' totals; empty when all are equal.
+std::string measurement_difference(const Measurement& a, const Measurement& b) {
+    if (auto d = build_stats_difference(a.build, b.build); !d.empty()) return d;
+    if (auto d = ray_count_difference(a, b); !d.empty()) return d;
+    if (a.counts.has_value() != b.counts.has_value()) return "traversal counters present in one only";
+    return a.counts ? stats_difference("", *a.counts, *b.counts) : "";
 }
 
 // Primary plus shadow totals; nullopt when the structure does not count its traversal
@@ -529,19 +542,7 @@ void pool_process(Measurement& into, const Measurement& next, int process) {
         into.stage = next.stage;
     };
     if (next.status != "ok") return fail(next.status, which + ": " + next.message);
-    std::string d = build_stats_difference(into.build, next.build);
-    if (d.empty() &&
-        (into.rays != next.rays || into.hits != next.hits || into.shadow_rays != next.shadow_rays ||
-         into.shadow_hits != next.shadow_hits))
-        d = "rays/hits " + std::to_string(into.rays) + "/" + std::to_string(into.hits) + " vs " +
-            std::to_string(next.rays) + "/" + std::to_string(next.hits);
-    if (d.empty() && into.counts.has_value() != next.counts.has_value()) d = "traversal counters present in one only";
-    if (d.empty() && into.counts &&
-        (into.counts->node_visits != next.counts->node_visits || into.counts->prim_tests != next.counts->prim_tests ||
-         into.counts->box_tests != next.counts->box_tests))
-        d = "node_visits/prim_tests " + std::to_string(into.counts->node_visits) + "/" +
-            std::to_string(into.counts->prim_tests) + " vs " + std::to_string(next.counts->node_visits) + "/" +
-            std::to_string(next.counts->prim_tests);
+    const std::string d = measurement_difference(into, next);
     if (!d.empty()) return fail("error", "nondeterministic between processes: " + d + " (process 1 vs " + which + ")");
     if (into.process.empty()) into.process.assign(into.render_s.size(), 1);
     into.build_s.insert(into.build_s.end(), next.build_s.begin(), next.build_s.end());
