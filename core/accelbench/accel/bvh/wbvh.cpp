@@ -732,7 +732,6 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
                     continue;
                 }
                 // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
-                // Other orders were measured and not adopted (docs/decisions.md).
                 uint32_t keys[W];
                 int n = 0;
                 keys[n++] = order_key(tnear[first], first);
