@@ -66,6 +66,16 @@ def test_the_largest_part_wins_and_unmeasured_is_zero():
     assert claim_spread(res, [("a", "nodes")]).value == 0  # counts are exact
 
 
+def test_the_floor_is_the_widest_gap_of_the_whole_run():
+    # The claims judge table rows only; a thread-scaling row elsewhere in the run whose
+    # interval reaches 85% still sets every claim's floor.
+    judged = results(("a", "table4", 1.0, 0.95, 1.05, 0.969))
+    run = results(("a", "table4", 1.0, 0.95, 1.05, 0.969), ("t", "thread-scaling", 1.0, 0.15, 1.2, 0.75))
+    assert claim_spread(judged, [("a", "build")]).value == pytest.approx(0.05)
+    floor = claim_spread(judged, [("a", "build")], run)
+    assert floor.value == pytest.approx(0.85) and "widest gap" in floor.how
+
+
 @pytest.mark.parametrize("n", [3, 6, 10])
 def test_median_interval_coverage_against_the_binomial_formula(n):
     k, coverage = median_ci(n)

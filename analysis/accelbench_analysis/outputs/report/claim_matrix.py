@@ -67,12 +67,15 @@ def evaluate_matrix(results: Results, report_nums: pd.DataFrame, claims: list[Cl
     return Matrix(cells, sources)
 
 
-def within_noise(matrix: Matrix, results: Results, c: Claim, setting: str) -> tuple[bool, Spread]:
+def within_noise(
+    matrix: Matrix, results: Results, c: Claim, setting: str, run: Results | None = None
+) -> tuple[bool, Spread]:
     """Whether the claim's verdict at `setting` lies inside the spread measured on the
-    combinations it read: some draw of its timed values within that spread gives the
-    opposite verdict. Returns that and the spread."""
+    combinations it read (at least the widest gap of `run`, every row of the run): some
+    draw of its timed values within that spread gives the opposite verdict. Returns that
+    and the spread."""
     cell = matrix.cells[c.id][setting]
-    spread = claim_spread(results, cell.read)
+    spread = claim_spread(results, cell.read, run)
     if cell.verdict not in (HOLDS, FAILS) or spread.value <= 0:
         return False, spread
     opposite = FAILS if cell.verdict == HOLDS else HOLDS

@@ -115,12 +115,14 @@ def failing_class(c: Claim, report: Finding, matrix: Matrix, setting: str) -> tu
     return "implementation", cause_text(matrix, c.id)
 
 
-def judge(c: Claim, report: Finding, matrix: Matrix, results: Results, setting: str) -> Judgement:
+def judge(
+    c: Claim, report: Finding, matrix: Matrix, results: Results, setting: str, run: Results | None = None
+) -> Judgement:
     cell = matrix.cells[c.id][setting]
     ev = cell.finding.evidence
     if cell.verdict == NOT_COMPARABLE:
         return Judgement(NOT_COMPARABLE, ev)
-    inside, spread = within_noise(matrix, results, c, setting)
+    inside, spread = within_noise(matrix, results, c, setting, run)
     if inside:
         return Judgement(
             WITHIN_NOISE, ev, "", f"{cell.verdict} by a margin inside the measured spread {spread}", spread
@@ -142,13 +144,19 @@ def judge(c: Claim, report: Finding, matrix: Matrix, results: Results, setting: 
 
 
 def judge_all(
-    claims: list[Claim], reports: dict[str, Finding], matrix: Matrix, results: Results
+    claims: list[Claim],
+    reports: dict[str, Finding],
+    matrix: Matrix,
+    results: Results,
+    run: Results | None = None,
 ) -> list[ClaimVerdicts]:
+    """Every claim at default and faithful; `run`, every row of the run, gives the spread's
+    floor (claim_spread)."""
     return [
         ClaimVerdicts(
             c,
             reports[c.id],
-            {s: judge(c, reports[c.id], matrix, results, s) for s in (DEFAULT, FAITHFUL)},
+            {s: judge(c, reports[c.id], matrix, results, s, run) for s in (DEFAULT, FAITHFUL)},
             cause_text(matrix, c.id),
         )
         for c in claims

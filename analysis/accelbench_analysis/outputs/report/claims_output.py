@@ -116,14 +116,16 @@ def write_claims(
     report_nums: pd.DataFrame,
     out_dir: Path,
     reference: Results | None = None,
+    run: Results | None = None,
 ) -> tuple[Path, ClaimsResult]:
     """tables/claims.md, claims.csv, claims_factors.csv (+ figures/claims_factors.png beside
-    the tables directory) and the cost model's files."""
+    the tables directory) and the cost model's files. `run`: every row of the run, whose
+    widest gap is the floor of every claim's spread (default: `results`)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     report_src = ReportSource(report_nums)
     matrix = evaluate_matrix(results, report_nums)
     reports = {c.id: evaluate(c, report_src) for c in CLAIMS}
-    rows = judge_all(CLAIMS, reports, matrix, results)
+    rows = judge_all(CLAIMS, reports, matrix, results, run)
     ref = None
     if reference is not None:
         ref_src = setting_source(reference, report_nums, SETTING[DEFAULT])
