@@ -58,6 +58,16 @@ def parser() -> argparse.ArgumentParser:
             help="a reference run (e.g. results/reference): its csv/ files of the "
             "same names as CSV are compared with these (claims, three-way table)",
         )
+        s.add_argument(
+            "--run-csv",
+            type=Path,
+            action="append",
+            default=[],
+            metavar="CSV",
+            help="another CSV of the same run analysed elsewhere (e.g. the scaling config's), "
+            "repeatable: read only for what concerns the whole run (the claims' spread floor, "
+            "the provenance)",
+        )
     add_regress(sub)
     add_grid(sub)
     add_scaling(sub)
@@ -308,7 +318,7 @@ def printed(paths: list[Path]) -> int:
 
 
 def sources(args: argparse.Namespace) -> Sources:
-    return Sources(args.csv, args.report_numbers, args.reference_run)
+    return Sources(args.csv, args.report_numbers, args.reference_run, args.run_csv)
 
 
 def cost_args(items: list[str]) -> dict[str, Path]:

@@ -30,11 +30,15 @@ BAD_INPUT = (ContractError, GridConfigError, StructureTableError, ValueError, Fi
 @dataclass(frozen=True)
 class Sources:
     """What the CSV commands read: the harness CSVs (a NAME.reps.csv beside NAME.csv is
-    read too), the report's numbers and, optionally, a reference run compared with."""
+    read too), the report's numbers and, optionally, a reference run compared with.
+    `run_csvs`: other CSVs of the same run that another command analyses (the scaling
+    config's), read only for what concerns the whole run: the widest gap the claims'
+    spread is floored at, and the provenance the report states."""
 
     csvs: list[Path]
     report_numbers: Path = DEFAULT_REPORT_NUMBERS
     reference_run: Path | None = None
+    run_csvs: list[Path] = field(default_factory=list)
 
 
 def warn(results: Results) -> None:
@@ -73,6 +77,7 @@ class Loaded:
     reference: Results | None
     report_nums: pd.DataFrame
     ranked: Results  # every measured row but the thread scaling's: the ranking REPORT.md opens with
+    whole_run: Results  # `everything` and Sources.run_csvs: the spread's floor, the provenance
     written: list[Path] = field(default_factory=list)
 
     @property
@@ -104,7 +109,10 @@ def load(src: Sources) -> Loaded:
     # the report's settings.
     # A run of thread scaling only is ranked at its thread counts (one column each).
     ranked = ranked if not ranked.measured_rows().empty else everything
-    return Loaded(src, everything, without_ablations(results), results, reference, report_nums, ranked)
+    whole_run = load_results([*src.csvs, *src.run_csvs]) if src.run_csvs else everything
+    return Loaded(
+        src, everything, without_ablations(results), results, reference, report_nums, ranked, whole_run
+    )
 
 
 def load_reference_run(run_dir: Path | None, csvs: list[Path]) -> Results | None:
@@ -147,11 +155,10 @@ def write_tables_of(data: Loaded, out: Path) -> list[Path]:
 def write_claims_of(data: Loaded, out: Path):
     from .outputs.report.claims_output import write_claims
 
-    # The spread's floor is the widest gap anywhere in the run: ray sets and thread scaling
-    # too, though the claims judge neither.
-    return write_claims(
-        data.with_ablations, data.report_nums, out / "tables", data.reference, data.everything
-    )
+    # The spread's floor is the widest gap anywhere in the run: ray sets, thread scaling and
+    # the run's other CSVs (Sources.run_csvs: the scaling config's) too, though the claims
+    # judge none of them.
+    return write_claims(data.with_ablations, data.report_nums, out / "tables", data.reference, data.whole_run)
 
 
 def write_comparison_of(data: Loaded, out: Path):
@@ -181,7 +188,9 @@ def write_report_of(data: Loaded, out: Path, claims, figures, comparison) -> lis
 
     if data.of_the_report:
         copy_report_numbers(data.src.report_numbers, out)
-    report = write_report(data.results, out, claims, figures, comparison, data.reference, data.ranked)
+    report = write_report(
+        data.results, out, claims, figures, comparison, data.reference, data.ranked, data.whole_run
+    )
     return [report, write_run_page(out)]
 
 

@@ -67,5 +67,5 @@ def analysed_run(realistic_csv, tmp_path_factory) -> Path:
     assert main([*cost, "--cost", f"BVH={a}", "--cost", f"kd-tree={b}", "--out", str(run)]) == 0
     assert main(["scaling", str(csvs / "scaling.csv"), "--out", str(run)]) == 0
     tables = [str(csvs / f) for f in ("table4.csv", "ray-sets.csv", "thread-scaling.csv")]
-    assert main(["all", *tables, "--out", str(run)]) == 0
+    assert main(["all", *tables, "--run-csv", str(csvs / "scaling.csv"), "--out", str(run)]) == 0
     return run

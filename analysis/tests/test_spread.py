@@ -162,3 +162,26 @@ def test_repetitions_say_how_many_processes_measured_them():
         "  - table4: 6 repetitions pooled from 2 processes; CI 97%",
         "  - ray-sets: 3 repetitions in one process; CI 75%",
     ]
+
+
+def test_the_run_csvs_set_the_floor_and_the_provenance_but_no_table(tmp_path):
+    # The scaling config's rows are analysed by `scaling`, not `all`; they are the run's
+    # all the same: a wide interval among them floors every claim's spread.
+    from synthetic import realistic_rows, row, write_csv
+    from test_scaling import scaling_rows
+
+    from accelbench_analysis.commands import Sources, load
+
+    table = write_csv(tmp_path / "table4.csv", realistic_rows(), with_errors=True)
+    wide = row("dragon-10k", "bvh", {"split": "median"}, build=1.0, render=1.0, config="scaling", ci=0.9)
+    rows = [*scaling_rows(), wide]
+    for i, r in enumerate(rows):  # narrow intervals but the last row's
+        r["extra"] = {"combo_id": f"{i:016x}", "ci_coverage": "0.75"}
+    scaling = write_csv(tmp_path / "scaling.csv", rows, extra_columns=("combo_id", "ci_coverage"))
+    data = load(Sources([table], run_csvs=[scaling]))
+    assert "scaling" in set(data.whole_run.rows["config"])
+    assert "scaling" not in set(data.everything.rows["config"]) | set(data.ranked.rows["config"])
+    assert widest_gap(data.whole_run, "build").value == pytest.approx(0.9)
+    assert widest_gap(data.everything, "build").value < 0.9
+    alone = load(Sources([table]))
+    assert alone.whole_run is alone.everything

@@ -302,7 +302,8 @@ def analysis_steps(job: Job, run_dir: Path) -> list[tuple[str, Callable[[], list
         steps.append(("scaling", lambda: commands.scaling([scaling_csv], run_dir)))
     main = [p for c, p in csvs.items() if c != job.scaling]
     if main:
-        src = commands.Sources(main)
+        # The scaling rows are the run's too: the claims' spread floor and the provenance read them.
+        src = commands.Sources(main, run_csvs=[csvs[job.scaling]] if job.scaling is not None else [])
         if job.report_numbers is not None:
             src = replace(src, report_numbers=job.report_numbers)
         ref_csv = job.reference_run / "csv" if job.reference_run is not None else None

@@ -311,11 +311,15 @@ def report_markdown(
     comparison: list[ThreeWay] | None = None,
     reference: Results | None = None,
     ranked: Results | None = None,
+    everything: Results | None = None,
 ) -> str:
     """`ranked`: the rows the ranking shows (every measured row of the run but the thread
-    scaling's); `results` those of the report's workload, which the figures drew."""
+    scaling's); `results` those of the report's workload, which the figures drew;
+    `everything`: every row of the run, whose provenance (machine, times, how each config
+    was measured, files) the report states."""
     ranked = ranked if ranked is not None else results
-    out = [f"# accelbench results: {md_escape(out_dir.resolve().name)}", "", provenance_line(results), ""]
+    everything = everything if everything is not None else results
+    out = [f"# accelbench results: {md_escape(out_dir.resolve().name)}", "", provenance_line(everything), ""]
     out += [f"> **Warning:** {md_escape(w)}\n" for w in ranked.warnings]
     out += ranking_markdown(ranked)
     measured = report_models_measured(results)
@@ -328,13 +332,13 @@ def report_markdown(
         # What choosing the report's workload left out (report_rows) concerns its tables only.
         out += report_section(out_dir, claims, [w for w in results.warnings if w not in ranked.warnings])
     out += comparison_lines(comparison, reference)
-    out += ["", "## Where these numbers come from", ""] + provenance_lines(results)
+    out += ["", "## Where these numbers come from", ""] + provenance_lines(everything)
     out += [
         "",
         "## Regenerate",
         "",
         f"`{REGENERATE}` (measures on this machine into a new results/runs/<time>-<sha>/, "
-        f"then `python -m accelbench_analysis all <csv> --out <that directory>`; see "
+        f"then `python -m accelbench_analysis all <csv> --run-csv <its scaling csv> --out <that directory>`; see "
         f"README.md and analysis/README.md).",
         "",
     ]
@@ -349,10 +353,13 @@ def write_report(
     comparison: list[ThreeWay] | None = None,
     reference: Results | None = None,
     ranked: Results | None = None,
+    everything: Results | None = None,
 ) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "tables").mkdir(exist_ok=True)
     (out_dir / RANKING_DOC).write_text(full_ranking_markdown(ranked if ranked is not None else results))
     path = out_dir / "REPORT.md"
-    path.write_text(report_markdown(results, out_dir, claims, figures, comparison, reference, ranked))
+    path.write_text(
+        report_markdown(results, out_dir, claims, figures, comparison, reference, ranked, everything)
+    )
     return path
