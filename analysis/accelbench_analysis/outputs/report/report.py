@@ -313,9 +313,11 @@ def report_markdown(
     ranked: Results | None = None,
 ) -> str:
     """`ranked`: the rows the ranking shows (every measured row of the run but the thread
-    scaling's); `results` those of the report's workload, which the figures drew."""
+    scaling's); `results` those of the report's workload, which the figures drew. The
+    provenance is the ranked rows': a run of ray sets only (configs/peers.yaml) has none of
+    the report's workload, and its header still names its threads and floating-point mode."""
     ranked = ranked if ranked is not None else results
-    out = [f"# accelbench results: {md_escape(out_dir.resolve().name)}", "", provenance_line(results), ""]
+    out = [f"# accelbench results: {md_escape(out_dir.resolve().name)}", "", provenance_line(ranked), ""]
     out += [f"> **Warning:** {md_escape(w)}\n" for w in ranked.warnings]
     out += ranking_markdown(ranked)
     measured = report_models_measured(results)
@@ -328,7 +330,7 @@ def report_markdown(
         # What choosing the report's workload left out (report_rows) concerns its tables only.
         out += report_section(out_dir, claims, [w for w in results.warnings if w not in ranked.warnings])
     out += comparison_lines(comparison, reference)
-    out += ["", "## Where these numbers come from", ""] + provenance_lines(results)
+    out += ["", "## Where these numbers come from", ""] + provenance_lines(ranked)
     out += [
         "",
         "## Regenerate",
