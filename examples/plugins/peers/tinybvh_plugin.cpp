@@ -126,11 +126,11 @@ PeerRay nearest_hit(const Layout& bvh, const accelbench_ray& r, float dir_scale)
     return p;
 }
 
-// Whether anything lies within [tmin, tmax). tinybvh's any-hit test from our origin, over
-// [0, tmin) first: a short segment, cheap. Where it finds nothing there, the test over
-// [0, tmax) answers for [tmin, tmax); where it does (about half of the shadow rays: the
-// surface they leave), the test from org + tmin * dir answers. A closest-hit trace from
-// the origin to tell the two apart cost the shadow rows 1.4-1.9x (docs/decisions.md).
+// Whether anything lies within [tmin, tmax). tinybvh's any-hit test from our origin over
+// [0, tmin) first. Where it finds nothing there, the test over [0, tmax) answers for
+// [tmin, tmax); where it does (about half of the shadow rays: the surface they leave), the
+// test from org + tmin * dir answers. The first test costs most of a shadow ray's trace,
+// whose work lies near its origin (docs/decisions.md, the open peers' plugins).
 template <class Layout>
 bool occluded_within(const Layout& bvh, const accelbench_ray& r, float dir_scale) {
     PeerRay p = peer_ray(r, dir_scale, false);
