@@ -263,7 +263,8 @@ robustness: build models venv ## the extreme-case catalogue's verdicts (configs/
 # bvh v2, plugins built by `make build` into build/peers/ from PEERS_SRC, see
 # examples/plugins/peers) on the bench models and every ray set, single-threaded; then the
 # analysis's `all` into the same folder (REPORT.md and index.html, its peers table and
-# figure). Always a fresh run (about 5 minutes on 2 cores). Writes results/peers/.
+# figure). Always a fresh run (two measuring processes: about 10 minutes on 2 cores).
+# Writes results/peers/.
 PEERS_SRC     ?= ../shared/peers
 PEERS_DIR     ?= results/peers
 PEER_PLUGINS  := $(BUILD_DIR)/peers/tinybvh.so $(BUILD_DIR)/peers/bvh2.so

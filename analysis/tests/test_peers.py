@@ -80,8 +80,13 @@ def test_the_section_appears_with_plugin_rows(tmp_path):
     doc = (out / "tables" / "peers.md").read_text()
     assert (out / "tables" / "peers.csv").is_file() and (out / "figures" / "peers.png").is_file()
     assert (out / "figures" / "peers.vl.json").is_file()
-    assert "](tables/peers.md)" in (out / "REPORT.md").read_text()
+    report = (out / "REPORT.md").read_text()
+    assert "](tables/peers.md)" in report
     assert "tables/peers.md" in (out / "index.html").read_text()
+    # A run of ray sets only has no row of the report's workload: its header still names
+    # the ranked rows' threads and floating-point mode.
+    assert "**render threads:** 1" in report.splitlines()[2]
+    assert "- **Floating-point mode of the traces:** ftz_daz (" in report
     lines = {
         line.split(" | ")[1]: line for line in doc.splitlines() if line.startswith("| ") and "---" not in line
     }

@@ -73,33 +73,74 @@ float direction_scale(const std::vector<bvhvec4>& vertices) {
     return std::ldexp(1.0f, int(std::clamp(k, 0L, 40L)));
 }
 
-// A tinybvh ray for ours: tinybvh has no tmin, so the origin moves to tmin (0 for camera
-// rays: unchanged) and the distances are measured from there; the direction is not
-// normalized (tinybvh's constructor would) but scaled by `dir_scale`, so tinybvh's t is
-// ours divided by it.
+// A tinybvh ray for ours. tinybvh's rays have no tmin: it searches [0, t] from the
+// origin. The ray starts at our origin (`from_tmin` false) and the plugin checks the hit
+// against tmin itself; or, when tinybvh's nearest hit lies before tmin and it cannot look
+// past it, at org + tmin * dir (`from_tmin` true, computed in double and rounded once),
+// which is off our ray's line by that rounding. The direction is not normalized (tinybvh's
+// constructor would) but scaled by `dir_scale`, so tinybvh's t is ours divided by it (and
+// minus tmin from the moved origin).
 struct PeerRay {
     tinybvh::Ray ray;
-    float tmin, tmax;  // tmax in tinybvh's units
-    float scale;
+    float tmin, tmax;    // tinybvh's units: [tmin, tmax) is our [tmin, tmax)
+    float scale, start;  // our t = tinybvh's t * scale + start
 
-    float our_t() const { return ray.hit.t * scale + tmin; }
+    float our_t() const { return ray.hit.t * scale + start; }
+    bool found() const { return ray.hit.prim != ACCELBENCH_INVALID_PRIM && ray.hit.t < tmax; }
+    bool before_tmin() const { return ray.hit.prim != ACCELBENCH_INVALID_PRIM && ray.hit.t < tmin; }
 };
 
-PeerRay peer_ray(const accelbench_ray& r, float dir_scale) {
+PeerRay peer_ray(const accelbench_ray& r, float dir_scale, bool from_tmin) {
     PeerRay p;
     p.scale = dir_scale;
-    p.tmin = r.tmin > 0 && std::isfinite(r.tmin) ? r.tmin : 0.0f;
+    const float tmin = r.tmin > 0 && std::isfinite(r.tmin) ? r.tmin : 0.0f;
+    p.start = from_tmin ? tmin : 0.0f;
     const bvhvec3 d(r.dir[0], r.dir[1], r.dir[2]);
-    p.ray.O = bvhvec3(r.org[0] + p.tmin * d.x, r.org[1] + p.tmin * d.y, r.org[2] + p.tmin * d.z);
+    bvhvec3 o(r.org[0], r.org[1], r.org[2]);
+    if (from_tmin)
+        for (int k = 0; k < 3; ++k) o[k] = float(double(r.org[k]) + double(tmin) * double(r.dir[k]));
+    p.ray.O = o;
     p.ray.D = d * dir_scale;
     p.ray.rD = tinybvh::tinybvh_safercp(p.ray.D);
     p.ray.mask = RAY_MASK_INTERSECT_ALL;
     p.ray.instIdx = 0;
-    p.tmax = (r.tmax - p.tmin) / dir_scale;
-    p.ray.hit.t = p.tmax;
+    p.tmin = (tmin - p.start) / dir_scale;
+    p.tmax = (r.tmax - p.start) / dir_scale;
+    // tinybvh accepts hits at t itself: the float below tmax keeps [tmin, tmax) open
+    p.ray.hit.t = std::nextafter(p.tmax, 0.0f);
     p.ray.hit.u = p.ray.hit.v = 0;
     p.ray.hit.prim = ACCELBENCH_INVALID_PRIM;
     return p;
+}
+
+// The nearest hit within [tmin, tmax): tinybvh's nearest from our origin, unless that lies
+// before tmin (a ray leaving a surface, hitting it again), then from org + tmin * dir.
+template <class Layout>
+PeerRay nearest_hit(const Layout& bvh, const accelbench_ray& r, float dir_scale) {
+    PeerRay p = peer_ray(r, dir_scale, false);
+    if (!(p.tmax > p.tmin)) return p;  // an empty interval: a miss
+    bvh.Intersect(p.ray);
+    if (!p.before_tmin()) return p;
+    p = peer_ray(r, dir_scale, true);
+    bvh.Intersect(p.ray);
+    return p;
+}
+
+// Whether anything lies within [tmin, tmax). tinybvh's any-hit test from our origin over
+// [0, tmin) first. Where it finds nothing there, the test over [0, tmax) answers for
+// [tmin, tmax); where it does (about half of the shadow rays: the surface they leave), the
+// test from org + tmin * dir answers. The first test costs most of a shadow ray's trace,
+// whose work lies near its origin (docs/decisions.md, the open peers' plugins).
+template <class Layout>
+bool occluded_within(const Layout& bvh, const accelbench_ray& r, float dir_scale) {
+    PeerRay p = peer_ray(r, dir_scale, false);
+    if (!(p.tmax > p.tmin)) return false;
+    if (p.tmin > 0) {
+        tinybvh::Ray before = p.ray;
+        before.hit.t = std::nextafter(p.tmin, 0.0f);
+        if (bvh.IsOccluded(before)) return bvh.IsOccluded(peer_ray(r, dir_scale, true).ray);
+    }
+    return bvh.IsOccluded(p.ray);
 }
 
 template <class Layout>
@@ -153,11 +194,8 @@ void closest_hits(const accelbench_structure* handle, const accelbench_ray* rays
     for (uint64_t i = 0; i < count; ++i) {
         hits[i] = peer_plugin::miss();
         if (s.vertices.empty() || !peer_plugin::traceable(rays[i])) continue;
-        PeerRay p = peer_ray(rays[i], s.dir_scale);
-        if (!(p.tmax > 0)) continue;
-        s.bvh.Intersect(p.ray);
-        if (p.ray.hit.t < p.tmax && p.ray.hit.prim != ACCELBENCH_INVALID_PRIM)
-            hits[i] = {p.ray.hit.prim, p.our_t(), p.ray.hit.u, p.ray.hit.v};
+        const PeerRay p = nearest_hit(s.bvh, rays[i], s.dir_scale);
+        if (p.found()) hits[i] = {p.ray.hit.prim, p.our_t(), p.ray.hit.u, p.ray.hit.v};
     }
 }
 
@@ -168,8 +206,7 @@ void any_hits(const accelbench_structure* handle, const accelbench_ray* rays, ui
     for (uint64_t i = 0; i < count; ++i) {
         occluded[i] = 0;
         if (s.vertices.empty() || !peer_plugin::traceable(rays[i])) continue;
-        const PeerRay p = peer_ray(rays[i], s.dir_scale);
-        if (p.tmax > 0) occluded[i] = s.bvh.IsOccluded(p.ray) ? 1 : 0;
+        occluded[i] = occluded_within(s.bvh, rays[i], s.dir_scale) ? 1 : 0;
     }
 }
 

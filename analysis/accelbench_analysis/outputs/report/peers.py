@@ -162,9 +162,10 @@ def peers_markdown(table: pd.DataFrame) -> str:
         "sets (each combination builds anew). Rows ordered by the geometric mean of the "
         "trace ratios. `from`: ours, Embree, or the plugin (its version and file) the "
         "structure was loaded from. The last columns sum the wrong answers against the "
-        "reference over the sets (false misses, false hits, wrong primitives; a wrong "
-        "primitive can be a tie between two triangles at the same distance); a cell names "
-        "its own where there are any, and a failed row its status.",
+        "reference over the sets (false misses, false hits, wrong primitives: another "
+        "triangle than the reference's at a distance more than 64 ulps from its hit, so "
+        "never a tie of two triangles at the same distance); a cell names its own where "
+        "there are any, and a failed row its status.",
         "",
     ]
     for panel, g in table.groupby("panel", sort=False):

@@ -315,8 +315,9 @@ def report_markdown(
 ) -> str:
     """`ranked`: the rows the ranking shows (every measured row of the run but the thread
     scaling's); `results` those of the report's workload, which the figures drew;
-    `everything`: every row of the run, whose provenance (machine, times, how each config
-    was measured, files) the report states."""
+    `everything`: every row of the run, whose provenance (machine, threads, floating-point
+    mode, times, how each config was measured, files) the report states, also for a run of
+    ray sets only (configs/peers.yaml), which has none of the report's workload."""
     ranked = ranked if ranked is not None else results
     everything = everything if everything is not None else results
     out = [f"# accelbench results: {md_escape(out_dir.resolve().name)}", "", provenance_line(everything), ""]
