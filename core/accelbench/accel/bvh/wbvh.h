@@ -74,8 +74,8 @@ struct WbvhTree {
 
 // Statistics of a finished wide tree (tree_tally.h): nodes = wide nodes, leaves = leaf
 // children, max_depth = edges down to the deepest leaf child, sah_cost over the wide nodes'
-// boxes; extras packets, packet_fill (used lanes / lanes of all packets) and avg_children
-// (used child slots per node).
+// boxes; extras packets, packet_fill (used lanes / lanes of all packets), avg_children
+// (used child slots per node) and packet_sah_cost (leaves weighted by packets, not triangles).
 template <int W>
 BuildStats measure_wbvh(const WbvhTree<W>& tree);
 
