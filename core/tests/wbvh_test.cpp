@@ -621,7 +621,7 @@ TEST(Wbvh, ParametersAreValidated) {
     const Wbvh::Config c = Wbvh::Config::from(resolved);
     EXPECT_EQ(c.width, 8u);
     EXPECT_EQ(c.max_prims, 8u);
-    EXPECT_EQ(c.traversal_cost, 2.0);
+    EXPECT_EQ(c.traversal_cost, 3.0);
     EXPECT_EQ(c.collapse, Wbvh::Collapse::sah);
     EXPECT_EQ(c.packet_cost, 2.0);
     EXPECT_EQ(c.kernel, Wbvh::Kernel::simd);
