@@ -104,10 +104,10 @@ public:
         uint32_t bins = 32;       // binned SAH bins: Embree's, and `bvh split=sah`'s
         // Ranges that bin all three axes (bvh.h): none, unlike bvh's 1024, for the build goal.
         uint32_t all_axes_min = 0;
-        // SAH constants of the binary build. 3: fewer, fuller leaves than 2 (a quarter fewer
-        // on the bench models, nearer Embree's tree), a faster build and no set slower on
-        // the ray sets, for a 3-5% higher SAH cost (docs/decisions.md). With collapse=sah
-        // the collapse still merges binary leaves as the wide cost model says.
+        // SAH constants of the binary build. 3: fewer, fuller leaves than 2 (26-31% fewer on
+        // the bench models, nearer Embree's tree) and a faster build, for a 3-5% higher SAH
+        // cost; the dragon's ray sets 2-8% faster, the others level within the spread
+        // (docs/decisions.md). The collapse still merges binary leaves by its cost model.
         double traversal_cost = 3;
         double isect_cost = 1;
         // Reinsertion passes on the binary tree before the collapse; off for the build goal
