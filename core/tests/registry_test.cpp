@@ -87,7 +87,7 @@ TEST(Registry, DefaultParameterTextIsUnchanged) {
          "threads=1"},
         {"reference", "leaf_size=4"},
         {"wbvh",
-         "width=8;max_prims=8;max_depth=64;bins=32;all_axes_min=0;traversal_cost=2;isect_cost=1;reinsertion=0;"
+         "width=8;max_prims=8;max_depth=64;bins=32;all_axes_min=0;traversal_cost=3;isect_cost=1;reinsertion=0;"
          "collapse=sah;packet_cost=2;kernel=simd;leaf_test=watertight;node_test=conservative;threads=1"},
     };
     for (const auto& [name, text] : expected) {

@@ -521,6 +521,11 @@ TEST(Wbvh, SahCollapseMergesLeavesIntoPackets) {
             EXPECT_EQ(s.nodes.value(), greedy ? 5u : 1u) << collapse;
             EXPECT_EQ(s.leaves.value(), greedy ? 16u : 4u) << collapse;
             EXPECT_EQ(s.extra.at("packets"), greedy ? 16 : 4) << collapse;
+            // Leaves weighted by packets, not triangles: sah's one node (relative area 1) over
+            // four leaves of one full packet each weighs them a quarter of sah_cost's; greedy's
+            // one-triangle leaves weigh the same in both.
+            EXPECT_NEAR(s.extra.at("packet_sah_cost"), greedy ? *s.sah_cost : 1 + (*s.sah_cost - 1) / 4, 1e-9)
+                << collapse;
             std::vector<Hit> hit(1);
             std::vector<RayStats> st(1);
             w->closest_hits({&ray, 1}, hit, st);
@@ -616,7 +621,7 @@ TEST(Wbvh, ParametersAreValidated) {
     const Wbvh::Config c = Wbvh::Config::from(resolved);
     EXPECT_EQ(c.width, 8u);
     EXPECT_EQ(c.max_prims, 8u);
-    EXPECT_EQ(c.traversal_cost, 2.0);
+    EXPECT_EQ(c.traversal_cost, 3.0);
     EXPECT_EQ(c.collapse, Wbvh::Collapse::sah);
     EXPECT_EQ(c.packet_cost, 2.0);
     EXPECT_EQ(c.kernel, Wbvh::Kernel::simd);
