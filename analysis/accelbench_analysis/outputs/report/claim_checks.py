@@ -389,8 +389,11 @@ NOISE_DRAWS = 64
 
 
 class PerturbedSource(AdjustedSource):
-    """Our numbers with every timed value scaled by its own factor in [1 - s, 1 + s]: a
-    failing claim that holds under some draw is a verdict inside the run's spread."""
+    """Our numbers with every timed value scaled by its own factor in [1 / (1 + s), 1 + s]
+    (log-uniform): a failing claim that holds under some draw is a verdict inside the run's
+    spread. The spread is a ratio of two measurements less one (max / min - 1), so a value
+    may lie that far above or below; the factor stays positive at any spread (a spread over
+    100%, [1 - s, 1 + s] would reach zero and below)."""
 
     def __init__(self, base: OurSource, spread: float, seed: int):
         super().__init__(base)
@@ -403,7 +406,7 @@ class PerturbedSource(AdjustedSource):
             return value
         key = (model, structure, metric, setting)
         if key not in self.factors:
-            self.factors[key] = self.rng.uniform(1 - self.spread, 1 + self.spread)
+            self.factors[key] = (1 + self.spread) ** self.rng.uniform(-1.0, 1.0)
         return value * self.factors[key]
 
 
