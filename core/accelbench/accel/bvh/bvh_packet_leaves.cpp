@@ -26,7 +26,7 @@ void BvhPacketLeaves::build(const FlatBvh& bvh, bool parallel) {
     const size_t n = bvh.nodes.size();
     std::vector<uint32_t> block_start(block_count(n, kBlock) + 1, 0);
     auto packets_of = [&](const BvhNode& node) {
-        return node.is_leaf() ? (node.prim_count() + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes : 0u;
+        return node.is_leaf() ? WbvhTriPacket::packets_for(node.prim_count()) : 0u;
     };
     for_blocks(parallel, n, kBlock, [&](size_t k, size_t begin, size_t end) {
         uint32_t count = 0;

@@ -213,7 +213,7 @@ public:
 
 private:
     static float leaf_cost(float area, uint32_t n, float packet_cost) {
-        return area * packet_cost * float((n + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes);
+        return area * packet_cost * float(WbvhTriPacket::packets_for(n));
     }
 
     void plan_subtree(uint32_t m, bool parallel) {
@@ -546,7 +546,7 @@ BuildStats measure_wbvh(const WbvhTree<W>& tree) {
             box.extend(b);
             if (node.count[k]) {
                 t.leaf(b.area(), node.count[k]);
-                packet_area += b.area() * double((node.count[k] + WbvhTriPacket::kLanes - 1) / WbvhTriPacket::kLanes);
+                packet_area += b.area() * double(WbvhTriPacket::packets_for(node.count[k]));
             }
         }
         t.inner(box.area());

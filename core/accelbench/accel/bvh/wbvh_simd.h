@@ -96,6 +96,8 @@ static_assert(sizeof(WbvhNode<4>) == 128 && sizeof(WbvhNode<8>) == 256, "two / f
 // are masked off by the test, never tested.
 struct alignas(16) WbvhTriPacket {
     static constexpr int kLanes = 4;
+    // The packets a leaf of n triangles takes (the last one part-used).
+    static constexpr uint32_t packets_for(uint32_t n) { return (n + kLanes - 1) / kLanes; }
     float v[3][3][kLanes];  // [vertex][axis][lane]
     uint32_t prim[kLanes];  // triangle index in the scene
 };
