@@ -339,7 +339,9 @@ def error_pareto(results: Results, path: Path) -> Path | Skipped:
     front is dashed and the points nothing beats overall are ringed."""
     if not results.has_error_columns():
         return Skipped(
-            "the CSV has no false_misses/false_hits values (the harness's reference comparison had not run)"
+            "no camera render of this run has false_misses/false_hits values (the harness's "
+            "reference comparison did not run on them; a ray-set run's wrong answers are in "
+            "its ray-set table)"
         )
     df = error_frame(results)
     if df.empty:
