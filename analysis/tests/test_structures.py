@@ -39,6 +39,39 @@ def test_the_table_is_the_registrys_in_registry_order():
         assert len({v.label for v in r.variants}) == len(r.variants), f"{r.name}: two variants share a label"
 
 
+def test_the_json_declares_each_parameter_as_the_listing_does():
+    """`list --json` carries each structure's description and declared parameters (type,
+    default, choices or range, help), the same as the text listing prints, and no plugin
+    for a built-in structure."""
+    binary = str(accelbench_path())
+    doc = json.loads(subprocess.run([binary, "list", "--json"], capture_output=True, text=True).stdout)
+    text = subprocess.run([binary, "list"], capture_output=True, text=True).stdout
+    kd = next(s for s in doc["structures"] if s["name"] == "kdtree")
+    assert kd["plugin"] is None and kd["description"] in text
+    params = {p["name"]: p for p in kd["params"]}
+    assert params["build"]["type"] == "enum" and params["build"]["choices"] == ["nlogn", "pbrt"]
+    assert params["empty_bonus"]["default"] == "0.5" and params["empty_bonus"]["max"] == 1
+    assert params["max_depth"]["default"] == "auto" and params["max_depth"]["scene_dependent_default"]
+    for s in doc["structures"]:
+        for p in s["params"]:
+            line = next(x for x in text.splitlines() if x.split()[:1] == [p["name"]] and p["help"] in x)
+            assert f"default {p['default']}" in " ".join(line.split()), (s["name"], p["name"])
+
+
+def test_the_json_names_a_plugins_file_hash_and_version():
+    binary = accelbench_path()
+    plugin = Path(binary).parent / "test_plugins" / "example_bvh.so"
+    if not plugin.exists():
+        pytest.skip(f"{plugin} is built with the C++ tests")
+    out = subprocess.run(
+        [str(binary), "list", "--json", "--plugin", str(plugin)], capture_output=True, text=True
+    )
+    mine = [s for s in json.loads(out.stdout)["structures"] if s["role"] == "plugin"]
+    assert mine and all(s["plugin"]["file"] == str(plugin) for s in mine)
+    assert all(len(s["plugin"]["sha256"]) == 64 and s["plugin"]["version"] for s in mine)
+    assert all(s["params"] for s in mine)
+
+
 def test_labels_are_the_ones_the_harness_writes_into_rows():
     """Every row of the committed reference run: the analysis's label of its accelerator and
     parameters is the row's `label` column (the registry's, of the same parameters)."""

@@ -25,24 +25,49 @@ std::string json_params(const std::map<std::string, std::string>& given) {
     return "{" + out + "}";
 }
 
+// A declared parameter as JSON: what the text listing shows, for programs (a grid search,
+// a plugin author's checks). Ranges are numbers; an enum has its choices instead.
+std::string json_param_spec(const ParamSpec& p) {
+    std::string domain;
+    if (p.type == ParamType::Enum) {
+        for (const auto& c : p.choices) domain += (domain.empty() ? "" : ", ") + json_quoted(c);
+        domain = ", \"choices\": [" + domain + "]";
+    } else if (p.type != ParamType::Bool) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, ", \"min\": %.17g, \"max\": %.17g", p.min, p.max);
+        domain = buf;
+    }
+    return "{\"name\": " + json_quoted(p.name) + ", \"type\": \"" + to_string(p.type) +
+        "\", \"default\": " + json_quoted(p.default_value) +
+        ", \"scene_dependent_default\": " + (p.scene_dependent_default ? "true" : "false") + domain +
+        ", \"help\": " + json_quoted(p.help) + "}";
+}
+
 // The structure table, registry order: per structure its name, label at the defaults,
-// role, family, whether `{name: all}` leaves it out as slow, whether it counts its
-// traversal, and its variants (the given parameters and the label of each).
+// description, role, family, whether `{name: all}` leaves it out as slow, whether it
+// counts its traversal, its variants (the given parameters and the label of each), its
+// declared parameters, and for a plugin's structure the plugin (file, sha256, version).
 void print_structure_table() {
     std::printf("{\"structures\": [");
     const char* sep = "\n";
     for (const auto& info : accelerator_registry()) {
-        std::string variants;
+        std::string variants, params;
         for (const auto& given : variant_settings(info))
             variants += (variants.empty() ? "" : ", ") + std::string("{\"params\": ") + json_params(given) +
                 ", \"label\": " + json_quoted(info.label(resolve_params(info.name, info.params, given))) + "}";
+        for (const auto& spec : info.params) params += (params.empty() ? "" : ", ") + json_param_spec(spec);
+        const std::string plugin = info.plugin
+            ? "{\"file\": " + json_quoted(info.plugin->file) + ", \"sha256\": " + json_quoted(info.plugin->sha256) +
+                ", \"version\": " + json_quoted(info.plugin->version) + "}"
+            : "null";
         std::printf(
-            "%s  {\"name\": %s, \"label\": %s, \"role\": \"%s\", \"family\": %s, \"slow\": %s, "
-            "\"counts_traversal\": %s, \"variants\": [%s]}",
+            "%s  {\"name\": %s, \"label\": %s, \"description\": %s, \"role\": \"%s\", \"family\": %s, "
+            "\"slow\": %s, \"counts_traversal\": %s, \"variants\": [%s], \"params\": [%s], \"plugin\": %s}",
             sep, json_quoted(info.name).c_str(),
-            json_quoted(info.label(resolve_params(info.name, info.params, {}))).c_str(), to_string(info.table.role),
-            json_quoted(info.table.family).c_str(), info.table.slow ? "true" : "false",
-            info.counts_traversal ? "true" : "false", variants.c_str());
+            json_quoted(info.label(resolve_params(info.name, info.params, {}))).c_str(),
+            json_quoted(info.description).c_str(), to_string(info.table.role), json_quoted(info.table.family).c_str(),
+            info.table.slow ? "true" : "false", info.counts_traversal ? "true" : "false", variants.c_str(),
+            params.c_str(), plugin.c_str());
         sep = ",\n";
     }
     std::printf("\n]}\n");
@@ -60,9 +85,11 @@ int list_command(int argc, char** argv) {
               "  with theirs, and the robustness cases with their requirements\n"
               "  --structures: one line per registered structure, in registry order, for scripts:\n"
               "  name, tab, label at the defaults, tab, whether it counts traversal (yes/no)\n"
-              "  --json: the structure table as JSON, registry order: name, label, role (ours, baseline,\n"
-              "  reference, plugin), family, slow (left out of {name: all}), counts_traversal, and the\n"
-              "  variants the report's tables show, each with its parameters and label\n"
+              "  --json: the structure table as JSON, registry order: name, label, description, role\n"
+              "  (ours, baseline, reference, plugin), family, slow (left out of {name: all}),\n"
+              "  counts_traversal, the variants the report's tables show (each with its parameters and\n"
+              "  label), params (name, type, default, choices or min and max, help) and plugin (file,\n"
+              "  sha256, version; null for a built-in structure)\n"
               "  --plugin PATH: also the structures of this plugin (accelbench_plugin.h); repeatable\n",
               argc, argv);
     if (auto code = args.walk([&] {
