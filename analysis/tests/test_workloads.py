@@ -7,12 +7,14 @@ import json
 
 import pandas as pd
 import pytest
-from synthetic import BVH, EMBREE, KD, row, write_csv
+from synthetic import BVH, EMBREE, KD, case_row, row, write_csv
 
 from accelbench_analysis.cli import main
 from accelbench_analysis.inputs.load import load_results
 from accelbench_analysis.outputs.figures.workloads import (
+    catalogue_leaks,
     ranking,
+    ray_set_markdown,
     ray_set_rows,
     ray_set_table,
     thread_scaling_rows,
@@ -255,3 +257,41 @@ def test_all_writes_and_links_them_and_keeps_the_tables(realistic_csv, tmp_path)
         assert f"]({rel})" in beyond, rel
     ranking_md = (mixed / "tables" / "ray_set_ranking.md").read_text()
     assert "Order changes in: ao." in ranking_md and "2*" in ranking_md
+
+
+def test_the_ray_set_table_shows_each_structures_catalogue_leaks_beside_its_speed(tmp_path):
+    """With the catalogue's rows in the input, each structure's leaks (failed and tolerated,
+    summed over the cases) stand beside its Mrays/s; a structure the catalogue did not run
+    gets "-"; without catalogue rows the column is not there."""
+    rays = [
+        row(
+            "stanford-bunny",
+            accel,
+            params,
+            build=0.1,
+            render=s,
+            config="ray-sets",
+            rays=1_000_000,
+            shadow_rays=0,
+            extra={"ray_set": "ao", "ray_set_hash": "0" * 16},
+        )
+        for accel, params, s in (("bvh", BVH, 1.0), ("kdtree", KD, 2.0), ("embree", EMBREE, 0.5))
+    ]
+    cases = [
+        case_row("case-1:closed-meshes", "bvh", BVH, "pass", "leaks=0 false_hits=0 rays=120"),
+        case_row("case-3b:scaled", "bvh", BVH, "pass", "leaks=0 leaks_tolerated=40 rays=120"),
+        case_row("case-3b:scaled", "embree", EMBREE, "FAIL", "leaks=120 false_hits=0 rays=120"),
+        case_row("case-3c:scaled", "embree", EMBREE, "FAIL", "leaks=7 false_hits=0 rays=120"),
+    ]
+    cols = ("ray_set", "ray_set_hash")
+    plain = load_results([write_csv(tmp_path / "rs.csv", rays, with_errors=True, extra_columns=cols)])
+    assert catalogue_leaks(plain) == {}
+    assert "catalogue leaks" not in ray_set_markdown(
+        ray_set_table(ray_set_rows(plain), catalogue_leaks(plain))
+    )
+    both = load_results([write_csv(tmp_path / "all.csv", rays + cases, with_errors=True, extra_columns=cols)])
+    t = ray_set_table(ray_set_rows(both), catalogue_leaks(both)).set_index("structure")["catalogue_leaks"]
+    assert t["BVH (median)"] == 40 and t["Embree"] == 127 and pd.isna(t["kd-tree"])
+    md = ray_set_markdown(ray_set_table(ray_set_rows(both), catalogue_leaks(both)))
+    assert "| ao | catalogue leaks |" in md
+    assert [line.split("|")[-2].strip() for line in md.splitlines() if line.startswith("| kd-tree")] == ["-"]

@@ -133,10 +133,29 @@ def baseline_row(group: pd.DataFrame) -> pd.Series | None:
     return best.iloc[0] if len(best) == 1 else None
 
 
-def ray_set_table(rows: pd.DataFrame) -> pd.DataFrame:
+# The counts of `verdict_counts` that are rays a catalogue case leaked: rays that must hit
+# and missed, as a failure (`leaks`) or tolerated by a labelled ablation (`leaks_tolerated`).
+LEAK_COUNTS = ("leaks", "leaks_tolerated")
+
+
+def catalogue_leaks(results: Results) -> dict[tuple[str, str], int]:
+    """Per structure (accel, canonical params), the rays the extreme-case catalogue's cases
+    in this input leaked, summed over its cases: what a structure's guarantees buy, beside
+    what they cost in the ray-set table. Empty without catalogue rows
+    (configs/robustness.yaml) among the input."""
+    cases = results.case_rows()
+    out: dict[tuple[str, str], int] = {}
+    for accel, params, counts in zip(cases["accel"], cases["params"], cases["verdict_counts"]):
+        fields = dict(f.split("=", 1) for f in str(counts).split() if "=" in f)
+        out[(accel, params)] = out.get((accel, params), 0) + sum(int(fields.get(k, 0)) for k in LEAK_COUNTS)
+    return out
+
+
+def ray_set_table(rows: pd.DataFrame, leaks: dict[tuple[str, str], int] | None = None) -> pd.DataFrame:
     """One row per model, workload, structure and set: Mrays/s and its ratio to Embree's row
     of the same model, set and workload (threads, image, ...): never to another thread
-    count's, never to a median of several."""
+    count's, never to a median of several. `catalogue_leaks`: the structure's leaks over the
+    extreme-case catalogue (catalogue_leaks) where the input has its cases, else empty."""
     cols = [
         "model",
         "workload",
@@ -156,6 +175,8 @@ def ray_set_table(rows: pd.DataFrame) -> pd.DataFrame:
         parts.append(t)
     t = pd.concat(parts) if parts else pd.DataFrame(columns=cols + ["embree_mrays_per_s"])
     t["ratio_to_embree"] = t["mrays_per_s"] / t["embree_mrays_per_s"]
+    keys = zip(rows.loc[t.index, "accel"], rows.loc[t.index, "params"]) if len(t) else []
+    t["catalogue_leaks"] = [(leaks or {}).get(k, float("nan")) for k in keys]
     return t.sort_values(["model", "workload", "structure", "ray_set"]).reset_index(drop=True)
 
 
@@ -218,12 +239,23 @@ def ray_set_markdown(table: pd.DataFrame) -> str:
         "reference (false misses + false hits) are shown where there are any.",
         "",
     ]
+    with_leaks = table["catalogue_leaks"].notna().any()
+    if with_leaks:
+        out += [
+            "`catalogue leaks`: the rays that must hit and missed over the extreme-case "
+            "catalogue's cases (configs/robustness.yaml, its rows in this input), summed: 0 "
+            "for a watertight structure, what an ablation gives up for its speed; - where the "
+            "catalogue did not run the structure.",
+            "",
+        ]
     for panel, g in table.groupby("panel"):
         out += [f"## {md_escape(panel)}", ""]
         body = []
         for structure, s in g.groupby("structure"):
-            body.append([md_escape(structure), *cells_per_set(s, sets, _mrays_cell)])
-        out += md_table(["structure"] + sets, body) + [""]
+            leak = s["catalogue_leaks"].iloc[0]
+            extra = [f"{int(leak):,}" if pd.notna(leak) else "-"] if with_leaks else []
+            body.append([md_escape(structure), *cells_per_set(s, sets, _mrays_cell), *extra])
+        out += md_table(["structure"] + sets + (["catalogue leaks"] if with_leaks else []), body) + [""]
     return "\n".join(out)
 
 
@@ -343,7 +375,7 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
     if not rows.empty:
         tables.mkdir(parents=True, exist_ok=True)
         figures.mkdir(parents=True, exist_ok=True)
-        table = ray_set_table(rows)
+        table = ray_set_table(rows, catalogue_leaks(results))
         palette = hue_palette(rows["structure"])
         table.drop(columns=["panel"]).to_csv(tables / "ray_sets.csv", index=False)
         (tables / "ray_sets.md").write_text(ray_set_markdown(table))
