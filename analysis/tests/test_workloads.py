@@ -34,21 +34,24 @@ SECONDS = {
 ACCELS = {"bvh": BVH, "kdtree": KD, "embree": EMBREE}
 
 
+def ray_set_row(accel: str, params: dict, seconds: float, ray_set: str, threads: int = 1) -> dict:
+    """One row of a ray-set run on the bunny: 1e6 rays of `ray_set` in `seconds`."""
+    return row(
+        "stanford-bunny",
+        accel,
+        params,
+        build=0.1,
+        render=seconds,
+        config="ray-sets",
+        rays=1_000_000,
+        shadow_rays=0,
+        render_threads=str(threads),
+        extra={"ray_set": ray_set, "ray_set_hash": f"{ray_set:0>16}"},
+    )
+
+
 def ray_set_csv(path):
-    rows = []
-    for (accel, rs), s in SECONDS.items():
-        r = row(
-            "stanford-bunny",
-            accel,
-            ACCELS[accel],
-            build=0.1,
-            render=s,
-            config="ray-sets",
-            rays=1_000_000,
-            shadow_rays=0,
-            extra={"ray_set": rs, "ray_set_hash": f"{rs:0>16}"},
-        )
-        rows.append(r)
+    rows = [ray_set_row(accel, ACCELS[accel], s, rs) for (accel, rs), s in SECONDS.items()]
     return write_csv(path, rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
 
 
@@ -102,39 +105,14 @@ def test_ratio_to_embree_only_within_one_workload(tmp_path):
             ("bvh", BVH, 2 * seconds),
             ("embree", dict(EMBREE, threads=str(threads)), seconds),
         ):
-            rows.append(
-                row(
-                    "stanford-bunny",
-                    accel,
-                    params,
-                    build=0.1,
-                    render=s,
-                    config="ray-sets",
-                    rays=1_000_000,
-                    shadow_rays=0,
-                    render_threads=str(threads),
-                    extra={"ray_set": "primary", "ray_set_hash": "0" * 16},
-                )
-            )
+            rows.append(ray_set_row(accel, params, s, "primary", threads))
     path = write_csv(tmp_path / "rs.csv", rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
     t = ray_set_table(ray_set_rows(load_results([path])))
     assert set(t["panel"]) == {"stanford-bunny (render_threads=1)", "stanford-bunny (render_threads=2)"}
     assert list(t.loc[t["structure"] == "Embree", "ratio_to_embree"]) == [1.0, 1.0]
     assert list(t.loc[t["structure"] == "BVH (median)", "ratio_to_embree"]) == [0.5, 0.5]
     # Two Embree rows of one workload: the one at Embree's defaults divides.
-    rows.append(
-        row(
-            "stanford-bunny",
-            "embree",
-            dict(EMBREE, quality="high"),
-            build=0.1,
-            render=0.1,
-            config="ray-sets",
-            rays=1_000_000,
-            shadow_rays=0,
-            extra={"ray_set": "primary", "ray_set_hash": "0" * 16},
-        )
-    )
+    rows.append(ray_set_row("embree", dict(EMBREE, quality="high"), 0.1, "primary"))
     path = write_csv(tmp_path / "rs2.csv", rows, with_errors=True, extra_columns=("ray_set", "ray_set_hash"))
     t = ray_set_table(ray_set_rows(load_results([path])))
     one = t[t["workload"] == "render_threads=1"].set_index("structure")["ratio_to_embree"]
@@ -147,18 +125,7 @@ def test_ray_sets_at_several_thread_counts_are_said_to_be_in_the_ray_set_table(t
     table (a section per thread count), not the thread-scaling table, which takes camera
     rows only and has none of them."""
     rows = [
-        row(
-            "stanford-bunny",
-            accel,
-            params,
-            build=0.1,
-            render=0.5 / threads,
-            config="ray-sets",
-            rays=1_000_000,
-            shadow_rays=0,
-            render_threads=str(threads),
-            extra={"ray_set": rs, "ray_set_hash": f"{rs:0>16}"},
-        )
+        ray_set_row(accel, params, 0.5 / threads, rs, threads)
         for threads in (1, 2)
         for rs in ("primary", "shadow")
         for accel, params in (("bvh", BVH), ("embree", dict(EMBREE, threads=str(threads))))
@@ -264,17 +231,7 @@ def test_the_ray_set_table_shows_each_structures_catalogue_leaks_beside_its_spee
     summed over the cases) stand beside its Mrays/s; a structure the catalogue did not run
     gets "-"; without catalogue rows the column is not there."""
     rays = [
-        row(
-            "stanford-bunny",
-            accel,
-            params,
-            build=0.1,
-            render=s,
-            config="ray-sets",
-            rays=1_000_000,
-            shadow_rays=0,
-            extra={"ray_set": "ao", "ray_set_hash": "0" * 16},
-        )
+        ray_set_row(accel, params, s, "ao")
         for accel, params, s in (("bvh", BVH, 1.0), ("kdtree", KD, 2.0), ("embree", EMBREE, 0.5))
     ]
     cases = [
