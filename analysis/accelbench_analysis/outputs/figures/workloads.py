@@ -175,8 +175,10 @@ def ray_set_table(rows: pd.DataFrame, leaks: dict[tuple[str, str], int] | None =
         parts.append(t)
     t = pd.concat(parts) if parts else pd.DataFrame(columns=cols + ["embree_mrays_per_s"])
     t["ratio_to_embree"] = t["mrays_per_s"] / t["embree_mrays_per_s"]
-    keys = zip(rows.loc[t.index, "accel"], rows.loc[t.index, "params"]) if len(t) else []
-    t["catalogue_leaks"] = [(leaks or {}).get(k, float("nan")) for k in keys]
+    leak = pd.Series(
+        [(leaks or {}).get(k, float("nan")) for k in zip(rows["accel"], rows["params"])], rows.index
+    )
+    t["catalogue_leaks"] = leak  # aligned on the rows' index, which the parts keep
     return t.sort_values(["model", "workload", "structure", "ray_set"]).reset_index(drop=True)
 
 
