@@ -104,7 +104,9 @@ std::vector<Combination> expand(const Config& config) {
                 }
                 const bool threads_given = c.given.count("threads") > 0;
                 std::vector<std::optional<RaySetKind>> sets = {std::nullopt};
-                if (config.ray_sets) sets.assign(config.ray_sets->sets.begin(), config.ray_sets->sets.end());
+                // A robustness case is judged once on its own rays, not per ray set.
+                if (config.ray_sets && model.kind != ModelSpec::Kind::Case)
+                    sets.assign(config.ray_sets->sets.begin(), config.ray_sets->sets.end());
                 for (int threads : config.thread_counts)
                     for (const auto& set : sets) {
                         Combination t = c;

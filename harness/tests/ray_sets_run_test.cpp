@@ -14,6 +14,7 @@
 #include "harness_test_util.h"
 #include "plan/combinations.h"
 #include "plan/loaded_model.h"
+#include "accelbench/verify/robustness_cases.h"
 
 namespace accelbench {
 namespace {
@@ -117,6 +118,36 @@ accelerators: [{name: bvh}]
     EXPECT_EQ(back.ray_sets->size(), 2u);
 }
 
+// A robustness case beside ray-set models is judged once on its own rays (no ray set), so
+// a structure's leaks sit in the same run as its ray-set speed.
+TEST(RaySetsRun, ARobustnessCaseIsJudgedOnceNotPerSet) {
+    TempDir dir("accelbench-ray-sets-case-");
+    const std::string cfg = write_file(dir.path(), "c.yaml", R"(repetitions: 1
+render: {width: 16, height: 12}
+ray_sets: {sets: [primary, ao]}
+models:
+  - {procedural: soup, triangles: 300, seed: 2}
+  - {case: 1}
+accelerators: [{name: bvh}, {name: wbvh}]
+)");
+    const std::string out = (dir.path() / "c.csv").string();
+    ASSERT_EQ(run({cfg, "--out", out}), 0);
+    const auto rows = rows_of(out);
+    ASSERT_EQ(rows.size(), 2u * 2u + 2u);  // 2 structures x 2 sets, and the case once each
+    int cases = 0;
+    for (const auto& r : rows) {
+        if (r.at("ray_source") == "robustness-case") {
+            ++cases;
+            EXPECT_EQ(r.at("ray_set"), "") << r.at("accel");
+            EXPECT_EQ(r.at("verdict"), "pass") << r.at("accel") << " " << r.at("message");
+        } else {
+            EXPECT_TRUE(r.at("ray_set") == "primary" || r.at("ray_set") == "ao") << r.at("ray_set");
+            EXPECT_EQ(r.at("verdict"), "");
+        }
+    }
+    EXPECT_EQ(cases, 2);
+}
+
 TEST(RaySetsRun, AConfigWithoutRaySetsWritesTheCameraRow) {
     TempDir dir("accelbench-ray-sets-run-");
     const std::string cfg = write_file(dir.path(), "cam.yaml", R"(repetitions: 1
@@ -178,8 +209,11 @@ accelerators: [{name: bvh}]
 TEST(RaySetsConfig, ShippedConfigsExpandAsDocumented) {
     const std::string dir = registry().project_dir() + "/configs/";
     const Config rs = load_config(dir + "ray-sets.yaml", registry());
-    // 2 models x 10 settings (7 structures, Embree robust=true, the two wbvh ablations) x 5 sets
-    EXPECT_EQ(expand(rs).size(), 100u);
+    // 2 models x 10 settings (7 structures, Embree robust=true, the two wbvh ablations) x 5
+    // sets, and the extreme-case catalogue's cases once per setting
+    const size_t cases = robustness_case_list().size();
+    EXPECT_EQ(rs.models.size(), 2u + cases);
+    EXPECT_EQ(expand(rs).size(), 100u + cases * 10u);
     const Config ts = load_config(dir + "thread-scaling.yaml", registry());
     EXPECT_EQ(expand(ts).size(), 14u * ts.thread_counts.size());  // 2 models x 7 structures
     EXPECT_EQ(ts.thread_counts.front(), 1);

@@ -141,8 +141,8 @@ LEAK_COUNTS = ("leaks", "leaks_tolerated")
 def catalogue_leaks(results: Results) -> dict[tuple[str, str], int]:
     """Per structure (accel, canonical params), the rays the extreme-case catalogue's cases
     in this input leaked, summed over its cases: what a structure's guarantees buy, beside
-    what they cost in the ray-set table. Empty without catalogue rows
-    (configs/robustness.yaml) among the input."""
+    what they cost in the ray-set table. Empty without catalogue rows among the input
+    (configs/ray-sets.yaml and configs/robustness.yaml have them)."""
     cases = results.case_rows()
     out: dict[tuple[str, str], int] = {}
     for accel, params, counts in zip(cases["accel"], cases["params"], cases["verdict_counts"]):
@@ -245,7 +245,8 @@ def ray_set_markdown(table: pd.DataFrame) -> str:
     if with_leaks:
         out += [
             "`catalogue leaks`: the rays that must hit and missed over the extreme-case "
-            "catalogue's cases (configs/robustness.yaml, its rows in this input), summed: 0 "
+            "catalogue's cases (its rows in this input: configs/ray-sets.yaml runs it for "
+            "its own structures, configs/robustness.yaml for every option), summed: 0 "
             "for a watertight structure, what an ablation gives up for its speed; - where the "
             "catalogue did not run the structure.",
             "",
