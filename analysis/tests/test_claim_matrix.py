@@ -13,6 +13,7 @@ from accelbench_analysis.outputs.report.claim_matrix import (
     cause_text,
     evaluate_matrix,
     flipping_factors,
+    mark_noise,
     matrix_frame,
     within_noise,
 )
@@ -74,6 +75,38 @@ def test_a_by_construction_variant_never_counts_as_a_reproduction(tmp_path, repo
     assert m.verdict("5.2-a", "lbvh build=median") == HOLDS
     assert flipping_factors(m, "5.2-a") == []
     assert cause_text(m, "5.2-a") == "no single factor"  # the variant holds: not a cause
+
+
+def test_a_flip_inside_the_noise_is_no_cause_and_shows_as_within_noise(tmp_path, report_nums):
+    # 5.2-a (the BVH builds faster than the LBVH) fails at faithful by 2x (the report's
+    # LBVH 0.05 s against the BVH's 0.1 s) and holds by 5% with build=karras (0.105 s).
+    def matrix_with(karras_gap: str | None):
+        rows = lbvh_rows("faithful", {"report": 0.05, "karras": 0.105}, bunny="bunny-35947")
+        for r in rows:
+            r["extra"] = {"combo_id": f"{r['model']}-{r['accel']}-{r['params']}", "processes": "2"}
+            if karras_gap and r["accel"] == "lbvh" and "build=karras" in r["params"]:
+                r["extra"]["build_s_process_gap"] = karras_gap
+        columns = ("combo_id", "processes", "build_s_process_gap")
+        res = load_results([write_csv(tmp_path / f"n{karras_gap}.csv", rows, extra_columns=columns)])
+        m = evaluate_matrix(res, report_nums, [CLAIM["5.2-a"]])
+        mark_noise(m, res, claims=[CLAIM["5.2-a"]])
+        return m
+
+    # Measured alike in both processes: the karras setting flips it, and is its cause.
+    m = matrix_with(None)
+    assert m.shown("5.2-a", "lbvh build=karras") == HOLDS
+    assert flipping_factors(m, "5.2-a") == ["lbvh build=karras"]
+    assert cause_text(m, "5.2-a").startswith("flipped by lbvh build=karras")
+    # Its two processes 12% apart: the 5% margin lies inside, the 2x one outside.
+    m = matrix_with("0.12")
+    assert m.verdict("5.2-a", "lbvh build=karras") == HOLDS  # the medians' verdict...
+    assert m.shown("5.2-a", "lbvh build=karras") == WITHIN_NOISE  # ...decided by noise
+    assert m.shown("5.2-a", "faithful") == FAILS
+    assert flipping_factors(m, "5.2-a") == []
+    assert cause_text(m, "5.2-a") == "the same at every setting where it is outside the noise"
+    frame = matrix_frame(m).set_index("setting")
+    assert frame.loc["lbvh build=karras", "verdict"] == WITHIN_NOISE
+    assert frame.loc["faithful", "verdict"] == FAILS
 
 
 def test_a_margin_inside_a_measured_between_process_spread_is_within_noise(tmp_path, report_nums):

@@ -5,7 +5,10 @@ switches one factor of the faithful setting back to our default, by the same cod
 rows that setting declares. Nothing is chosen: the matrix is written whole
 (tables/claims_factors.csv, columns claim, setting, value, verdict, and the heat map
 figures/claims_factors.png from one Vega-Lite specification), and a claim's cause is the
-factor whose switch flips its faithful verdict, or "no single factor".
+factor whose switch flips its faithful verdict, or "no single factor". A cell whose margin
+lies inside the spread measured on the rows it read shows `within noise` (mark_noise), and a
+verdict within noise neither is flipped nor flips one: a factor that "flips" a claim only
+inside the noise (the kd-tree build=nlogn setting builds the same tree) is no cause.
 """
 
 from __future__ import annotations
@@ -23,6 +26,8 @@ from .claims import CLAIMS, FAILS, HOLDS, NOT_COMPARABLE, Claim, Finding, OurSou
 
 MATRIX_COLUMNS = ("claim", "setting", "value", "verdict")
 NOT_MEASURED = "not measured"
+WITHIN_NOISE = "within noise"
+BY_CONSTRUCTION = "by construction"
 
 
 def setting_source(results: Results, report_nums: pd.DataFrame, setting: Setting) -> OurSource:
@@ -36,10 +41,19 @@ class Cell:
     finding: Finding
     read: set[tuple[str, str]] = field(default_factory=set)
     models_read: set[str] = field(default_factory=set)
+    # within_noise's answer for this cell, once asked (mark_noise asks it for every cell).
+    noise: tuple[bool, Spread] | None = None
 
     @property
     def verdict(self) -> str:
+        """The verdict of the medians: holds, does not hold or not comparable."""
         return self.finding.verdict if self.finding.verdict in (HOLDS, FAILS) else NOT_COMPARABLE
+
+    @property
+    def shown(self) -> str:
+        """The verdict the matrix shows: `within noise` where the margin lies inside the
+        spread measured on what the cell read (once that is known), else the verdict."""
+        return WITHIN_NOISE if self.noise is not None and self.noise[0] else self.verdict
 
 
 @dataclass
@@ -48,23 +62,31 @@ class Matrix:
 
     cells: dict[str, dict[str, Cell]]
     sources: dict[str, OurSource]
+    by_construction: frozenset[str] = frozenset()  # claims that cannot fail
 
     def verdict(self, claim_id: str, setting: str) -> str:
         return self.cells[claim_id][setting].verdict
 
+    def shown(self, claim_id: str, setting: str) -> str:
+        """What the matrix shows: the cell's (Cell.shown), `by construction` where a claim
+        that cannot fail holds, as the summary counts it."""
+        v = self.cells[claim_id][setting].shown
+        return BY_CONSTRUCTION if v == HOLDS and claim_id in self.by_construction else v
+
 
 def evaluate_matrix(results: Results, report_nums: pd.DataFrame, claims: list[Claim] | None = None) -> Matrix:
-    cells: dict[str, dict[str, Cell]] = {c.id: {} for c in claims or CLAIMS}
+    claims = claims or CLAIMS
+    cells: dict[str, dict[str, Cell]] = {c.id: {} for c in claims}
     sources = {}
     for s in SETTINGS:
         src = setting_source(results, report_nums, s)
         sources[s.name] = src
-        for c in claims or CLAIMS:
+        for c in claims:
             finding = evaluate(c, src)
             if not src.picker.rows.shape[0]:
                 finding = Finding(NOT_COMPARABLE, f"{NOT_MEASURED}: this run has no rows of setting {s.name}")
             cells[c.id][s.name] = Cell(finding, set(src.read), set(src.models_read))
-    return Matrix(cells, sources)
+    return Matrix(cells, sources, frozenset(c.id for c in claims if c.by_construction))
 
 
 def within_noise(
@@ -75,18 +97,32 @@ def within_noise(
     draw of its timed values within that spread gives the opposite verdict. Returns that
     and the spread."""
     cell = matrix.cells[c.id][setting]
-    spread = claim_spread(results, cell.read, run)
-    if cell.verdict not in (HOLDS, FAILS) or spread.value <= 0:
-        return False, spread
-    opposite = FAILS if cell.verdict == HOLDS else HOLDS
-    return holds_within(c, matrix.sources[setting], spread.value, opposite), spread
+    if cell.noise is None:
+        spread = claim_spread(results, cell.read, run)
+        inside = False
+        if cell.verdict in (HOLDS, FAILS) and spread.value > 0:
+            opposite = FAILS if cell.verdict == HOLDS else HOLDS
+            inside = holds_within(c, matrix.sources[setting], spread.value, opposite)
+        cell.noise = (inside, spread)
+    return cell.noise
+
+
+def mark_noise(
+    matrix: Matrix, results: Results, run: Results | None = None, claims: list[Claim] | None = None
+) -> None:
+    """Every cell's within_noise, so that the matrix, its causes and its heat map show
+    which verdicts the measured spread decides (`run`: every row of the run, the floor)."""
+    for c in claims or CLAIMS:
+        for s in SETTINGS:
+            within_noise(matrix, results, c, s.name, run)
 
 
 def flipping_factors(matrix: Matrix, claim_id: str) -> list[str]:
-    """The factor settings whose switch gives the opposite of the faithful verdict (labelled
-    variants never count: they cannot fail)."""
+    """The factor settings whose switch gives the opposite of the faithful verdict, both
+    outside the noise where it was marked (labelled variants never count: they cannot
+    fail)."""
     at = matrix.cells[claim_id]
-    base = at[FAITHFUL].verdict
+    base = at[FAITHFUL].shown
     if base not in (HOLDS, FAILS):
         return []
     return [
@@ -94,15 +130,17 @@ def flipping_factors(matrix: Matrix, claim_id: str) -> list[str]:
         for s in SETTINGS
         if s.name not in (DEFAULT, FAITHFUL)
         and not s.by_construction
-        and {base, at[s.name].verdict} == {HOLDS, FAILS}
+        and {base, at[s.name].shown} == {HOLDS, FAILS}
     ]
 
 
 def cause_text(matrix: Matrix, claim_id: str) -> str:
     """What decides the claim between our defaults and the faithful setting."""
     at = matrix.cells[claim_id]
-    d, f = at[DEFAULT].verdict, at[FAITHFUL].verdict
+    d, f = at[DEFAULT].shown, at[FAITHFUL].shown
     flips = flipping_factors(matrix, claim_id)
+    if f == WITHIN_NOISE:
+        return "within noise at the faithful setting: no factor is shown to decide it"
     if f not in (HOLDS, FAILS):
         return "not judged at the faithful setting"
     if flips:
@@ -110,36 +148,60 @@ def cause_text(matrix: Matrix, claim_id: str) -> str:
         return "flipped by " + ", ".join(flips) + "".join(f" ({e})" for e in cited)
     if d in (HOLDS, FAILS) and d != f:
         return "no single factor (default and faithful differ; no one switch flips it)"
-    judged = {c.verdict for c in at.values()} - {NOT_COMPARABLE}
-    return "the same at every setting judged" if len(judged) == 1 else "no single factor"
+    shown = {c.shown for c in at.values()}
+    if len(shown - {NOT_COMPARABLE, WITHIN_NOISE}) > 1:
+        return "no single factor"
+    return (
+        "the same at every setting where it is outside the noise"
+        if WITHIN_NOISE in shown
+        else "the same at every setting judged"
+    )
 
 
 def matrix_frame(matrix: Matrix) -> pd.DataFrame:
     rows = [
-        {"claim": cid, "setting": s.name, "value": at[s.name].finding.evidence, "verdict": at[s.name].verdict}
+        {
+            "claim": cid,
+            "setting": s.name,
+            "value": at[s.name].finding.evidence,
+            "verdict": matrix.shown(cid, s.name),
+        }
         for cid, at in matrix.cells.items()
         for s in SETTINGS
     ]
     return pd.DataFrame(rows, columns=list(MATRIX_COLUMNS))
 
 
+MATRIX_MARKS = {HOLDS: "✓", FAILS: "✗", WITHIN_NOISE: "≈", BY_CONSTRUCTION: "□", NOT_COMPARABLE: "–"}
+MATRIX_LEGEND = (
+    "✓ holds, ✗ does not hold, ≈ within noise (either, by a margin inside the measured "
+    "spread), □ holds by construction (cannot fail), – not comparable"
+)
+
+
 def matrix_markdown(matrix: Matrix) -> list[str]:
-    """The matrix as a table: one row per claim, one column per setting (✓ holds, ✗ does
-    not hold, – not comparable), and the cause."""
-    mark = {HOLDS: "✓", FAILS: "✗", NOT_COMPARABLE: "–"}
+    """The matrix as a table: one row per claim, one column per setting (MATRIX_MARKS), and
+    the cause."""
+    mark = MATRIX_MARKS
     head = "| claim | " + " | ".join(s.name for s in SETTINGS) + " | cause |"
     rule = "|:---|" + ":---:|" * len(SETTINGS) + ":---|"
     out = [head, rule]
-    for cid, at in matrix.cells.items():
+    for cid in matrix.cells:
         out.append(
             f"| {cid} | "
-            + " | ".join(mark[at[s.name].verdict] for s in SETTINGS)
+            + " | ".join(mark[matrix.shown(cid, s.name)] for s in SETTINGS)
             + f" | {cause_text(matrix, cid)} |"
         )
     return out
 
 
-VERDICT_COLOURS = {HOLDS: "#4c9a5b", FAILS: "#c8553d", NOT_COMPARABLE: "#bbbbbb"}
+VERDICT_COLOURS = {
+    HOLDS: "#4c9a5b",
+    FAILS: "#c8553d",
+    WITHIN_NOISE: "#e3b448",
+    BY_CONSTRUCTION: "#8fb3d9",
+    NOT_COMPARABLE: "#bbbbbb",
+}
 
 
 def heat_map_spec(frame: pd.DataFrame) -> dict:

@@ -22,10 +22,17 @@ from ...mapping.formatting import fmt_sig, md_escape
 from ...mapping.settings import DEFAULT, FAITHFUL, SETTINGS
 from ...mapping.spread import Spread
 from .claim_checks import short
-from .claim_matrix import Matrix, cause_text, matrix_markdown, within_noise
+from .claim_matrix import (
+    BY_CONSTRUCTION,
+    MATRIX_LEGEND,
+    WITHIN_NOISE,
+    Matrix,
+    cause_text,
+    matrix_markdown,
+    within_noise,
+)
 from .claims import FAILS, HOLDS, NOT_COMPARABLE, Claim, Finding, Missing
 
-BY_CONSTRUCTION, WITHIN_NOISE = "by construction", "within noise"
 VERDICTS = (HOLDS, FAILS, WITHIN_NOISE, BY_CONSTRUCTION, NOT_COMPARABLE)
 CLASSES = ("implementation", "report-numbers", "stand-in")
 # Claims comparing the kd-tree with the BVH across model sizes: the metric whose kd/BVH
@@ -214,11 +221,7 @@ def claims_table(rows: list[ClaimVerdicts]) -> list[str]:
 
 
 def summary_with_matrix(rows: list[ClaimVerdicts], matrix: Matrix) -> list[str]:
-    return (
-        summary_markdown(rows)
-        + ["The matrix (✓ holds, ✗ does not hold, – not comparable):", ""]
-        + matrix_markdown(matrix)
-    )
+    return summary_markdown(rows) + [f"The matrix ({MATRIX_LEGEND}):", ""] + matrix_markdown(matrix)
 
 
 def verdicts_frame(rows: list[ClaimVerdicts]) -> pd.DataFrame:

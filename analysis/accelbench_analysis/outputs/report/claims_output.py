@@ -12,7 +12,7 @@ import pandas as pd
 from ...inputs.schema import Results
 from ...mapping.formatting import md_escape
 from ...mapping.settings import DEFAULT, FAITHFUL, SETTING
-from .claim_matrix import Matrix, evaluate_matrix, flipping_factors, setting_source, write_matrix
+from .claim_matrix import Matrix, evaluate_matrix, flipping_factors, mark_noise, setting_source, write_matrix
 from .claim_verdicts import (
     ClaimVerdicts,
     claims_table,
@@ -124,6 +124,7 @@ def write_claims(
     out_dir.mkdir(parents=True, exist_ok=True)
     report_src = ReportSource(report_nums)
     matrix = evaluate_matrix(results, report_nums)
+    mark_noise(matrix, results, run)
     reports = {c.id: evaluate(c, report_src) for c in CLAIMS}
     rows = judge_all(CLAIMS, reports, matrix, results, run)
     ref = None
