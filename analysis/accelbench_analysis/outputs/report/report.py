@@ -209,9 +209,10 @@ def beyond_report_lines(out_dir: Path) -> list[str]:
     ):
         if (out_dir / rel).is_file():
             out.append(
-                f"- [Robustness]({rel}): a pass/FAIL verdict per extreme case "
-                f"(configs/robustness.yaml) and accelerator, the failures with their "
-                f"counts, and the stiff-parameter runs with memory and errors."
+                f"- [Robustness]({rel}): a pass/FAIL verdict per extreme case and "
+                f"accelerator setting the run judged (configs/robustness.yaml: every option; "
+                f"configs/ray-sets.yaml: its own structures), the failures with their counts, "
+                f"and any stiff-parameter runs with memory and errors."
             )
             break
     if (out_dir / "tables" / "ray_sets.md").is_file():
