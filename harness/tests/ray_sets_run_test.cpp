@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 
+#include "accelbench/verify/robustness_cases.h"
 #include "commands/cli.h"
 #include "config/config.h"
 #include "csv/csv.h"
@@ -14,7 +15,6 @@
 #include "harness_test_util.h"
 #include "plan/combinations.h"
 #include "plan/loaded_model.h"
-#include "accelbench/verify/robustness_cases.h"
 
 namespace accelbench {
 namespace {
