@@ -74,11 +74,16 @@ class Matrix:
         return BY_CONSTRUCTION if v == HOLDS and claim_id in self.by_construction else v
 
 
-def evaluate_matrix(results: Results, report_nums: pd.DataFrame, claims: list[Claim] | None = None) -> Matrix:
+def evaluate_matrix(
+    results: Results,
+    report_nums: pd.DataFrame,
+    claims: list[Claim] | None = None,
+    settings: tuple[Setting, ...] = SETTINGS,
+) -> Matrix:
     claims = claims or CLAIMS
     cells: dict[str, dict[str, Cell]] = {c.id: {} for c in claims}
     sources = {}
-    for s in SETTINGS:
+    for s in settings:
         src = setting_source(results, report_nums, s)
         sources[s.name] = src
         for c in claims:
@@ -113,8 +118,8 @@ def mark_noise(
     """Every cell's within_noise, so that the matrix, its causes and its heat map show
     which verdicts the measured spread decides (`run`: every row of the run, the floor)."""
     for c in claims or CLAIMS:
-        for s in SETTINGS:
-            within_noise(matrix, results, c, s.name, run)
+        for setting in matrix.cells[c.id]:
+            within_noise(matrix, results, c, setting, run)
 
 
 def flipping_factors(matrix: Matrix, claim_id: str) -> list[str]:

@@ -12,7 +12,15 @@ import pandas as pd
 from ...inputs.schema import Results
 from ...mapping.formatting import md_escape
 from ...mapping.settings import DEFAULT, FAITHFUL, SETTING
-from .claim_matrix import Matrix, evaluate_matrix, flipping_factors, mark_noise, setting_source, write_matrix
+from .claim_matrix import (
+    Cell,
+    Matrix,
+    evaluate_matrix,
+    flipping_factors,
+    mark_noise,
+    setting_source,
+    write_matrix,
+)
 from .claim_verdicts import (
     ClaimVerdicts,
     claims_table,
@@ -21,7 +29,7 @@ from .claim_verdicts import (
     table2_side_by_side,
     verdicts_frame,
 )
-from .claims import CLAIMS, FAILS, HOLDS, Finding, Missing, ReportSource, evaluate, tolerance_text
+from .claims import CLAIMS, FAILS, HOLDS, Missing, ReportSource, evaluate, tolerance_text
 from .cost_model import cost_model_lines, fit_all, pooled_residuals, write_cost_model
 
 
@@ -31,15 +39,17 @@ class ClaimsResult:
 
     rows: list[ClaimVerdicts]
     matrix: Matrix
-    reference: dict[str, Finding] | None = None  # the reference run's default verdicts
+    reference: dict[str, Cell] | None = None  # the reference run's default cells, noise judged
 
     def machine_dependent(self) -> list[str]:
+        """The claims that hold at default in one run and not in the other, each verdict
+        outside its own run's measured noise."""
         if self.reference is None:
             return []
         return [
             r.claim.id
             for r in self.rows
-            if {r.at[DEFAULT].verdict, self.reference[r.claim.id].verdict} == {HOLDS, FAILS}
+            if {r.at[DEFAULT].verdict, self.reference[r.claim.id].shown} == {HOLDS, FAILS}
         ]
 
 
@@ -87,9 +97,8 @@ def claims_markdown(result: ClaimsResult, results: Results, report_src: ReportSo
     dependent = result.machine_dependent()
     if result.reference is not None:
         out += [
-            "Machine-dependent (holds at default on one run, not on the committed reference run): "
-            + (", ".join(dependent) if dependent else "none")
-            + ".",
+            "Machine-dependent (holds at default on one run, not on the committed reference run, "
+            "each outside its run's noise): " + (", ".join(dependent) if dependent else "none") + ".",
             "",
         ]
     out += ["## Every claim", ""] + claims_table(result.rows)
@@ -128,9 +137,10 @@ def write_claims(
     reports = {c.id: evaluate(c, report_src) for c in CLAIMS}
     rows = judge_all(CLAIMS, reports, matrix, results, run)
     ref = None
-    if reference is not None:
-        ref_src = setting_source(reference, report_nums, SETTING[DEFAULT])
-        ref = {c.id: evaluate(c, ref_src) for c in CLAIMS}
+    if reference is not None:  # its default verdicts, judged for noise on its own rows
+        ref_matrix = evaluate_matrix(reference, report_nums, settings=(SETTING[DEFAULT],))
+        mark_noise(ref_matrix, reference, reference)
+        ref = {c.id: ref_matrix.cells[c.id][DEFAULT] for c in CLAIMS}
     result = ClaimsResult(rows, matrix, ref)
     write_matrix(matrix, out_dir, out_dir.parent / "figures")
     verdicts_frame(rows).to_csv(out_dir / "claims.csv", index=False)

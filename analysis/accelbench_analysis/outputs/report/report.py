@@ -149,9 +149,8 @@ def claims_section(result: ClaimsResult | None) -> list[str]:
     dependent = result.machine_dependent()
     return [
         "",
-        "Machine-dependent claims (hold at default on one run, not on the committed reference run): "
-        + (", ".join(dependent) if dependent else "none")
-        + ".",
+        "Machine-dependent claims (hold at default on one run, not on the committed reference run, "
+        "each outside its run's noise): " + (", ".join(dependent) if dependent else "none") + ".",
     ]
 
 
