@@ -62,16 +62,23 @@ class Matrix:
 
     cells: dict[str, dict[str, Cell]]
     sources: dict[str, OurSource]
-    by_construction: frozenset[str] = frozenset()  # claims that cannot fail
+    claims: dict[str, Claim]  # by id, the claims the cells judge
 
     def verdict(self, claim_id: str, setting: str) -> str:
         return self.cells[claim_id][setting].verdict
 
     def shown(self, claim_id: str, setting: str) -> str:
-        """What the matrix shows: the cell's (Cell.shown), `by construction` where a claim
-        that cannot fail holds, as the summary counts it."""
-        v = self.cells[claim_id][setting].shown
-        return BY_CONSTRUCTION if v == HOLDS and claim_id in self.by_construction else v
+        """What the matrix shows: the cell's (Cell.shown), and `by construction` where it
+        holds only because it cannot fail: a claim that cannot fail, or a labelled variant
+        (lbvh build=median, the median BVH's tree) holding where faithful does not."""
+        at = self.cells[claim_id]
+        v = at[setting].shown
+        if v != HOLDS:
+            return v
+        if self.claims[claim_id].by_construction:
+            return BY_CONSTRUCTION
+        variant = SETTING[setting].by_construction and FAITHFUL in at and at[FAITHFUL].shown != HOLDS
+        return BY_CONSTRUCTION if variant else v
 
 
 def evaluate_matrix(
@@ -91,7 +98,7 @@ def evaluate_matrix(
             if not src.picker.rows.shape[0]:
                 finding = Finding(NOT_COMPARABLE, f"{NOT_MEASURED}: this run has no rows of setting {s.name}")
             cells[c.id][s.name] = Cell(finding, set(src.read), set(src.models_read))
-    return Matrix(cells, sources, frozenset(c.id for c in claims if c.by_construction))
+    return Matrix(cells, sources, {c.id: c for c in claims})
 
 
 def within_noise(
@@ -112,12 +119,10 @@ def within_noise(
     return cell.noise
 
 
-def mark_noise(
-    matrix: Matrix, results: Results, run: Results | None = None, claims: list[Claim] | None = None
-) -> None:
+def mark_noise(matrix: Matrix, results: Results, run: Results | None = None) -> None:
     """Every cell's within_noise, so that the matrix, its causes and its heat map show
     which verdicts the measured spread decides (`run`: every row of the run, the floor)."""
-    for c in claims or CLAIMS:
+    for c in matrix.claims.values():
         for setting in matrix.cells[c.id]:
             within_noise(matrix, results, c, setting, run)
 
@@ -180,21 +185,21 @@ def matrix_frame(matrix: Matrix) -> pd.DataFrame:
 MATRIX_MARKS = {HOLDS: "✓", FAILS: "✗", WITHIN_NOISE: "≈", BY_CONSTRUCTION: "□", NOT_COMPARABLE: "–"}
 MATRIX_LEGEND = (
     "✓ holds, ✗ does not hold, ≈ within noise (either, by a margin inside the measured "
-    "spread), □ holds by construction (cannot fail), – not comparable"
+    "spread), □ holds by construction (the claim, or the labelled variant, cannot fail), "
+    "– not comparable"
 )
 
 
 def matrix_markdown(matrix: Matrix) -> list[str]:
     """The matrix as a table: one row per claim, one column per setting (MATRIX_MARKS), and
     the cause."""
-    mark = MATRIX_MARKS
     head = "| claim | " + " | ".join(s.name for s in SETTINGS) + " | cause |"
     rule = "|:---|" + ":---:|" * len(SETTINGS) + ":---|"
     out = [head, rule]
     for cid in matrix.cells:
         out.append(
             f"| {cid} | "
-            + " | ".join(mark[matrix.shown(cid, s.name)] for s in SETTINGS)
+            + " | ".join(MATRIX_MARKS[matrix.shown(cid, s.name)] for s in SETTINGS)
             + f" | {cause_text(matrix, cid)} |"
         )
     return out
