@@ -425,27 +425,37 @@ inline WbvhPacketHits wbvh_packet_test(const WbvhTriPacket& p, int lanes, const 
     const __m128 zero = _mm_setzero_ps();
     const uint32_t edge_zero = uint32_t(
         _mm_movemask_ps(_mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)), _mm_cmpeq_ps(e2, zero))));
-    const __m128 any_neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)), _mm_cmplt_ps(e2, zero));
-    const __m128 any_pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)), _mm_cmpgt_ps(e2, zero));
-    const uint32_t outside = uint32_t(_mm_movemask_ps(_mm_and_ps(any_neg, any_pos)));
+    // Outside (edge functions of both strict signs) from the sign bits: set in the OR of the
+    // three (one is negative) and clear in their AND (not all are, so one is positive) — 5
+    // operations for the 11 of six comparisons. Equal to the comparisons on every lane that
+    // decides with it: the edge functions are never NaN (vertices and origins below
+    // kMaxCoordinate keep every product and difference finite, geometry.h), a non-zero one
+    // has its sign bit exactly when it is negative, and a lane with a zero one is in
+    // edge_zero, whose lanes the mask leaves out and the double-precision end decides
+    // whatever `outside` says (under DAZ a denormal compares equal to zero: edge_zero too).
+    const uint32_t outside =
+        uint32_t(_mm_movemask_ps(_mm_andnot_ps(_mm_and_ps(_mm_and_ps(e0, e1), e2), _mm_or_ps(_mm_or_ps(e0, e1), e2))));
     const __m128 det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
     const __m128 ts =
         _mm_add_ps(_mm_add_ps(_mm_mul_ps(e0, sh[0][2]), _mm_mul_ps(e1, sh[1][2])), _mm_mul_ps(e2, sh[2][2]));
     const __m128 sign = _mm_set1_ps(-0.0f);
     const __m128 flt_min = _mm_set1_ps(std::numeric_limits<float>::min());
     const __m128 abs_ts = _mm_andnot_ps(sign, ts);
+    const __m128 abs_det = _mm_andnot_ps(sign, det);
     const __m128 representable =
-        _mm_and_ps(_mm_cmpge_ps(_mm_andnot_ps(sign, det), flt_min),
+        _mm_and_ps(_mm_cmpge_ps(abs_det, flt_min),
                    _mm_and_ps(_mm_cmpge_ps(abs_ts, flt_min),
                               _mm_cmple_ps(abs_ts, _mm_set1_ps(std::numeric_limits<float>::max()))));
     const uint32_t unrepresentable = ~uint32_t(_mm_movemask_ps(representable)) & 0xfu;
-    // t in [tmin, tmax) compared before dividing, the inequalities flipped with det's sign
-    // (the negations written as NLT / NGT, exactly the scalar code's !(a < b)).
-    const __m128 tmin_det = _mm_mul_ps(_mm_set1_ps(tmin), det), tmax_det = _mm_mul_ps(_mm_set1_ps(tmax), det);
-    const __m128 in_pos = _mm_and_ps(_mm_cmpnlt_ps(ts, tmin_det), _mm_cmplt_ps(ts, tmax_det));
-    const __m128 in_neg = _mm_and_ps(_mm_cmpngt_ps(ts, tmin_det), _mm_cmpgt_ps(ts, tmax_det));
-    const __m128 det_pos = _mm_cmpgt_ps(det, zero);
-    const __m128 in = _mm_or_ps(_mm_and_ps(det_pos, in_pos), _mm_andnot_ps(det_pos, in_neg));
+    // t in [tmin, tmax) compared before dividing. The scalar test flips its inequalities for
+    // a negative det (!(ts > tmin det) && ts > tmax det); here t_scaled takes det's sign
+    // instead and is compared with |det|: tmin det = -(tmin |det|) exactly (a product's
+    // sign is its operands' XOR, its magnitude rounds alike), so the two forms agree on
+    // every lane the mask keeps (representable: det non-zero, t_scaled finite). NLT is the
+    // scalar code's !(a < b).
+    const __m128 ts_signed = _mm_xor_ps(ts, _mm_and_ps(sign, det));
+    const __m128 in = _mm_and_ps(_mm_cmpnlt_ps(ts_signed, _mm_mul_ps(_mm_set1_ps(tmin), abs_det)),
+                                 _mm_cmplt_ps(ts_signed, _mm_mul_ps(_mm_set1_ps(tmax), abs_det)));
     out.mask = valid & ~edge_zero & ~outside & ~unrepresentable & uint32_t(_mm_movemask_ps(in));
     // The scalar test's double-precision ends (triangle.h): an edge function exactly zero,
     // or, inside the edges, a determinant or t_scaled float cannot divide. Rare: per lane.
