@@ -75,6 +75,7 @@ class Loaded:
     results: Results
     with_ablations: Results
     reference: Results | None
+    reference_run: Results | None  # every row of the reference run named like ours: its floor
     report_nums: pd.DataFrame
     ranked: Results  # every measured row but the thread scaling's: the ranking REPORT.md opens with
     whole_run: Results  # `everything` and Sources.run_csvs: the spread's floor, the provenance
@@ -97,6 +98,10 @@ def load(src: Sources) -> Loaded:
     everything = load_results(src.csvs)
     report_nums = load_report_numbers(src.report_numbers)
     reference = load_reference_run(src.reference_run, src.csvs)
+    # The reference's verdicts are judged against the widest gap of its whole run, as ours are.
+    reference_run = (
+        load_reference_run(src.reference_run, [*src.csvs, *src.run_csvs]) if src.run_csvs else reference
+    )
     warn(everything)
     ranked, left_out = without_thread_scaling(everything)
     results, notes = report_rows(ranked, own_image=is_ablation(ranked.rows))
@@ -111,7 +116,15 @@ def load(src: Sources) -> Loaded:
     ranked = ranked if not ranked.measured_rows().empty else everything
     whole_run = load_results([*src.csvs, *src.run_csvs]) if src.run_csvs else everything
     return Loaded(
-        src, everything, without_ablations(results), results, reference, report_nums, ranked, whole_run
+        src,
+        everything,
+        without_ablations(results),
+        results,
+        reference,
+        reference_run,
+        report_nums,
+        ranked,
+        whole_run,
     )
 
 
@@ -158,7 +171,14 @@ def write_claims_of(data: Loaded, out: Path):
     # The spread's floor is the widest gap anywhere in the run: ray sets, thread scaling and
     # the run's other CSVs (Sources.run_csvs: the scaling config's) too, though the claims
     # judge none of them.
-    return write_claims(data.with_ablations, data.report_nums, out / "tables", data.reference, data.whole_run)
+    return write_claims(
+        data.with_ablations,
+        data.report_nums,
+        out / "tables",
+        data.reference,
+        data.whole_run,
+        data.reference_run,
+    )
 
 
 def write_comparison_of(data: Loaded, out: Path):

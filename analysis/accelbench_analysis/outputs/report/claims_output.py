@@ -126,10 +126,12 @@ def write_claims(
     out_dir: Path,
     reference: Results | None = None,
     run: Results | None = None,
+    reference_run: Results | None = None,
 ) -> tuple[Path, ClaimsResult]:
     """tables/claims.md, claims.csv, claims_factors.csv (+ figures/claims_factors.png beside
     the tables directory) and the cost model's files. `run`: every row of the run, whose
-    widest gap is the floor of every claim's spread (default: `results`)."""
+    widest gap is the floor of every claim's spread (default: `results`); `reference_run`
+    the same for the reference run's verdicts (default: `reference`)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     report_src = ReportSource(report_nums)
     matrix = evaluate_matrix(results, report_nums)
@@ -137,9 +139,9 @@ def write_claims(
     reports = {c.id: evaluate(c, report_src) for c in CLAIMS}
     rows = judge_all(CLAIMS, reports, matrix, results, run)
     ref = None
-    if reference is not None:  # its default verdicts, judged for noise on its own rows
+    if reference is not None:  # its default verdicts, judged for noise on its own run
         ref_matrix = evaluate_matrix(reference, report_nums, settings=(SETTING[DEFAULT],))
-        mark_noise(ref_matrix, reference, reference)
+        mark_noise(ref_matrix, reference, reference_run)
         ref = {c.id: ref_matrix.cells[c.id][DEFAULT] for c in CLAIMS}
     result = ClaimsResult(rows, matrix, ref)
     write_matrix(matrix, out_dir, out_dir.parent / "figures")
