@@ -135,6 +135,10 @@ RENDER_SETTING_COLUMNS = [
 # Settings that are counts: where a row has one, a whole number of at least 1.
 COUNT_SETTING_COLUMNS = ["render_threads", "image_width", "image_height", "spp"]
 
+# The combo_ids timed alternately with a row in its processes (`interleave: true`), sorted,
+# ';'-separated; empty when timed alone, as in the files from before the column.
+TIMED_WITH_COLUMN = "timed_with"
+
 # The results CSV's columns other than the parameters' (which sit between `params` and
 # `status`, one per parameter name of the registry), in the harness's order, with their kind
 # in the harness's column table (`accelbench columns`; a test holds the two equal). The
@@ -155,6 +159,7 @@ RESULT_CSV_COLUMNS: list[tuple[str, str]] = [
     ("message", "text"),
     ("repetitions", "number"),
     ("processes", "number"),
+    (TIMED_WITH_COLUMN, "text"),
     *[(c, "number") for c in TIMING_COLUMNS],
     ("ci_coverage", "number"),
     ("build_s_process_gap", "number"),
@@ -588,7 +593,7 @@ def read_csv(path: str | Path) -> pd.DataFrame:
     for col in (ISA_COLUMN, EMBREE_ISA_COLUMN, COMPILE_FLAGS_COLUMN):
         if col not in df.columns:
             df[col] = UNKNOWN
-    for col in PLUGIN_COLUMNS:
+    for col in PLUGIN_COLUMNS + [TIMED_WITH_COLUMN]:
         df[col] = df[col].fillna("").astype(str) if col in df.columns else ""
     for col in PROVENANCE_IDENTITY + ["timestamp"]:
         df[col] = df[col].astype(str).str.strip()
