@@ -461,3 +461,29 @@ def robustness_rows() -> list[dict]:
         )
     )
     return rows
+
+
+# The .reps.csv the harness writes beside a results CSV: one line per timed repetition.
+REPS_HEADER = [
+    "config",
+    "combo_id",
+    "model",
+    "accel",
+    "params",
+    "repetition",
+    "build_s",
+    "render_s",
+    "process",
+]
+
+
+def write_reps(path: Path, reps: list[tuple[dict, int, float, int]]) -> Path:
+    """Writes (row, repetition, render_s, process) per repetition of rows made by row() with
+    a combo_id in `extra` (build_s: the row's median)."""
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(REPS_HEADER)
+        for r, k, render, process in reps:
+            key = [r["config"], r["extra"]["combo_id"], r["model"], r["accel"], r["params"]]
+            w.writerow(key + [k, r["build_s_median"], render, process])
+    return path

@@ -7,7 +7,7 @@ import json
 
 import pandas as pd
 import pytest
-from synthetic import BVH, EMBREE, KD, case_row, row, write_csv
+from synthetic import BVH, EMBREE, KD, case_row, row, write_csv, write_reps
 
 from accelbench_analysis.cli import main
 from accelbench_analysis.inputs.load import load_results
@@ -252,3 +252,68 @@ def test_the_ray_set_table_shows_each_structures_catalogue_leaks_beside_its_spee
     md = ray_set_markdown(ray_set_table(ray_set_rows(both), catalogue_leaks(both)))
     assert "| ao | catalogue leaks |" in md
     assert [line.split("|")[-2].strip() for line in md.splitlines() if line.startswith("| kd-tree")] == ["-"]
+
+
+# Render seconds of each repetition per process: Embree 10% slower than the BVH in process 1
+# and 10% faster in process 2, so the pooled medians are equal (ratio 1.00) and the
+# BVH's worse process has Embree / BVH = 0.90. The kd-tree is never timed with Embree.
+PROCESS_SECONDS = {
+    "bvh": {1: (0.99, 1.0, 1.01), 2: (0.99, 1.0, 1.01)},
+    "embree": {1: (1.09, 1.1, 1.11), 2: (0.89, 0.9, 0.91)},
+    "kdtree": {1: (1.0, 1.0, 1.0), 2: (3.0, 3.0, 3.0)},
+}
+
+
+def interleaved_run(tmp_path, interleaved: bool, column: bool = True):
+    """A ray-set run on `ao` in two processes, its .reps.csv beside it; with `interleaved`
+    the BVH and Embree were timed alternately (each names the other in `timed_with`), else
+    every row was timed alone; without `column` the file has no `timed_with` at all."""
+    combos = {"bvh": "c-bvh", "embree": "c-embree", "kdtree": "c-kd"}
+    pair = {"bvh": "c-embree", "embree": "c-bvh"}
+    rows = []
+    for accel, per_process in PROCESS_SECONDS.items():
+        median = float(pd.Series([s for p in per_process.values() for s in p]).median())
+        r = ray_set_row(accel, ACCELS[accel], median, "ao")
+        together = pair.get(accel, "") if interleaved else ""
+        r["extra"].update(combo_id=combos[accel], timed_with=together)
+        rows.append(r)
+    cols = ("ray_set", "ray_set_hash", "combo_id") + (("timed_with",) if column else ())
+    path = write_csv(tmp_path / "rs.csv", rows, with_errors=True, extra_columns=cols)
+    reps = [
+        (r, k + 1 + 3 * (p - 1), s, p)
+        for r in rows
+        for p, seconds in PROCESS_SECONDS[r["accel"]].items()
+        for k, s in enumerate(seconds)
+    ]
+    write_reps(tmp_path / "rs.reps.csv", reps)
+    results = load_results([path])
+    assert not results.warnings  # the summaries' medians are their repetitions'
+    return results, ray_set_table(ray_set_rows(results), reps=results.reps).set_index("structure")
+
+
+def test_the_worse_process_ratio_of_rows_timed_alternately(tmp_path):
+    """Per process, Embree's median over the BVH's, both timed turn by turn there: 1.10 in
+    process 1, 0.90 in process 2; the column is the worse, 0.90, beside the pooled 1.00."""
+    results, t = interleaved_run(tmp_path, interleaved=True)
+    assert set(results.rows["timed_with"]) == {"c-embree", "c-bvh", ""}
+    assert t.loc["BVH (median)", "ratio_to_embree"] == pytest.approx(1.0)
+    assert t.loc["BVH (median)", "ratio_to_embree_worse_process"] == pytest.approx(0.9)
+    assert t.loc["Embree", "ratio_to_embree_worse_process"] == pytest.approx(1.0)
+    # Timed alone, though its repetitions name processes: no per-process ratio.
+    assert pd.isna(t.loc["kd-tree", "ratio_to_embree_worse_process"])
+    md = ray_set_markdown(t.reset_index())
+    assert "| BVH (median) | 1 (1.00x; worse process 0.90x) |" in md
+    assert "| kd-tree | 0.5 (0.50x) |" in md
+    assert "the smallest of them" in md
+
+
+@pytest.mark.parametrize("column", [True, False], ids=["timed-alone", "no-timed_with-column"])
+def test_rows_timed_apart_have_no_worse_process_ratio(tmp_path, column):
+    """The same repetitions, but the rows timed in separate processes (an empty
+    `timed_with`, or a file from before the column): two medians timed apart are not read as
+    one process's ratio."""
+    results, t = interleaved_run(tmp_path, interleaved=False, column=column)
+    assert set(results.rows["timed_with"]) == {""}
+    assert t["ratio_to_embree_worse_process"].isna().all()
+    assert t.loc["BVH (median)", "ratio_to_embree"] == pytest.approx(1.0)
+    assert "worse process " not in ray_set_markdown(t.reset_index())

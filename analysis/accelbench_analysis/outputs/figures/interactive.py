@@ -309,6 +309,7 @@ def ray_sets_spec(table: pd.DataFrame, sets: list[str], palette: dict[str, str])
         {"field": "ray_set", "type": "nominal", "title": "ray set"},
         number("mrays_per_s", "Mrays/s"),
         number("ratio_to_embree", "ratio to Embree"),
+        number("ratio_to_embree_worse_process", "ratio to Embree, worse process"),
         number("embree_mrays_per_s", "Embree Mrays/s"),
         number("rays", "rays", ",d"),
         number("false_misses", "false misses", ",d"),

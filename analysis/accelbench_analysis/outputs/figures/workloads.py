@@ -9,7 +9,8 @@ Embree's row of the same model, set and workload (thread count, image), never by
 
 Outputs (when the input has such rows):
 - tables/ray_sets.md, .csv: each structure's Mrays/s per set and its ratio to Embree's
-  on the same model and set;
+  on the same model and set, and, where the two were timed alternately in the same
+  processes, the worse of the processes' ratios;
 - tables/ray_set_ranking.md: per model, the structures ranked by Mrays/s in each set, a
   rank marked * where it differs from the rank in the first set (primary);
 - figures/ray_sets.png: Mrays/s per set, structure and model;
@@ -29,6 +30,7 @@ import pandas as pd
 
 from ...inputs.schema import CAMERA_SET, RAY_SETS, RENDER_SETTING_COLUMNS, Results
 from ...mapping.formatting import md_escape
+from ...mapping.interleaved import process_medians, worse_process_ratio
 from ...mapping.selection import EMBREE_PREFERRED, label_of
 from ...mapping.structures import baseline_accels, table_row
 from ...mapping.styles import Styles
@@ -151,11 +153,18 @@ def catalogue_leaks(results: Results) -> dict[tuple[str, str], int]:
     return out
 
 
-def ray_set_table(rows: pd.DataFrame, leaks: dict[tuple[str, str], int] | None = None) -> pd.DataFrame:
+def ray_set_table(
+    rows: pd.DataFrame,
+    leaks: dict[tuple[str, str], int] | None = None,
+    reps: pd.DataFrame | None = None,
+) -> pd.DataFrame:
     """One row per model, workload, structure and set: Mrays/s and its ratio to Embree's row
     of the same model, set and workload (threads, image, ...): never to another thread
-    count's, never to a median of several. `catalogue_leaks`: the structure's leaks over the
-    extreme-case catalogue (catalogue_leaks) where the input has its cases, else empty."""
+    count's, never to a median of several. `ratio_to_embree_worse_process`: where the row
+    was timed alternately with that Embree row, the worse over their processes of the ratio
+    of the two per-process medians (`reps`, the repetitions; mapping/interleaved.py), else
+    NaN. `catalogue_leaks`: the structure's leaks over the extreme-case catalogue
+    (catalogue_leaks) where the input has its cases, else empty."""
     cols = [
         "model",
         "workload",
@@ -167,14 +176,18 @@ def ray_set_table(rows: pd.DataFrame, leaks: dict[tuple[str, str], int] | None =
         "false_misses",
         "false_hits",
     ]
-    parts = []
+    parts, worse = [], pd.Series(float("nan"), index=rows.index)
+    medians = process_medians(reps)
     for _, g in rows.groupby(["model", "workload", "ray_set"], observed=True, sort=False):
         t = g[cols].copy()
         base = baseline_row(g)
         t["embree_mrays_per_s"] = float("nan") if base is None else base["mrays_per_s"]
+        for i, r in g.iterrows():
+            worse[i] = worse_process_ratio(medians, r, base)
         parts.append(t)
     t = pd.concat(parts) if parts else pd.DataFrame(columns=cols + ["embree_mrays_per_s"])
     t["ratio_to_embree"] = t["mrays_per_s"] / t["embree_mrays_per_s"]
+    t["ratio_to_embree_worse_process"] = worse  # aligned on the rows' index, as below
     leak = pd.Series(
         [(leaks or {}).get(k, float("nan")) for k in zip(rows["accel"], rows["params"])], rows.index
     )
@@ -217,7 +230,10 @@ def cells_per_set(rows: pd.DataFrame, sets: list[str], cell) -> list[str]:
 def _mrays_cell(r: pd.Series) -> str:
     cell = f"{r['mrays_per_s']:.3g}"
     if pd.notna(r["ratio_to_embree"]):
-        cell += f" ({r['ratio_to_embree']:.2f}x)"
+        worse = r["ratio_to_embree_worse_process"]
+        cell += f" ({r['ratio_to_embree']:.2f}x" + (
+            f"; worse process {worse:.2f}x)" if pd.notna(worse) else ")"
+        )
     wrong = (r["false_misses"] if pd.notna(r["false_misses"]) else 0) + (
         r["false_hits"] if pd.notna(r["false_hits"]) else 0
     )
@@ -237,8 +253,12 @@ def ray_set_markdown(table: pd.DataFrame) -> str:
         "once per model from the reference's hits, so every structure traces the same rays), "
         "and in parentheses its ratio to Embree's row of the same model, set and workload "
         "(threads, image: a model measured at several has a section for each; > 1: faster than "
-        "Embree; none where there is no single such Embree row). Wrong answers against the "
-        "reference (false misses + false hits) are shown where there are any.",
+        "Embree; none where there is no single such Embree row). Where a structure was timed "
+        "alternately with that Embree row in the same processes (`interleave: true`), the "
+        "ratio is followed by the worse process's: in each process the ratio of the two "
+        "medians timed there turn by turn, the smallest of them (the structure's worse "
+        "process). Wrong answers against the reference (false misses + false hits) are shown "
+        "where there are any.",
         "",
     ]
     with_leaks = table["catalogue_leaks"].notna().any()
@@ -378,7 +398,7 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
     if not rows.empty:
         tables.mkdir(parents=True, exist_ok=True)
         figures.mkdir(parents=True, exist_ok=True)
-        table = ray_set_table(rows, catalogue_leaks(results))
+        table = ray_set_table(rows, catalogue_leaks(results), results.reps)
         palette = hue_palette(rows["structure"])
         table.drop(columns=["panel"]).to_csv(tables / "ray_sets.csv", index=False)
         (tables / "ray_sets.md").write_text(ray_set_markdown(table))
