@@ -74,6 +74,8 @@ void read_run_settings(ConfigReader& r, const Fields& top) {
         if (auto v = read_number(r.c, e->value, "timeout_s", 0, 1e7, true)) r.cfg.timeout_s = *v;
     if (auto* e = top.find("errors"))
         if (auto v = read_bool(r.c, e->value, "errors")) r.cfg.errors = *v;
+    if (auto* e = top.find("interleave"))
+        if (auto v = read_bool(r.c, e->value, "interleave")) r.cfg.interleave = *v;
 }
 
 // The number of combinations (models x the sum over accelerator entries of the product
@@ -140,8 +142,8 @@ Config load_config(const std::string& path, const ModelRegistry& models) {
     const YAML::Node root = load_yaml_document(path);
     // `grid:` belongs to the analysis's grid search (analysis/README.md): accepted, unread.
     Fields top(r.c, root, "",
-               {"name", "description", "repetitions", "warmup", "processes", "timeout_s", "errors", "render",
-                "ray_sets", "rays", "models", "accelerators", "skip", "grid", "plugins"});
+               {"name", "description", "repetitions", "warmup", "processes", "interleave", "timeout_s", "errors",
+                "render", "ray_sets", "rays", "models", "accelerators", "skip", "grid", "plugins"});
     if (!top.ok()) throw ConfigError(r.c.issues);
     // Before `accelerators`, which may name the plugins' structures.
     if (auto* e = top.find("plugins")) read_plugins(r, e->value);

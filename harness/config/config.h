@@ -101,6 +101,11 @@ struct Config {
     // Child processes that measure each combination, `repetitions` each, pooled into one
     // row: the second pass gives the spread between processes (docs/configs.md).
     int processes = 1;
+    // Time the combinations of one model that trace the same rays (ray set and render
+    // thread count) in one child process, their repetitions alternating round by round,
+    // so that a ratio between two of them is of times taken seconds apart, never minutes
+    // (docs/configs.md "Interleaving").
+    bool interleave = false;
     double timeout_s = 300;
     // Trace every combination's rays through the `reference` accelerator too and write the
     // error columns; `errors: false` turns it off.

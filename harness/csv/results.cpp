@@ -44,6 +44,8 @@ const ColumnSpec kMeasuredColumns[] = {
     {"message", ColumnKind::Text, "", "why a row is not ok"},
     {"repetitions", ColumnKind::Number, "count", "timed repetitions counted (over every measuring process)"},
     {"processes", ColumnKind::Number, "count", "child processes that measured the row, repetitions pooled"},
+    {"timed_with", ColumnKind::Text, "",
+     "combo_ids timed alternately with the row in the same processes (interleave), ';'-separated; empty: alone"},
     {"build_s_median", ColumnKind::Number, "s", "build time, median"},
     {"build_s_mean", ColumnKind::Number, "s", "build time, mean"},
     {"build_s_stddev", ColumnKind::Number, "s", "build time, standard deviation"},
@@ -234,6 +236,8 @@ constexpr AddedColumn kAddedColumns[] = {
     {"processes", "repetitions", ""},
     {"build_s_process_gap", "ci_coverage", ""},
     {"render_s_process_gap", "build_s_process_gap", ""},
+    // Before `interleave` every row was timed alone in its processes.
+    {"timed_with", "processes", ""},
     // Which flags compiled an older row's binary was not recorded: unknown, a build of its own.
     {"compile_flags", "build_type", "unknown"},
 };

@@ -7,12 +7,14 @@
 #include <benchmark/benchmark.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <initializer_list>
 #include <iostream>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -149,8 +151,6 @@ public:
           console_(benchmark::ConsoleReporter::OutputOptions(
               benchmark::ConsoleReporter::OO_Tabular |
               (isatty(STDOUT_FILENO) ? benchmark::ConsoleReporter::OO_Color : benchmark::ConsoleReporter::OO_None))) {
-        json_.SetOutputStream(&json_text_);
-        json_.SetErrorStream(&json_text_);
         if (!s.show_context) console_.SetErrorStream(&null_);
     }
 
@@ -165,26 +165,46 @@ public:
             if (settings_.show_repetitions || r.run_type == Run::RT_Aggregate || r.repetitions <= 1 || r.error_occurred)
                 shown.push_back(r);
         if (!shown.empty()) console_.ReportRuns(shown);
-        if (settings_.json) json_.ReportRuns(runs);
         for (const auto& r : runs) {
+            const std::string& f = r.run_name.function_name;
+            const bool build = f.size() >= 6 && f.compare(f.size() - 6, 6, "/build") == 0;
+            const std::string name = f.substr(0, f.size() - (build ? 6 : 7));  // "/build" or "/render"
+            if (settings_.json) json_of(name).reporter.ReportRuns({r});
             if (r.run_type != Run::RT_Iteration || r.error_occurred) continue;
-            const bool build = r.run_name.function_name.size() >= 6 &&
-                r.run_name.function_name.compare(r.run_name.function_name.size() - 6, 6, "/build") == 0;
-            (build ? build_s : render_s).push_back(r.real_accumulated_time / double(r.iterations));
+            (build ? build_s : render_s)[name].push_back(r.real_accumulated_time / double(r.iterations));
         }
     }
 
     void Finalize() override { console_.Finalize(); }
 
-    std::string json() const { return json_text_.str(); }
+    // The JSON run objects of one combination, comma-separated.
+    std::string json(const std::string& name) const {
+        auto it = json_.find(name);
+        return it == json_.end() ? "" : it->second->text.str();
+    }
 
-    std::vector<double> build_s, render_s;
+    // Each combination's counted repetitions, by its name (the benchmarks' name before
+    // "/build" and "/render"), in the order timed.
+    std::map<std::string, std::vector<double>> build_s, render_s;
 
 private:
     MeasureSettings settings_;
     benchmark::ConsoleReporter console_;
-    benchmark::JSONReporter json_;
-    std::ostringstream json_text_;
+    // One JSON reporter per combination, so that each row's JSON holds its own runs only.
+    struct JsonOut {
+        std::ostringstream text;
+        benchmark::JSONReporter reporter;
+        JsonOut() {
+            reporter.SetOutputStream(&text);
+            reporter.SetErrorStream(&text);
+        }
+    };
+    JsonOut& json_of(const std::string& name) {
+        auto& out = json_[name];
+        if (!out) out = std::make_unique<JsonOut>();
+        return *out;
+    }
+    std::map<std::string, std::unique_ptr<JsonOut>> json_;
     std::ostream null_{nullptr};
 };
 
@@ -209,14 +229,14 @@ class MeasuringStages {
 public:
     MeasuringStages(const AcceleratorInfo& info, const ParamSet& params, const LoadedModel& model,
                     const RenderSettings& render, const MeasureSettings& settings, const StageFn& stage,
-                    const GeneratedRaySet* ray_set)
+                    const GeneratedRaySet* ray_set, std::string stage_prefix)
         : info_(info),
           params_(params),
           model_(model),
           render_(render),
           settings_(settings),
           stage_(stage),
-          start_(Clock::now()),
+          stage_prefix_(std::move(stage_prefix)),
           ray_set_(ray_set) {
         timed_.settings = render;
         timed_.light = model.light;
@@ -261,8 +281,15 @@ public:
     // render's counts and the error columns of the second against the reference.
     Measurement result(const CaptureReporter& reporter, const std::string& name) {
         Measurement m = std::move(m_);
-        m.json = reporter.json();
+        m.json = reporter.json(name);
         const int reps = settings_.repetitions;
+        static const std::vector<double> none;
+        auto samples = [&](const std::map<std::string, std::vector<double>>& by_name) -> const std::vector<double>& {
+            auto it = by_name.find(name);
+            return it == by_name.end() ? none : it->second;
+        };
+        const std::vector<double>& build_s = samples(reporter.build_s);
+        const std::vector<double>& render_s = samples(reporter.render_s);
         if (!failure_.empty()) {
             m.status = timed_out_ ? "timeout" : "error";
             m.message = failure_;
@@ -270,11 +297,10 @@ public:
                 std::fprintf(stderr, "accelbench run: %s: %s\n", name.c_str(), failure_.c_str());
             return m;
         }
-        if (int(reporter.build_s.size()) != reps || int(reporter.render_s.size()) != reps || !first_count_ ||
-            !first_build_) {
+        if (int(build_s.size()) != reps || int(render_s.size()) != reps || !first_count_ || !first_build_) {
             m.status = "error";
-            m.message = "Google Benchmark reported " + std::to_string(reporter.build_s.size()) + " build and " +
-                std::to_string(reporter.render_s.size()) + " render repetitions, expected " + std::to_string(reps) +
+            m.message = "Google Benchmark reported " + std::to_string(build_s.size()) + " build and " +
+                std::to_string(render_s.size()) + " render repetitions, expected " + std::to_string(reps) +
                 " of each (a --benchmark_* flag may have filtered them)";
             return m;
         }
@@ -286,8 +312,8 @@ public:
             return m;
         }
         m.columns["peak_rss_bytes"] = std::to_string(peak_rss_bytes());
-        m.build_s = reporter.build_s;
-        m.render_s = reporter.render_s;
+        m.build_s = build_s;
+        m.render_s = render_s;
         m.render_cpu_s = render_cpu_s_;
         if (ray_set_) m.columns["ray_set_hash"] = hex16(ray_set_->hash);
         m.build = *first_build_;
@@ -420,11 +446,13 @@ private:
 
     // ---- what every stage shares
 
-    // A stage begins: reported to the parent process, checked against the time limit.
+    // A stage begins: reported to the parent process (named with the combination when
+    // several share the process), checked against the time limit, which counts this
+    // combination's own stages only: interleaved with others, their time is not its.
     void begin(const std::string& s) {
         m_.stage = s;
-        if (stage_) stage_(s);
-        if (settings_.timeout_s > 0 && seconds_between(start_, Clock::now()) > settings_.timeout_s)
+        if (stage_) stage_(stage_prefix_ + s);
+        if (settings_.timeout_s > 0 && spent_s_ + seconds_between(entered_, Clock::now()) > settings_.timeout_s)
             throw StageTimeout("exceeded the time limit (timeout_s = " + limit_text(settings_.timeout_s) +
                                " s) before " + s);
     }
@@ -434,6 +462,7 @@ private:
     template <class F>
     void guarded(benchmark::State& st, F&& stages) {
         if (!failure_.empty()) return st.SkipWithError(failure_.c_str());
+        entered_ = Clock::now();
         try {
             stages();
         } catch (const std::exception& e) {
@@ -443,6 +472,7 @@ private:
             }
             st.SkipWithError(failure_.c_str());
         }
+        spent_s_ += seconds_between(entered_, Clock::now());
     }
 
     std::unique_ptr<Accelerator> build_checked(const std::string& what) {
@@ -475,7 +505,9 @@ private:
     const RenderSettings& render_;
     const MeasureSettings& settings_;
     const StageFn& stage_;
-    const Clock::time_point start_;
+    const std::string stage_prefix_;  // "<name>: " in an interleaved group, else empty
+    Clock::time_point entered_;       // when the repetition under way began
+    double spent_s_ = 0;              // in this combination's repetitions before it
     TraceRequest timed_, counting_, error_trace_;
 
     Measurement m_;        // its stage: the last one begun
@@ -492,30 +524,84 @@ private:
 
 }  // namespace
 
-Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
-                    const LoadedModel& model, const RenderSettings& render_settings, const MeasureSettings& settings,
-                    const StageFn& stage, std::optional<RaySetKind> ray_set) {
+namespace {
+
+using BenchmarkFn = std::function<void(benchmark::State&)>;
+
+benchmark::internal::Benchmark* register_timed(const std::string& name, BenchmarkFn fn, int repetitions) {
+    return benchmark::RegisterBenchmark(name.c_str(), std::move(fn))
+        ->UseManualTime()
+        ->Iterations(1)
+        ->Repetitions(repetitions)
+        ->Unit(benchmark::kMillisecond);
+}
+
+// Registers each combination's build and render benchmarks. One combination: two
+// benchmarks of `repetitions` repetitions each, so that Google Benchmark shows their
+// aggregates. Several: one single-repetition benchmark per round and combination, every
+// build round before the render rounds; round k times the k-th repetition of every
+// combination that has one, in the jobs' order in odd rounds and the reverse in even ones,
+// so that neither side of a pair is always the one timed after the other. Google Benchmark
+// runs registered benchmarks in the order registered (random interleaving off).
+void register_benchmarks(const std::vector<MeasureJob>& jobs, std::vector<std::unique_ptr<MeasuringStages>>& stages) {
+    auto build = [&](size_t j) {
+        return BenchmarkFn([&, j](benchmark::State& st) { stages[j]->build_benchmark(st); });
+    };
+    auto render = [&](size_t j) {
+        return BenchmarkFn([&, j](benchmark::State& st) { stages[j]->render_benchmark(st); });
+    };
+    if (jobs.size() == 1) {
+        register_timed(jobs[0].name + "/build", build(0), jobs[0].settings.repetitions);
+        register_timed(jobs[0].name + "/render", render(0), jobs[0].settings.repetitions);
+        return;
+    }
+    int rounds = 0;
+    for (const MeasureJob& j : jobs) rounds = std::max(rounds, j.settings.repetitions);
+    for (const bool builds : {true, false})
+        for (int k = 1; k <= rounds; ++k)
+            for (size_t i = 0; i < jobs.size(); ++i) {
+                const size_t j = k % 2 ? i : jobs.size() - 1 - i;
+                if (jobs[j].settings.repetitions < k) continue;
+                register_timed(jobs[j].name + (builds ? "/build" : "/render"), builds ? build(j) : render(j), 1);
+            }
+}
+
+}  // namespace
+
+std::vector<Measurement> measure_jobs(const std::vector<MeasureJob>& jobs, const LoadedModel& model,
+                                      const StageFn& stage) {
+    if (jobs.empty()) return {};
     reset_peak_rss();
-    MeasuringStages stages(info, params, model, render_settings, settings, stage,
-                           ray_set ? &model.ray_set(*ray_set) : nullptr);
-    CaptureReporter reporter(settings);
+    const bool shared = jobs.size() > 1;
+    std::vector<std::unique_ptr<MeasuringStages>> stages;
+    for (const MeasureJob& j : jobs)
+        stages.push_back(std::make_unique<MeasuringStages>(j.info, j.params, model, j.render, j.settings, stage,
+                                                           j.ray_set ? &model.ray_set(*j.ray_set) : nullptr,
+                                                           shared ? j.name + ": " : ""));
+    CaptureReporter reporter(jobs[0].settings);
     benchmark::ClearRegisteredBenchmarks();
-    for (auto [suffix, fn] : {std::pair<const char*, std::function<void(benchmark::State&)>>{
-                                  "/build", [&](benchmark::State& st) { stages.build_benchmark(st); }},
-                              {"/render", [&](benchmark::State& st) { stages.render_benchmark(st); }}})
-        benchmark::RegisterBenchmark((name + suffix).c_str(), fn)
-            ->UseManualTime()
-            ->Iterations(1)
-            ->Repetitions(settings.repetitions)
-            ->Unit(benchmark::kMillisecond);
+    register_benchmarks(jobs, stages);
     try {
         benchmark::RunSpecifiedBenchmarks(&reporter, std::string("."));
     } catch (const std::exception& e) {
-        stages.failed(e);
+        for (auto& s : stages) s->failed(e);
     }
     benchmark::ClearRegisteredBenchmarks();
     std::cout.flush();
-    return stages.result(reporter, name);
+    std::vector<Measurement> out;
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        out.push_back(stages[j]->result(reporter, jobs[j].name));
+        // The process's high-water mark is of every structure of the group at once: no
+        // combination's own, so none is written.
+        if (shared) out.back().columns.erase("peak_rss_bytes");
+    }
+    return out;
+}
+
+Measurement measure(const std::string& name, const AcceleratorInfo& info, const ParamSet& params,
+                    const LoadedModel& model, const RenderSettings& render_settings, const MeasureSettings& settings,
+                    const StageFn& stage, std::optional<RaySetKind> ray_set) {
+    return measure_jobs({MeasureJob{name, info, params, render_settings, settings, ray_set}}, model, stage)[0];
 }
 
 std::map<std::string, std::string> error_columns(const HitErrors& hits, const std::optional<ImageErrors>& image) {
@@ -599,29 +685,36 @@ Measurement take_measurement(WireReader& r) {
     return m;
 }
 
-Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s) {
+IsolatedMeasurements run_isolated_all(const std::function<std::vector<Measurement>(const StageFn&)>& work, size_t count,
+                                      double timeout_s) {
     const ChildOutcome o = run_in_child(
         [&](const StageFn& stage) {
-            Measurement m;
+            std::vector<Measurement> ms;
             try {
-                m = work(stage);
+                ms = work(stage);
             } catch (const std::exception& e) {
-                m.status = "error";
-                m.message = e.what();
+                ms.assign(count, Measurement{});
+                for (Measurement& m : ms) m.status = "error", m.message = e.what();
             } catch (...) {
-                m.status = "error";
-                m.message = "unknown exception";
+                ms.assign(count, Measurement{});
+                for (Measurement& m : ms) m.status = "error", m.message = "unknown exception";
             }
             WireWriter w;
-            put_measurement(w, m);
+            w.put(uint64_t(ms.size()));
+            for (const Measurement& m : ms) put_measurement(w, m);
             return w.take();
         },
         timeout_s);
+    IsolatedMeasurements out;
     if (o.result) {
-        WireReader r(*o.result, "the measurement from its process");
-        Measurement m = take_measurement(r);
+        WireReader r(*o.result, "the measurements from their process");
+        const uint64_t n = r.take<uint64_t>();
+        if (n != count)
+            throw std::logic_error("the measuring process sent " + std::to_string(n) + " measurements, " +
+                                   std::to_string(count) + " expected");
+        for (uint64_t i = 0; i < n; ++i) out.measurements.push_back(take_measurement(r));
         r.expect_end();
-        return m;
+        return out;
     }
     Measurement m;
     m.stage = o.stage;
@@ -632,7 +725,14 @@ Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work,
         m.status = "error";
         m.message = "the measurement process " + o.failure + " during " + o.stage;
     }
-    return m;
+    out.measurements.assign(count, m);
+    out.process_failed = true;
+    return out;
+}
+
+Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s) {
+    return run_isolated_all([&](const StageFn& stage) { return std::vector<Measurement>{work(stage)}; }, 1, timeout_s)
+        .measurements[0];
 }
 
 }  // namespace accelbench

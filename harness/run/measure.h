@@ -108,6 +108,27 @@ Measurement measure(const std::string& name, const AcceleratorInfo& info, const 
                     const LoadedModel& model, const RenderSettings& render, const MeasureSettings& settings,
                     const StageFn& stage = {}, std::optional<RaySetKind> ray_set = std::nullopt);
 
+// One combination to measure: what measure() takes, by name.
+struct MeasureJob {
+    std::string name;
+    const AcceleratorInfo& info;
+    const ParamSet& params;
+    RenderSettings render;
+    MeasureSettings settings;
+    std::optional<RaySetKind> ray_set;
+};
+
+// Measures several combinations of one model in this process, interleaved: every build
+// round before the render rounds, round k timing the k-th repetition of each combination
+// that has one, in the jobs' order in odd rounds and reversed in even ones (measure.cpp,
+// register_benchmarks). Each combination's stages are measure()'s, in its own order; its
+// time limit counts its own stages only; the stages it reports to `stage` are prefixed
+// with "<name>: ". With more than one job, peak_rss_bytes is not written (the process holds
+// every structure of the group at once). One job is exactly measure(). The results are in
+// the jobs' order. The settings' show_repetitions, show_context and json are job 0's.
+std::vector<Measurement> measure_jobs(const std::vector<MeasureJob>& jobs, const LoadedModel& model,
+                                      const StageFn& stage = {});
+
 // Pools `next`, the same combination measured again in another process (numbered
 // `process`, 2 and up), into `into`: the repetitions appended with their process number,
 // peak_rss_bytes the larger. Everything deterministic (build statistics, ray and hit counts,
@@ -122,6 +143,16 @@ void pool_process(Measurement& into, const Measurement& next, int process);
 // structure does not end the run. The parent must not have started threads (fork copies
 // one thread).
 Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s);
+
+// run_isolated for work that measures `count` combinations in one child. When the child
+// gives no result (it crashed, exited early or passed the deadline), every measurement is
+// the same error or timeout naming the child's last stage, and process_failed is set.
+struct IsolatedMeasurements {
+    std::vector<Measurement> measurements;
+    bool process_failed = false;
+};
+IsolatedMeasurements run_isolated_all(const std::function<std::vector<Measurement>(const StageFn&)>& work, size_t count,
+                                      double timeout_s);
 
 // The wire form (util/wire.h) a measurement crosses the pipe in, every value exact.
 void put_measurement(WireWriter& w, const Measurement& m);

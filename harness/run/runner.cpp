@@ -3,8 +3,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <iterator>
+#include <map>
+#include <set>
+#include <sstream>
+#include <utility>
 
 #include "accelbench/accel/registry.h"
+#include "accelbench/base/unknown_name.h"
 #include "plan/loaded_model.h"
 #include "run/child_process.h"
 #include "run/measure.h"
@@ -192,12 +198,13 @@ class Runner {
 public:
     Runner(const RunPlan& plan, const RunOptions& options) : plan_(plan), options_(options) {}
 
-    // One combination: skipped by a rule, a timeout (its model's preparation passed the
-    // deadline), not run (its model did not load), an error without measuring (the
-    // reference cannot trace the model), or measured.
-    CombinationResult run_one(const Combination& c, ModelOnDemand& model) {
+    // One combination's result before measuring: skipped by a rule, a timeout (its model's
+    // preparation passed the deadline), not run (its model did not load), an error without
+    // measuring (the reference cannot trace the model); `to_measure` when none of these.
+    CombinationResult unmeasured(const Combination& c, ModelOnDemand& model, bool& to_measure) {
         const ModelSpec& spec = plan_.config.models[c.model];
         CombinationResult r{c, spec, model.triangles, model.vertices, utc_now("%Y-%m-%dT%H:%M:%SZ"), "", {}, {}};
+        to_measure = false;
         if (auto reason = model.triangles ? skip_reason(plan_.config, c, *model.triangles) : std::nullopt) {
             r.measurement.status = "skipped";
             r.measurement.message = *reason;
@@ -216,11 +223,23 @@ public:
             r.measurement.message =
                 "no error measurement: the reference cannot trace the model: " + model.reference_error;
         } else {
-            const auto t0 = Clock::now();
-            r.measurement = measure_combination(c, *loaded, 1);
-            r.measuring_s = seconds_since(t0);
+            to_measure = true;
         }
         return r;
+    }
+
+    // The combinations of `group` (one model's, timed together when the config interleaves),
+    // each skipped, failed before measuring (unmeasured) or measured in process 1.
+    std::vector<CombinationResult> run_group(const std::vector<const Combination*>& group, ModelOnDemand& model) {
+        std::vector<CombinationResult> results;
+        std::vector<size_t> measured;
+        for (const Combination* c : group) {
+            bool to_measure = false;
+            results.push_back(unmeasured(*c, model, to_measure));
+            if (to_measure) measured.push_back(results.size() - 1);
+        }
+        measure_into(results, measured, *model.loaded(), 1);
+        return results;
     }
 
     // How many processes measure a combination: its `processes` (processes_of), one under
@@ -229,24 +248,142 @@ public:
         return options_.in_process || !options_.callgrind_out.empty() ? 1 : processes_of(plan_.config, c);
     }
 
-    // The same combination measured again in process `process` (2 and up), pooled into its
-    // result; only a measured combination that is ok so far, never a robustness case.
-    void measure_again(CombinationResult& r, const ModelOnDemand& model, int process) {
+    // The group measured again in process `process` (2 and up), each result pooled into its
+    // own: only the measured combinations that are ok so far and have that many processes,
+    // never a robustness case.
+    void measure_again(std::vector<CombinationResult>& group, const ModelOnDemand& model, int process) {
         const LoadedModel* loaded = model.loaded();
-        if (process > processes(r.combination) || !loaded || loaded->robustness_case || r.measurement.status != "ok" ||
-            !r.measuring_s)
-            return;
-        const auto t0 = Clock::now();
-        pool_process(r.measurement, measure_combination(r.combination, *loaded, process), process);
-        *r.measuring_s += seconds_since(t0);
+        if (!loaded || loaded->robustness_case) return;
+        std::vector<size_t> again;
+        for (size_t i = 0; i < group.size(); ++i)
+            if (process <= processes(group[i].combination) && group[i].measurement.status == "ok" &&
+                group[i].measuring_s)
+                again.push_back(i);
+        measure_into(group, again, *loaded, process);
+    }
+
+    // The groups a model's combinations are timed in, in the plan's order: with
+    // `interleave`, those that trace the same rays (ray set and render thread count)
+    // together; alone otherwise, under callgrind (whose count is of one render) and for a
+    // robustness case (judged, not timed).
+    std::vector<std::vector<const Combination*>> groups(const std::vector<const Combination*>& mine,
+                                                        const ModelSpec& spec) const {
+        std::vector<std::vector<const Combination*>> out;
+        const bool together =
+            plan_.config.interleave && options_.callgrind_out.empty() && spec.kind != ModelSpec::Kind::Case;
+        std::map<std::pair<std::optional<RaySetKind>, int>, size_t> index;
+        for (const Combination* c : mine) {
+            if (!together) {
+                out.push_back({c});
+                continue;
+            }
+            auto [it, added] = index.try_emplace({c->ray_set, c->threads}, out.size());
+            if (added) out.emplace_back();
+            out[it->second].push_back(c);
+        }
+        return out;
     }
 
 private:
-    // Timed (or judged, for a robustness case) in a child process that the time limit can
-    // stop, unless --in-process.
-    // `process` > 1: a later process of the combination, timing only.
-    Measurement measure_combination(const Combination& c, const LoadedModel& model, int process) {
-        const AcceleratorInfo* info = find_accelerator(c.accel);
+    // Measures results[i] for every i in `which` together in process `process`: their
+    // measurements (pooled into the earlier processes' after the first) and their share of
+    // the wall time. Later processes time only the combinations timed with them before:
+    // `timed_with` keeps the ids timed alongside in every process.
+    void measure_into(std::vector<CombinationResult>& results, const std::vector<size_t>& which,
+                      const LoadedModel& model, int process) {
+        if (which.empty()) return;
+        std::vector<const Combination*> group;
+        for (size_t i : which) group.push_back(&results[i].combination);
+        const auto t0 = Clock::now();
+        std::vector<Measurement> ms = measure_group(group, model, process);
+        const double share = seconds_since(t0) / double(which.size());
+        for (size_t k = 0; k < which.size(); ++k) {
+            CombinationResult& r = results[which[k]];
+            if (process == 1) {
+                r.measurement = std::move(ms[k]);
+                r.measuring_s = share;
+                continue;
+            }
+            const std::string before = r.measurement.columns["timed_with"];
+            pool_process(r.measurement, ms[k], process);
+            r.measurement.columns["timed_with"] = common_ids(before, ms[k].columns["timed_with"]);
+            *r.measuring_s += share;
+        }
+    }
+
+    // `group` in process `process`: one combination alone (measure_combination); several in
+    // one child, interleaved (measure_jobs), each with the others' ids in `timed_with`.
+    std::vector<Measurement> measure_group(const std::vector<const Combination*>& group, const LoadedModel& model,
+                                           int process) {
+        if (group.size() == 1) return {measure_combination(*group[0], model, process)};
+        std::vector<MeasureJob> jobs;
+        for (const Combination* c : group)
+            jobs.push_back(MeasureJob{c->name, *find_accelerator(c->accel), c->params, render_of(plan_.config, *c),
+                                      settings_of(*c, process), c->ray_set});
+        first_measurement_ = false;
+        auto work = [&](const StageFn& stage) { return measure_jobs(jobs, model, stage); };
+        std::vector<Measurement> ms;
+        if (options_.in_process) {
+            ms = work(StageFn{});
+        } else {
+            // The child's deadline is every combination's own limit together.
+            IsolatedMeasurements got =
+                run_isolated_all(work, jobs.size(), plan_.config.timeout_s * double(jobs.size()));
+            if (got.process_failed) {
+                Measurement& failure = got.measurements[0];
+                if (failure.status == "timeout")
+                    failure.message =
+                        concat("exceeded the time limit (timeout_s = ", number_text(plan_.config.timeout_s, 6),
+                               " s for each of the ", std::to_string(jobs.size()),
+                               " combinations timed in one process) during ", failure.stage);
+                return after_failed_child(group, model, process, failure);
+            }
+            ms = std::move(got.measurements);
+        }
+        for (size_t i = 0; i < group.size(); ++i) {
+            std::vector<std::string> others;
+            for (const Combination* c : group)
+                if (c != group[i]) others.push_back(c->id);
+            std::sort(others.begin(), others.end());
+            ms[i].columns["timed_with"] = join_names(others, ";");
+        }
+        return ms;
+    }
+
+    // A group's child gave no result (it crashed or passed its deadline): the combination
+    // whose stage it was in (the stage names it) gets the failure and the others are
+    // measured again without it, so that one broken structure does not cost the others
+    // their rows. When no stage names one (the child died before any), all get the failure.
+    std::vector<Measurement> after_failed_child(const std::vector<const Combination*>& group, const LoadedModel& model,
+                                                int process, const Measurement& failure) {
+        auto culprit = std::find_if(group.begin(), group.end(),
+                                    [&](const Combination* c) { return failure.stage.rfind(c->name + ": ", 0) == 0; });
+        if (culprit == group.end()) return std::vector<Measurement>(group.size(), failure);
+        std::vector<const Combination*> rest = group;
+        rest.erase(rest.begin() + (culprit - group.begin()));
+        std::vector<Measurement> out = measure_group(rest, model, process);
+        out.insert(out.begin() + (culprit - group.begin()), failure);
+        return out;
+    }
+
+    // The ids in both ';'-separated lists, sorted.
+    static std::string common_ids(const std::string& a, const std::string& b) {
+        auto ids = [](const std::string& list) {
+            std::set<std::string> out;
+            std::istringstream in(list);
+            for (std::string id; std::getline(in, id, ';');)
+                if (!id.empty()) out.insert(id);
+            return out;
+        };
+        const std::set<std::string> x = ids(a), y = ids(b);
+        std::vector<std::string> both;
+        std::set_intersection(x.begin(), x.end(), y.begin(), y.end(), std::back_inserter(both));
+        return join_names(both, ";");
+    }
+
+    // What measuring combination c gets in process `process` (> 1: a later process, timing
+    // only).
+    MeasureSettings settings_of(const Combination& c, int process) const {
         MeasureSettings ms;
         ms.repetitions = repetitions_of(plan_.config, c);
         ms.warmup = warmup_of(plan_.config, c);
@@ -263,6 +400,14 @@ private:
             ms.repetitions = 1;
             ms.warmup = std::min(ms.warmup, 1);
         }
+        return ms;
+    }
+
+    // Timed (or judged, for a robustness case) in a child process that the time limit can
+    // stop, unless --in-process.
+    Measurement measure_combination(const Combination& c, const LoadedModel& model, int process) {
+        const AcceleratorInfo* info = find_accelerator(c.accel);
+        const MeasureSettings ms = settings_of(c, process);
         first_measurement_ = false;
         auto work = [&](const StageFn& stage) {
             if (model.robustness_case) return judge_measurement(c.accel, c.given, *model.robustness_case, stage);
@@ -295,10 +440,11 @@ int run_plan(const RunPlan& plan, const RunOptions& options, const std::vector<R
         ModelOnDemand model(plan.config.models[mi], plan, mine, reference_wanted, options.in_process);
         // With several processes, the model's combinations are measured in turn, then all
         // again (interleaved, so that a drift in time shows as a gap between processes), and
-        // each is reported once its last process is done.
+        // each is reported once its last process is done. With `interleave`, the unit
+        // measured in turn is a group (Runner::groups), its combinations in one child.
         int processes = 1;
         for (const Combination* c : mine) processes = std::max(processes, runner.processes(*c));
-        std::vector<CombinationResult> pending;
+        std::vector<std::vector<CombinationResult>> pending;
         // False when an output cannot be written, which ends the run.
         auto report = [&](const CombinationResult& result) {
             not_loaded |= !result.written();
@@ -311,15 +457,20 @@ int run_plan(const RunPlan& plan, const RunOptions& options, const std::vector<R
             }
             return true;
         };
-        for (const Combination* c : mine) {
-            for (RunSink* s : sinks) s->starting(*c);
-            if (processes > 1) pending.push_back(runner.run_one(*c, model));
-            else if (!report(runner.run_one(*c, model))) return 2;
+        for (const std::vector<const Combination*>& group : runner.groups(mine, plan.config.models[mi])) {
+            for (const Combination* c : group)
+                for (RunSink* s : sinks) s->starting(*c);
+            std::vector<CombinationResult> results = runner.run_group(group, model);
+            if (processes > 1) pending.push_back(std::move(results));
+            else
+                for (const CombinationResult& r : results)
+                    if (!report(r)) return 2;
         }
         for (int p = 2; p <= processes; ++p)
-            for (CombinationResult& r : pending) runner.measure_again(r, model, p);
-        for (const CombinationResult& r : pending)
-            if (!report(r)) return 2;
+            for (std::vector<CombinationResult>& group : pending) runner.measure_again(group, model, p);
+        for (const std::vector<CombinationResult>& group : pending)
+            for (const CombinationResult& r : group)
+                if (!report(r)) return 2;
     }
     for (RunSink* s : sinks) s->finalize();
     return not_loaded ? 2 : errors ? 1 : 0;

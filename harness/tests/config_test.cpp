@@ -140,6 +140,14 @@ accelerators: [{name: embree}]
     EXPECT_TRUE(has_issue(e, 6, 9, "errors", "expected"));
 }
 
+TEST_F(ConfigTest, InterleaveIsABooleanOffByDefault) {
+    const char* body = "models: [{procedural: soup, triangles: 100}]\naccelerators: [{name: bvh}]\n";
+    EXPECT_FALSE(load_config(write("a.yaml", body), registry()).interleave);
+    EXPECT_TRUE(load_config(write("b.yaml", std::string("interleave: true\n") + body), registry()).interleave);
+    const ConfigError e = load_error(write("c.yaml", std::string("interleave: sometimes\n") + body));
+    EXPECT_TRUE(has_issue(e, 1, 13, "interleave", "expected")) << all_issues(e);
+}
+
 TEST_F(ConfigTest, UnknownKeyWithSuggestion) {
     const std::string p =
         write("a.yaml", "name: t\nrepetition: 3\nmodels: [stanford-bunny]\naccelerators: [{name: embree}]\n");

@@ -2,6 +2,7 @@
 // or slow structure is caught (in this process and in a child process).
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cmath>
 #include <csignal>
 #include <cstring>
@@ -229,6 +230,105 @@ TEST(MeasureTest, InProcessTimeLimitIsCheckedBetweenStages) {
     EXPECT_EQ(m.status, "timeout");
     EXPECT_NE(m.message.find("exceeded the time limit (timeout_s = 0.1 s) before build repetition"), std::string::npos)
         << m.message;
+}
+
+// Brute force that writes its tag into a shared log at every build and every traced
+// batch: the order in which the stages of interleaved combinations ran.
+class LoggingBruteForce final : public Accelerator {
+public:
+    LoggingBruteForce(char tag, std::string& log)
+        : tag_(tag), log_(log), inner_(BruteForce::Config::from(defaults(BruteForce::info()))) {}
+    void build(const Scene& s) override {
+        log_.push_back(char(std::toupper(tag_)));
+        inner_.build(s);
+    }
+    void closest_hits(std::span<const Ray> r, std::span<Hit> h, std::span<RayStats> st) const override {
+        log_.push_back(tag_);
+        inner_.closest_hits(r, h, st);
+    }
+    void any_hits(std::span<const Ray> r, std::span<uint8_t> o, std::span<RayStats> st) const override {
+        log_.push_back(tag_);
+        inner_.any_hits(r, o, st);
+    }
+    BuildStats build_stats() const override { return inner_.build_stats(); }
+
+private:
+    char tag_;
+    std::string& log_;
+    BruteForce inner_;
+};
+
+// The log's renders, one letter each: every render of the box makes the same number of
+// batch calls (`per_render`), so a run of n calls of one tag is n / per_render renders.
+std::string renders_in(const std::string& log, size_t per_render) {
+    std::string out;
+    for (size_t i = 0; i < log.size();) {
+        size_t j = i;
+        while (j < log.size() && log[j] == log[i]) ++j;
+        EXPECT_EQ((j - i) % per_render, 0u) << log;
+        out.append((j - i) / per_render, log[i]);
+        i = j;
+    }
+    return out;
+}
+
+TEST(MeasureTest, InterleavedCombinationsAlternateRoundByRound) {
+    const LoadedModel model = box_model();
+    std::string log;
+    const AcceleratorInfo a = test_accel("a", [&] { return std::make_unique<LoggingBruteForce>('a', log); });
+    const AcceleratorInfo b = test_accel("b", [&] { return std::make_unique<LoggingBruteForce>('b', log); });
+    const ParamSet none;
+    const std::vector<Measurement> ms =
+        measure_jobs({MeasureJob{"box/a", a, none, tiny_render(), quick(), std::nullopt},
+                      MeasureJob{"box/b", b, none, tiny_render(), quick(), std::nullopt}},
+                     model);
+    ASSERT_EQ(ms.size(), 2u);
+    // Builds: a's warm-up and round 1, b's; round 2 reversed; round 3 forward.
+    std::string builds, traces;
+    for (char c : log) (std::isupper(c) ? builds : traces).push_back(c);
+    EXPECT_EQ(builds, "AABBBAAB");
+    // Renders: round 1 each one's counting render and its first timed one; round 2
+    // reversed; round 3 a's timed render and second counting render, then b's.
+    const size_t per_render = traces.size() / 10;  // 3 timed + 2 counting renders each
+    EXPECT_EQ(renders_in(traces, per_render), "aabbbaaabb");
+    const Measurement alone =
+        measure("box/brute_force", BruteForce::info(), defaults(BruteForce::info()), model, tiny_render(), quick());
+    for (const Measurement& m : ms) {
+        ASSERT_EQ(m.status, "ok") << m.message;
+        EXPECT_EQ(m.build_s.size(), 3u);
+        EXPECT_EQ(m.render_s.size(), 3u);
+        // The same answers and counts as measured alone.
+        EXPECT_EQ(m.hits, alone.hits);
+        EXPECT_EQ(m.shadow_hits, alone.shadow_hits);
+        ASSERT_TRUE(m.counts);
+        EXPECT_EQ(m.counts->prim_tests, alone.counts->prim_tests);
+        // No peak of its own: the process held both structures.
+        EXPECT_EQ(m.columns.count("peak_rss_bytes"), 0u);
+    }
+}
+
+TEST(MeasureTest, InterleavedTimeLimitCountsOnlyACombinationsOwnStages) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo slow = test_accel("slow", [] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(60));
+        return std::make_unique<BruteForce>(BruteForce::Config::from(defaults(BruteForce::info())));
+    });
+    MeasureSettings s = quick();
+    s.timeout_s = 0.1;
+    const AcceleratorInfo fast = BruteForce::info();
+    // Two slow builds pass the limit; the fast combination's own stages do not, however
+    // long the slow one took before them.
+    const std::vector<Measurement> ms =
+        measure_jobs({MeasureJob{"box/slow", slow, defaults(slow), tiny_render(), s, std::nullopt},
+                      MeasureJob{"box/fast", fast, defaults(fast), tiny_render(), s, std::nullopt}},
+                     model);
+    ASSERT_EQ(ms.size(), 2u);
+    EXPECT_EQ(ms[0].status, "timeout");
+    EXPECT_NE(ms[0].message.find("exceeded the time limit (timeout_s = 0.1 s) before build repetition"),
+              std::string::npos)
+        << ms[0].message;
+    EXPECT_EQ(ms[1].status, "ok") << ms[1].message;
+    EXPECT_EQ(ms[1].render_s.size(), 3u);
 }
 
 // Bit for bit: floats compared as bytes, so that -0.0, NaN payloads and rounding all count.

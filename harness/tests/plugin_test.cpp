@@ -204,5 +204,56 @@ accelerators:
     EXPECT_EQ(ours["plugin_file"], "");
 }
 
+// Interleaved, a crash or a hang in the shared child costs its own combination only: the
+// child's last stage names it, and the others are measured again without it.
+TEST(Plugin, AnInterleavedGroupOutlivesACrashAndAHang) {
+    TempDir dir{"accelbench-plugin-test-"};
+    const std::string config = write_file(dir.path(), "group.yaml",
+                                          R"(name: group
+repetitions: 1
+warmup: 0
+timeout_s: 1
+interleave: true
+errors: false
+render: {width: 32, height: 24}
+plugins: [)" + plugin_path("crash_in_trace") + ", " +
+                                              plugin_path("hang_in_build") + R"(]
+models: [{procedural: soup, triangles: 2000, seed: 5}]
+accelerators:
+  - {name: fault_crash_in_trace}
+  - {name: brute_force}
+  - {name: fault_hang_in_build}
+  - {name: bvh}
+)");
+    const std::string out = (dir.path() / "group.csv").string();
+    EXPECT_EQ(run({config, "--out", out}), 1);  // rows in error
+    const CsvData d = read_csv(out);
+    const auto keys = result_columns();
+    std::map<std::string, std::map<std::string, std::string>> rows;  // by accel
+    for (const auto& row : d.rows) {
+        std::map<std::string, std::string> m;
+        for (size_t i = 0; i < keys.size(); ++i) m[keys[i]] = row[i];
+        rows[m["accel"]] = m;
+    }
+    ASSERT_EQ(rows.size(), 4u);
+    EXPECT_EQ(rows["fault_hang_in_build"]["status"], "timeout");
+    EXPECT_NE(
+        rows["fault_hang_in_build"]["message"].find("(timeout_s = 1 s for each of the 4 combinations timed in one "
+                                                    "process) during soup(triangles=2000,seed=5)/fault_hang_in_build: "
+                                                    "build repetition 1 of 1"),
+        std::string::npos)
+        << rows["fault_hang_in_build"]["message"];
+    EXPECT_EQ(rows["fault_crash_in_trace"]["status"], "error");
+    EXPECT_NE(rows["fault_crash_in_trace"]["message"].find("signal 11"), std::string::npos)
+        << rows["fault_crash_in_trace"]["message"];
+    // The survivors, timed with each other in the last child.
+    auto& brute = rows["brute_force"];
+    auto& bvh = rows["bvh"];
+    EXPECT_EQ(brute["status"], "ok") << brute["message"];
+    EXPECT_EQ(bvh["status"], "ok") << bvh["message"];
+    EXPECT_EQ(brute["timed_with"], bvh["combo_id"]);
+    EXPECT_EQ(bvh["timed_with"], brute["combo_id"]);
+}
+
 }  // namespace
 }  // namespace accelbench

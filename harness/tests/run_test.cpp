@@ -153,6 +153,46 @@ accelerators:
     EXPECT_EQ(per_process, (std::map<std::string, int>{{"1", 4}, {"2", 4}}));
 }
 
+// `interleave`: the combinations that trace the same rays are timed in one child per
+// process, and each row names the others (`timed_with`); rows of other rays are not.
+TEST_F(RunTest, InterleavedRowsNameWhatTheyWereTimedWith) {
+    const std::string cfg = write_file(dir.path(), "il.yaml", R"(name: il
+repetitions: 2
+processes: 2
+interleave: true
+render: {width: 24, height: 16}
+ray_sets: {sets: [primary, ao], random: {rays: 100}}
+models:
+  - {procedural: soup, triangles: 1000, seed: 3}
+accelerators:
+  - {name: brute_force}
+  - {name: embree}
+  - {name: bvh}
+)");
+    const std::string il_out = (dir.path() / "out" / "il.csv").string();
+    ASSERT_EQ(run({cfg, "--out", il_out}), 0);
+    const CsvData d = read_csv(il_out);
+    ASSERT_EQ(d.rows.size(), 6u);
+    std::map<std::string, std::set<std::string>> ids_by_set;
+    std::vector<std::map<std::string, std::string>> rows;
+    for (size_t i = 0; i < d.rows.size(); ++i) {
+        rows.push_back(as_map(d, i));
+        ids_by_set[rows.back().at("ray_set")].insert(rows.back().at("combo_id"));
+    }
+    for (const auto& r : rows) {
+        EXPECT_EQ(r.at("status"), "ok") << r.at("message");
+        EXPECT_EQ(r.at("processes"), "2");
+        EXPECT_EQ(r.at("repetitions"), "4");
+        EXPECT_EQ(r.at("false_misses"), "0");
+        EXPECT_EQ(r.at("peak_rss_bytes"), "");  // the group's process held all three
+        std::set<std::string> others = ids_by_set.at(r.at("ray_set"));
+        others.erase(r.at("combo_id"));
+        std::string expected;
+        for (const std::string& id : others) expected += (expected.empty() ? "" : ";") + id;
+        EXPECT_EQ(r.at("timed_with"), expected);
+    }
+}
+
 // Every row says how wrong it is: the error columns against the reference.
 TEST_F(RunTest, ErrorColumnsCompareEachCombinationWithTheReference) {
     ASSERT_EQ(run({config, "--out", out}), 0);
