@@ -238,7 +238,7 @@ public:
             results.push_back(unmeasured(*c, model, to_measure));
             if (to_measure) measured.push_back(results.size() - 1);
         }
-        measure_into(results, measured, *model.loaded(), 1);
+        if (!measured.empty()) measure_into(results, measured, *model.loaded(), 1);
         return results;
     }
 
