@@ -4,9 +4,9 @@ by repetition, and names in each row's `timed_with` the combo_ids timed with it.
 
 Two such rows can be compared process by process: in each process, the ratio of their
 median render times is of two medians timed under the same load, turn by turn. The worse
-of those ratios is the issue's "the worse of two processes". Two rows timed apart (an
-empty `timed_with`, every file from before the column) have no such ratio: two medians of
-different processes are never read as one process's.
+of those ratios is how the goals read "the worse of two processes" (docs/benchmarks.md).
+Two rows timed apart (an empty `timed_with`, every file from before the column) have no
+such ratio: two medians of different processes are never read as one process's.
 """
 
 from __future__ import annotations
