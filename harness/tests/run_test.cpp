@@ -734,6 +734,17 @@ TEST(ShippedConfigsTest, AreValidAndExpandToTheDocumentedCounts) {
     }
 }
 
+// The incoherent-ray goals' config: five settings on three models' five ray sets, timed
+// interleaved in two processes, and the catalogue's 26 cases for the same five.
+TEST(ShippedConfigsTest, TheGoalsRaySetConfigIsInterleaved) {
+    const Config c = load_config(registry().project_dir() + "/configs/ray-sets-vs-embree.yaml", registry());
+    EXPECT_TRUE(c.interleave);
+    EXPECT_EQ(c.processes, 2);
+    EXPECT_EQ(c.render.width, 640);
+    EXPECT_EQ(c.render.height, 480);
+    EXPECT_EQ(expand(c).size(), 3u * 5u * 5u + 26u * 5u);
+}
+
 TEST(ShippedConfigsTest, SmokeRunsCleanInSeconds) {
     TempDir dir("accelbench-smoke-test-");
     const std::string out = (dir.path() / "smoke.csv").string();
