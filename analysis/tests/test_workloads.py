@@ -304,6 +304,7 @@ def test_the_worse_process_ratio_of_rows_timed_alternately(tmp_path):
     md = ray_set_markdown(t.reset_index())
     assert "| BVH (median) | 1 (1.00x; worse process 0.90x) |" in md
     assert "| kd-tree | 0.5 (0.50x) |" in md
+    assert "| Embree | 1 (1.00x) |" in md  # its own worse process is 1 by definition
     assert "the smallest of them" in md
 
 

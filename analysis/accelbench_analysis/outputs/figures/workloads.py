@@ -163,8 +163,9 @@ def ray_set_table(
     count's, never to a median of several. `ratio_to_embree_worse_process`: where the row
     was timed alternately with that Embree row, the worse over their processes of the ratio
     of the two per-process medians (`reps`, the repetitions; mapping/interleaved.py), else
-    NaN. `catalogue_leaks`: the structure's leaks over the extreme-case catalogue
-    (catalogue_leaks) where the input has its cases, else empty."""
+    NaN. `baseline`: the row is that Embree row. `catalogue_leaks`: the structure's leaks
+    over the extreme-case catalogue (catalogue_leaks) where the input has its cases, else
+    empty."""
     cols = [
         "model",
         "workload",
@@ -182,10 +183,11 @@ def ray_set_table(
         t = g[cols].copy()
         base = baseline_row(g)
         t["embree_mrays_per_s"] = float("nan") if base is None else base["mrays_per_s"]
+        t["baseline"] = False if base is None else t.index == base.name
         for i, r in g.iterrows():
             worse[i] = worse_process_ratio(medians, r, base)
         parts.append(t)
-    t = pd.concat(parts) if parts else pd.DataFrame(columns=cols + ["embree_mrays_per_s"])
+    t = pd.concat(parts) if parts else pd.DataFrame(columns=cols + ["embree_mrays_per_s", "baseline"])
     t["ratio_to_embree"] = t["mrays_per_s"] / t["embree_mrays_per_s"]
     t["ratio_to_embree_worse_process"] = worse  # aligned on the rows' index, as below
     leak = pd.Series(
@@ -230,7 +232,8 @@ def cells_per_set(rows: pd.DataFrame, sets: list[str], cell) -> list[str]:
 def _mrays_cell(r: pd.Series) -> str:
     cell = f"{r['mrays_per_s']:.3g}"
     if pd.notna(r["ratio_to_embree"]):
-        worse = r["ratio_to_embree_worse_process"]
+        # The Embree row's own worse process is 1 by definition: not shown.
+        worse = r["ratio_to_embree_worse_process"] if not r["baseline"] else float("nan")
         cell += f" ({r['ratio_to_embree']:.2f}x" + (
             f"; worse process {worse:.2f}x)" if pd.notna(worse) else ")"
         )
@@ -400,8 +403,9 @@ def write_workloads(results: Results, out_dir: Path) -> list[Path]:
         figures.mkdir(parents=True, exist_ok=True)
         table = ray_set_table(rows, catalogue_leaks(results), results.reps)
         palette = hue_palette(rows["structure"])
-        table.drop(columns=["panel"]).to_csv(tables / "ray_sets.csv", index=False)
         (tables / "ray_sets.md").write_text(ray_set_markdown(table))
+        table = table.drop(columns=["baseline"])  # the markdown's, not a column of the outputs
+        table.drop(columns=["panel"]).to_csv(tables / "ray_sets.csv", index=False)
         (tables / "ray_set_ranking.md").write_text(ranking_markdown(ranking(rows)))
         written += [
             tables / "ray_sets.md",
