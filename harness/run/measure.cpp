@@ -690,14 +690,16 @@ IsolatedMeasurements run_isolated_all(const std::function<std::vector<Measuremen
     const ChildOutcome o = run_in_child(
         [&](const StageFn& stage) {
             std::vector<Measurement> ms;
+            auto all_failed = [&](const std::string& message) {
+                ms.assign(count, Measurement{});
+                for (Measurement& m : ms) m.status = "error", m.message = message;
+            };
             try {
                 ms = work(stage);
             } catch (const std::exception& e) {
-                ms.assign(count, Measurement{});
-                for (Measurement& m : ms) m.status = "error", m.message = e.what();
+                all_failed(e.what());
             } catch (...) {
-                ms.assign(count, Measurement{});
-                for (Measurement& m : ms) m.status = "error", m.message = "unknown exception";
+                all_failed("unknown exception");
             }
             WireWriter w;
             w.put(uint64_t(ms.size()));

@@ -5,8 +5,6 @@
 #include <cstdio>
 #include <iterator>
 #include <map>
-#include <set>
-#include <sstream>
 #include <utility>
 
 #include "accelbench/accel/registry.h"
@@ -287,8 +285,9 @@ public:
 private:
     // Measures results[i] for every i in `which` together in process `process`: their
     // measurements (pooled into the earlier processes' after the first) and their share of
-    // the wall time. Later processes time only the combinations timed with them before:
-    // `timed_with` keeps the ids timed alongside in every process.
+    // the wall time. A later process times the combinations of the group still ok, a subset
+    // of those an earlier one timed together, so its `timed_with` is the ids timed
+    // alongside in every process.
     void measure_into(std::vector<CombinationResult>& results, const std::vector<size_t>& which,
                       const LoadedModel& model, int process) {
         if (which.empty()) return;
@@ -304,9 +303,8 @@ private:
                 r.measuring_s = share;
                 continue;
             }
-            const std::string before = r.measurement.columns["timed_with"];
             pool_process(r.measurement, ms[k], process);
-            r.measurement.columns["timed_with"] = common_ids(before, ms[k].columns["timed_with"]);
+            r.measurement.columns["timed_with"] = ms[k].columns["timed_with"];
             *r.measuring_s += share;
         }
     }
@@ -364,21 +362,6 @@ private:
         std::vector<Measurement> out = measure_group(rest, model, process);
         out.insert(out.begin() + (culprit - group.begin()), failure);
         return out;
-    }
-
-    // The ids in both ';'-separated lists, sorted.
-    static std::string common_ids(const std::string& a, const std::string& b) {
-        auto ids = [](const std::string& list) {
-            std::set<std::string> out;
-            std::istringstream in(list);
-            for (std::string id; std::getline(in, id, ';');)
-                if (!id.empty()) out.insert(id);
-            return out;
-        };
-        const std::set<std::string> x = ids(a), y = ids(b);
-        std::vector<std::string> both;
-        std::set_intersection(x.begin(), x.end(), y.begin(), y.end(), std::back_inserter(both));
-        return join_names(both, ";");
     }
 
     // What measuring combination c gets in process `process` (> 1: a later process, timing
