@@ -633,6 +633,33 @@ inline ChildRef child_ref(const WbvhNode<W>& node, int k) {
     return {node.child[k], node.count[k]};
 }
 
+#if defined(ACCELBENCH_WBVH_AVX)
+// The closest-hit order of the children hit (`mask`, three or more) without a sort: a child's
+// place is its rank, the number of children hit with a smaller order_key, found by one
+// compare of its key against all eight. The keys are order_key's as signed integers (a
+// float's bits with the magnitude flipped for negatives, the slot in the low 3 bits), so
+// they are distinct and the order is the insertion sort's: the same visits, the same
+// answers. Pushes ranks n-1..1 far to near from `top` (the farthest deepest), sets `cur`
+// to rank 0 and returns the new top; rank 0 is written one past the pushes first, a slot
+// the stack's bound leaves free (W - 1 spare entries), so no branch depends on the rank.
+inline StackEntry* push_by_rank(const WbvhNode<8>& node, uint32_t mask, const float (&tnear)[8], StackEntry* top,
+                                ChildRef& cur) {
+    const __m256i bits = _mm256_castps_si256(_mm256_loadu_ps(tnear));
+    const __m256i ordered = _mm256_xor_si256(bits, _mm256_srli_epi32(_mm256_srai_epi32(bits, 31), 1));
+    const __m256i keys =
+        _mm256_or_si256(_mm256_and_si256(ordered, _mm256_set1_epi32(~7)), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    const int last = std::popcount(mask) - 1;
+    for (uint32_t m = mask; m; m &= m - 1) {
+        const int k = std::countr_zero(m);
+        const __m256i key = _mm256_permutevar8x32_epi32(keys, _mm256_set1_epi32(k));
+        const uint32_t smaller = uint32_t(_mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(key, keys))));
+        top[last - std::popcount(smaller & mask)] = {child_ref(node, k), tnear[k]};
+    }
+    cur = top[last].ref;
+    return top + last;
+}
+#endif
+
 // Closest hit (kAnyHit false): `hit` must come in empty and receives the closest hit; the
 // interval shrinks to it. Any hit: the children hit are pushed in slot order, as Embree's
 // any-hit traverser does, and it returns at the first triangle hit.
@@ -738,7 +765,22 @@ ACCELBENCH_BVH_HOT bool traverse(const WbvhTree<W>& tree, const Ray& ray, Hit& h
                     cur = child_ref(node, first);
                     continue;
                 }
-                // Several: sort their keys (insertion sort, at most 8), push far to near, enter the nearest.
+                if ((mask & (mask - 1)) == 0) {  // two: one comparison of their keys
+                    const int second = std::countr_zero(mask);
+                    const bool swap = order_key(tnear[second], second) < order_key(tnear[first], first);
+                    const int near = swap ? second : first, far = swap ? first : second;
+                    *top++ = {child_ref(node, far), tnear[far]};
+                    cur = child_ref(node, near);
+                    continue;
+                }
+                // More: pushed far to near, the nearest entered.
+#if defined(ACCELBENCH_WBVH_AVX)
+                if constexpr (W == 8 && kVector) {
+                    top = push_by_rank(node, mask | 1u << first, tnear, top, cur);
+                    continue;
+                }
+#endif
+                // Sort their keys (insertion sort, at most 8).
                 uint32_t keys[W];
                 int n = 0;
                 keys[n++] = order_key(tnear[first], first);
