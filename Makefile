@@ -102,14 +102,14 @@ bench: build ## speed against Embree on the bunny (and the dragon), with the spe
 # ablations and Embree default and robust=true on every ray set at 640x480, interleaved, two
 # processes; about 3 minutes), then the analysis's `all` beside it: tables/ray_sets.md
 # gives each cell's ratio to Embree and its worse process's. Writes
-# results/runs/ray-sets-vs-embree-<UTC time>/.
-RAY_SETS_VS_EMBREE_DIR := results/runs/ray-sets-vs-embree-$(shell date -u +%Y%m%dT%H%M%SZ)
+# results/runs/ray-sets-vs-embree-<UTC time>/ (the time the run starts, read in the recipe
+# so that no other make invocation runs `date`).
 .PHONY: ray-sets-vs-embree
 ray-sets-vs-embree: build models venv ## wbvh8 against Embree on every ray set, interleaved (the goals)
-	mkdir -p $(RAY_SETS_VS_EMBREE_DIR)
-	$(ACCELBENCH) run --out $(RAY_SETS_VS_EMBREE_DIR)/ray-sets-vs-embree.csv configs/ray-sets-vs-embree.yaml \
-	  > $(RAY_SETS_VS_EMBREE_DIR)/ray-sets-vs-embree.log
-	$(ANALYSIS) all $(RAY_SETS_VS_EMBREE_DIR)/ray-sets-vs-embree.csv --out $(RAY_SETS_VS_EMBREE_DIR)
+	dir=results/runs/ray-sets-vs-embree-$$(date -u +%Y%m%dT%H%M%SZ) && mkdir -p $$dir && \
+	$(ACCELBENCH) run --out $$dir/ray-sets-vs-embree.csv configs/ray-sets-vs-embree.yaml \
+	  > $$dir/ray-sets-vs-embree.log && \
+	$(ANALYSIS) all $$dir/ray-sets-vs-embree.csv --out $$dir
 
 # ---- tests ------------------------------------------------------------------------
 # The dragon is fetched first (npm pack) so its registry test runs rather than skips.
