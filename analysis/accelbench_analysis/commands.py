@@ -95,12 +95,15 @@ def load(src: Sources) -> Loaded:
     from .outputs.figures.workloads import without_thread_scaling
     from .outputs.report.claims import is_ablation, without_ablations
 
-    everything = load_results(src.csvs)
+    files: dict = {}  # each CSV read once, though several of the sets below share it
+    everything = load_results(src.csvs, files)
     report_nums = load_report_numbers(src.report_numbers)
-    reference = load_reference_run(src.reference_run, src.csvs)
+    reference = load_reference_run(src.reference_run, src.csvs, files)
     # The reference's verdicts are judged against the widest gap of its whole run, as ours are.
     reference_run = (
-        load_reference_run(src.reference_run, [*src.csvs, *src.run_csvs]) if src.run_csvs else reference
+        load_reference_run(src.reference_run, [*src.csvs, *src.run_csvs], files)
+        if src.run_csvs
+        else reference
     )
     warn(everything)
     ranked, left_out = without_thread_scaling(everything)
@@ -114,7 +117,7 @@ def load(src: Sources) -> Loaded:
     # the report's settings.
     # A run of thread scaling only is ranked at its thread counts (one column each).
     ranked = ranked if not ranked.measured_rows().empty else everything
-    whole_run = load_results([*src.csvs, *src.run_csvs]) if src.run_csvs else everything
+    whole_run = load_results([*src.csvs, *src.run_csvs], files) if src.run_csvs else everything
     return Loaded(
         src,
         everything,
@@ -128,16 +131,17 @@ def load(src: Sources) -> Loaded:
     )
 
 
-def load_reference_run(run_dir: Path | None, csvs: list[Path]) -> Results | None:
+def load_reference_run(run_dir: Path | None, csvs: list[Path], files: dict | None = None) -> Results | None:
     """The reference run's CSVs named like the given ones (like compared with like: its
-    table4.csv beside this run's table4.csv); None when it has none of them."""
+    table4.csv beside this run's table4.csv); None when it has none of them. `files`: as
+    load_results's cache."""
     if run_dir is None:
         return None
     mine = [run_dir / "csv" / p.name for p in csvs]
     if any(m.resolve() == p.resolve() for m, p in zip(mine, csvs)):
         return None  # this is the reference run
     present = [m for m in mine if m.is_file()]
-    return load_results(present) if present else None
+    return load_results(present, files) if present else None
 
 
 def copy_report_numbers(report_numbers: Path, out: Path) -> None:

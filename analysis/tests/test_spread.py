@@ -185,3 +185,31 @@ def test_the_run_csvs_set_the_floor_and_the_provenance_but_no_table(tmp_path):
     assert widest_gap(data.everything, "build").value < 0.9
     alone = load(Sources([table]))
     assert alone.whole_run is alone.everything
+
+
+def test_load_reads_each_csv_once_though_several_sets_share_it(tmp_path, monkeypatch):
+    # The run's CSVs are in `everything` and again in `whole_run`; the reference run's
+    # table4.csv in `reference` and again in `reference_run`: each file read once.
+    from synthetic import realistic_rows, write_csv
+    from test_scaling import scaling_rows
+
+    from accelbench_analysis.commands import Sources, load
+    from accelbench_analysis.inputs import load as load_module
+
+    table = write_csv(tmp_path / "table4.csv", realistic_rows(), with_errors=True)
+    scaling = write_csv(tmp_path / "scaling.csv", scaling_rows())
+    ref_dir = tmp_path / "reference"
+    (ref_dir / "csv").mkdir(parents=True)
+    write_csv(ref_dir / "csv" / "table4.csv", realistic_rows(), with_errors=True)
+    write_csv(ref_dir / "csv" / "scaling.csv", scaling_rows())
+    reads: list[str] = []
+    real = load_module.read_csv
+    monkeypatch.setattr(load_module, "read_csv", lambda p: reads.append(str(p)) or real(p))
+    data = load(Sources([table], reference_run=ref_dir, run_csvs=[scaling]))
+    assert sorted(reads) == sorted(
+        map(str, [table, scaling, ref_dir / "csv" / "table4.csv", ref_dir / "csv" / "scaling.csv"])
+    )
+    assert "scaling" in set(data.whole_run.rows["config"]) and "scaling" in set(
+        data.reference_run.rows["config"]
+    )
+    assert "scaling" not in set(data.reference.rows["config"])

@@ -127,18 +127,38 @@ def _provenance_warnings(groups: list[ProvenanceGroup]) -> list[str]:
     return warnings
 
 
-def load_results(paths: list[str | Path]) -> Results:
-    """Loads and checks one or more harness CSVs (and their .reps.csv where present)."""
+# One CSV as read and checked: its rows, its repetitions (None without a .reps.csv) and what
+# checking them against each other found.
+FileRead = tuple[pd.DataFrame, "pd.DataFrame | None", list[str]]
+
+
+def _read_file(p: str | Path) -> FileRead:
+    df = read_csv(p)
+    rp = reps_path(p)
+    if not rp.is_file():
+        return df, None, []
+    reps = read_reps(rp)
+    return df, reps, [f"{rp}: {w}" for w in _check_reps(df, reps)]
+
+
+def load_results(paths: list[str | Path], cache: dict[Path, FileRead] | None = None) -> Results:
+    """Loads and checks one or more harness CSVs (and their .reps.csv where present).
+    `cache`: files already read, by resolved path, filled with those read here (an analysis
+    that loads overlapping sets of files reads each once; the frames are not modified)."""
     if not paths:
         raise ContractError("no CSV given")
     frames, rep_frames, warnings = [], [], []
     for p in paths:
-        df = read_csv(p)
+        key = Path(p).resolve()
+        read = cache.get(key) if cache is not None else None
+        if read is None:
+            read = _read_file(p)
+            if cache is not None:
+                cache[key] = read
+        df, reps, file_warnings = read
         frames.append(df)
-        rp = reps_path(p)
-        if rp.is_file():
-            reps = read_reps(rp)
-            warnings += [f"{rp}: {w}" for w in _check_reps(df, reps)]
+        warnings += file_warnings
+        if reps is not None:
             rep_frames.append(reps)
     rows = pd.concat(frames, ignore_index=True)
     labels, groups = _provenance_groups(rows)
