@@ -52,6 +52,7 @@
 
 #include "accelbench/accel/baseline/embree_accel.h"
 #include "accelbench/accel/registry.h"
+#include "accelbench/base/memory.h"
 #include "accelbench/base/unknown_name.h"
 #include "accelbench/render/fp_mode.h"
 #include "accelbench/render/ray_sets.h"
@@ -637,6 +638,11 @@ std::string model_label(const std::string& name) { return name == kForest100k ? 
 }  // namespace
 
 int main(int argc, char** argv) {
+    // glibc's mmap and trim thresholds fixed, as `accelbench` fixes them: otherwise every
+    // large block freed raises them, and the arrays of a structure built later come from
+    // whatever memory the benchmarks before it left (docs/decisions.md, "One combination,
+    // two configs" and "accel_bench's allocator history").
+    accelbench::fix_malloc_thresholds();
     std::vector<std::string> model_names;
     FpMode fp_mode = RenderSettings{}.fp_mode;
     std::vector<char*> rest;
