@@ -17,7 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from .grid.grid_config import GridConfigError
-from .inputs.load import load_results
+from .inputs.load import FileRead, load_results
 from .inputs.report_numbers import DEFAULT_REPORT_NUMBERS, load_report_numbers
 from .inputs.schema import ContractError, Results
 from .mapping.structures import StructureTableError
@@ -95,7 +95,7 @@ def load(src: Sources) -> Loaded:
     from .outputs.figures.workloads import without_thread_scaling
     from .outputs.report.claims import is_ablation, without_ablations
 
-    files: dict = {}  # each CSV read once, though several of the sets below share it
+    files: dict[Path, FileRead] = {}  # each CSV read once, though several of the sets below share it
     everything = load_results(src.csvs, files)
     report_nums = load_report_numbers(src.report_numbers)
     reference = load_reference_run(src.reference_run, src.csvs, files)
@@ -131,7 +131,9 @@ def load(src: Sources) -> Loaded:
     )
 
 
-def load_reference_run(run_dir: Path | None, csvs: list[Path], files: dict | None = None) -> Results | None:
+def load_reference_run(
+    run_dir: Path | None, csvs: list[Path], files: dict[Path, FileRead] | None = None
+) -> Results | None:
     """The reference run's CSVs named like the given ones (like compared with like: its
     table4.csv beside this run's table4.csv); None when it has none of them. `files`: as
     load_results's cache."""

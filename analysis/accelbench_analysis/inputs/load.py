@@ -147,15 +147,13 @@ def load_results(paths: list[str | Path], cache: dict[Path, FileRead] | None = N
     that loads overlapping sets of files reads each once; the frames are not modified)."""
     if not paths:
         raise ContractError("no CSV given")
+    cache = {} if cache is None else cache
     frames, rep_frames, warnings = [], [], []
     for p in paths:
         key = Path(p).resolve()
-        read = cache.get(key) if cache is not None else None
-        if read is None:
-            read = _read_file(p)
-            if cache is not None:
-                cache[key] = read
-        df, reps, file_warnings = read
+        if key not in cache:
+            cache[key] = _read_file(p)
+        df, reps, file_warnings = cache[key]
         frames.append(df)
         warnings += file_warnings
         if reps is not None:
