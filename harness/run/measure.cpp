@@ -2,6 +2,7 @@
 #include "accelbench/base/memory.h"
 #include "plan/combinations.h"
 #include "run/instructions.h"
+#include "util/stats.h"
 #include "util/text.h"
 
 #include <benchmark/benchmark.h>
@@ -146,8 +147,12 @@ struct StageTimeout : std::runtime_error {
 // owns.
 class CaptureReporter : public benchmark::BenchmarkReporter {
 public:
-    explicit CaptureReporter(const MeasureSettings& s)
+    // interleaved: each of Google Benchmark's runs is one repetition of one combination,
+    // so the console shows none of them (they would be every repetition) and the group's
+    // summary() stands for its aggregates.
+    CaptureReporter(const MeasureSettings& s, bool interleaved)
         : settings_(s),
+          interleaved_(interleaved),
           console_(benchmark::ConsoleReporter::OutputOptions(
               benchmark::ConsoleReporter::OO_Tabular |
               (isatty(STDOUT_FILENO) ? benchmark::ConsoleReporter::OO_Color : benchmark::ConsoleReporter::OO_None))) {
@@ -159,10 +164,11 @@ public:
     void ReportRuns(const std::vector<Run>& runs) override {
         // GB reports the repetitions and then, in a second call, their aggregates (mean,
         // median, stddev, cv): by default the console shows the aggregates, and a single
-        // repetition or a failed one as it is.
+        // repetition (not one of an interleaved group's) or a failed one as it is.
         std::vector<Run> shown;
         for (const auto& r : runs)
-            if (settings_.show_repetitions || r.run_type == Run::RT_Aggregate || r.repetitions <= 1 || r.error_occurred)
+            if (settings_.show_repetitions || r.run_type == Run::RT_Aggregate ||
+                (r.repetitions <= 1 && !interleaved_) || r.error_occurred)
                 shown.push_back(r);
         if (!shown.empty()) console_.ReportRuns(shown);
         for (const auto& r : runs) {
@@ -177,6 +183,22 @@ public:
 
     void Finalize() override { console_.Finalize(); }
 
+    // An interleaved group's console summary, one line per combination and stage timed:
+    // the median of its repetitions and the interval of the median (util/stats.h).
+    void summary(const std::vector<std::string>& names, std::ostream& out) const {
+        if (!interleaved_ || settings_.show_repetitions) return;
+        for (const std::string& name : names)
+            for (const auto& [stage, samples] : {std::pair{"build", &build_s}, std::pair{"render", &render_s}}) {
+                const auto it = samples->find(name);
+                if (it == samples->end() || it->second.empty()) continue;
+                const Summary t = summarize(it->second);
+                char line[160];
+                std::snprintf(line, sizeof line, "median %.4g ms [%.4g, %.4g] of %zu repetitions, interleaved",
+                              1e3 * t.median, 1e3 * t.ci_lo.value_or(t.median), 1e3 * t.ci_hi.value_or(t.median), t.n);
+                out << name << "/" << stage << ": " << line << "\n";
+            }
+    }
+
     // The JSON run objects of one combination, comma-separated.
     std::string json(const std::string& name) const {
         auto it = json_.find(name);
@@ -189,6 +211,7 @@ public:
 
 private:
     MeasureSettings settings_;
+    bool interleaved_;
     benchmark::ConsoleReporter console_;
     // One JSON reporter per combination, so that each row's JSON holds its own runs only.
     struct JsonOut {
@@ -578,7 +601,7 @@ std::vector<Measurement> measure_jobs(const std::vector<MeasureJob>& jobs, const
         stages.push_back(std::make_unique<MeasuringStages>(j.info, j.params, model, j.render, j.settings, stage,
                                                            j.ray_set ? &model.ray_set(*j.ray_set) : nullptr,
                                                            shared ? j.name + ": " : ""));
-    CaptureReporter reporter(jobs[0].settings);
+    CaptureReporter reporter(jobs[0].settings, shared);
     benchmark::ClearRegisteredBenchmarks();
     register_benchmarks(jobs, stages);
     try {
@@ -587,6 +610,9 @@ std::vector<Measurement> measure_jobs(const std::vector<MeasureJob>& jobs, const
         for (auto& s : stages) s->failed(e);
     }
     benchmark::ClearRegisteredBenchmarks();
+    std::vector<std::string> names;
+    for (const MeasureJob& j : jobs) names.push_back(j.name);
+    reporter.summary(names, std::cout);
     std::cout.flush();
     std::vector<Measurement> out;
     for (size_t j = 0; j < jobs.size(); ++j) {

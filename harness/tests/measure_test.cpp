@@ -307,6 +307,35 @@ TEST(MeasureTest, InterleavedCombinationsAlternateRoundByRound) {
     }
 }
 
+// An interleaved group's console: one summary line per combination and stage, not Google
+// Benchmark's row for every repetition (each of its runs is one repetition); all of them
+// with --show-repetitions.
+TEST(MeasureTest, InterleavedConsoleSummarizesEachCombination) {
+    const LoadedModel model = box_model();
+    const AcceleratorInfo info = BruteForce::info();
+    auto console_of = [&](bool every_repetition) {
+        MeasureSettings s = quick();
+        s.show_repetitions = every_repetition;
+        testing::internal::CaptureStdout();
+        const std::vector<Measurement> ms =
+            measure_jobs({MeasureJob{"box/a", info, defaults(info), tiny_render(), s, std::nullopt},
+                          MeasureJob{"box/b", info, defaults(info), tiny_render(), s, std::nullopt}},
+                         model);
+        const std::string out = testing::internal::GetCapturedStdout();
+        for (const Measurement& m : ms) EXPECT_EQ(m.status, "ok") << m.message;
+        return out;
+    };
+    const std::string summary = console_of(false);
+    for (const char* name :
+         {"box/a/build: median ", "box/a/render: median ", "box/b/build: median ", "box/b/render: median "})
+        EXPECT_NE(summary.find(name), std::string::npos) << name << " in:\n" << summary;
+    EXPECT_NE(summary.find("of 3 repetitions, interleaved"), std::string::npos) << summary;
+    EXPECT_EQ(summary.find("repeats:1"), std::string::npos) << summary;
+    const std::string every = console_of(true);
+    EXPECT_NE(every.find("box/a/render/iterations:1/repeats:1"), std::string::npos) << every;
+    EXPECT_EQ(every.find("box/a/render: median "), std::string::npos) << every;
+}
+
 TEST(MeasureTest, InterleavedTimeLimitCountsOnlyACombinationsOwnStages) {
     const LoadedModel model = box_model();
     const AcceleratorInfo slow = test_accel("slow", [] {
