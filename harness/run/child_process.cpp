@@ -160,8 +160,11 @@ ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work
     return o;
 }
 
-std::string time_limit_message(double timeout_s, const std::string& stage) {
-    return "exceeded the time limit (timeout_s = " + number_text(timeout_s, 6) + " s) during " + stage;
+std::string time_limit_message(double timeout_s, const std::string& stage, size_t combinations) {
+    const std::string each = combinations > 1
+        ? " for each of the " + std::to_string(combinations) + " combinations timed in one process"
+        : "";
+    return "exceeded the time limit (timeout_s = " + number_text(timeout_s, 6) + " s" + each + ") during " + stage;
 }
 
 }  // namespace accelbench

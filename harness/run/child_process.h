@@ -30,7 +30,9 @@ struct ChildOutcome {
 ChildOutcome run_in_child(const std::function<std::string(const StageFn&)>& work, double timeout_s,
                           const std::string& first_stage = "start-up");
 
-// "exceeded the time limit (timeout_s = 2 s) during <stage>"
-std::string time_limit_message(double timeout_s, const std::string& stage);
+// "exceeded the time limit (timeout_s = 2 s) during <stage>"; for a child that times
+// several combinations (a deadline of timeout_s each), "(timeout_s = 2 s for each of the 4
+// combinations timed in one process)".
+std::string time_limit_message(double timeout_s, const std::string& stage, size_t combinations = 1);
 
 }  // namespace accelbench

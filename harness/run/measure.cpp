@@ -713,6 +713,7 @@ Measurement take_measurement(WireReader& r) {
 
 IsolatedMeasurements run_isolated_all(const std::function<std::vector<Measurement>(const StageFn&)>& work, size_t count,
                                       double timeout_s) {
+    const double deadline_s = timeout_s * double(count);
     const ChildOutcome o = run_in_child(
         [&](const StageFn& stage) {
             std::vector<Measurement> ms;
@@ -732,7 +733,7 @@ IsolatedMeasurements run_isolated_all(const std::function<std::vector<Measuremen
             for (const Measurement& m : ms) put_measurement(w, m);
             return w.take();
         },
-        timeout_s);
+        deadline_s);
     IsolatedMeasurements out;
     if (o.result) {
         WireReader r(*o.result, "the measurements from their process");
@@ -748,7 +749,7 @@ IsolatedMeasurements run_isolated_all(const std::function<std::vector<Measuremen
     m.stage = o.stage;
     if (o.timed_out) {
         m.status = "timeout";
-        m.message = time_limit_message(timeout_s, o.stage);
+        m.message = time_limit_message(timeout_s, o.stage, count);
     } else {
         m.status = "error";
         m.message = "the measurement process " + o.failure + " during " + o.stage;

@@ -144,9 +144,10 @@ void pool_process(Measurement& into, const Measurement& next, int process);
 // one thread).
 Measurement run_isolated(const std::function<Measurement(const StageFn&)>& work, double timeout_s);
 
-// run_isolated for work that measures `count` combinations in one child. When the child
-// gives no result (it crashed, exited early or passed the deadline), every measurement is
-// the same error or timeout naming the child's last stage, and process_failed is set.
+// run_isolated for work that measures `count` combinations in one child, whose deadline is
+// timeout_s for each of them (count x timeout_s). When the child gives no result (it
+// crashed, exited early or passed the deadline), every measurement is the same error or
+// timeout naming the child's last stage, and process_failed is set.
 struct IsolatedMeasurements {
     std::vector<Measurement> measurements;
     bool process_failed = false;

@@ -325,17 +325,8 @@ private:
             ms = work(StageFn{});
         } else {
             // The child's deadline is every combination's own limit together.
-            IsolatedMeasurements got =
-                run_isolated_all(work, jobs.size(), plan_.config.timeout_s * double(jobs.size()));
-            if (got.process_failed) {
-                Measurement& failure = got.measurements[0];
-                if (failure.status == "timeout")
-                    failure.message =
-                        concat("exceeded the time limit (timeout_s = ", number_text(plan_.config.timeout_s, 6),
-                               " s for each of the ", std::to_string(jobs.size()),
-                               " combinations timed in one process) during ", failure.stage);
-                return after_failed_child(group, model, process, failure);
-            }
+            IsolatedMeasurements got = run_isolated_all(work, jobs.size(), plan_.config.timeout_s);
+            if (got.process_failed) return after_failed_child(group, model, process, got.measurements[0]);
             ms = std::move(got.measurements);
         }
         for (size_t i = 0; i < group.size(); ++i) {
