@@ -193,8 +193,11 @@ public:
                 if (it == samples->end() || it->second.empty()) continue;
                 const Summary t = summarize(it->second);
                 char line[160];
-                std::snprintf(line, sizeof line, "median %.4g ms [%.4g, %.4g] of %zu repetitions, interleaved",
-                              1e3 * t.median, 1e3 * t.ci_lo.value_or(t.median), 1e3 * t.ci_hi.value_or(t.median), t.n);
+                if (t.ci_lo && t.ci_hi)
+                    std::snprintf(line, sizeof line, "median %.4g ms [%.4g, %.4g] of %zu repetitions, interleaved",
+                                  1e3 * t.median, 1e3 * *t.ci_lo, 1e3 * *t.ci_hi, t.n);
+                else  // one repetition: no interval, as the row's empty *_ci_lo and *_ci_hi
+                    std::snprintf(line, sizeof line, "%.4g ms, one repetition, interleaved", 1e3 * t.median);
                 out << name << "/" << stage << ": " << line << "\n";
             }
     }

@@ -313,9 +313,10 @@ TEST(MeasureTest, InterleavedCombinationsAlternateRoundByRound) {
 TEST(MeasureTest, InterleavedConsoleSummarizesEachCombination) {
     const LoadedModel model = box_model();
     const AcceleratorInfo info = BruteForce::info();
-    auto console_of = [&](bool every_repetition) {
+    auto console_of = [&](bool every_repetition, int repetitions = 3) {
         MeasureSettings s = quick();
         s.show_repetitions = every_repetition;
+        s.repetitions = repetitions;
         testing::internal::CaptureStdout();
         const std::vector<Measurement> ms =
             measure_jobs({MeasureJob{"box/a", info, defaults(info), tiny_render(), s, std::nullopt},
@@ -334,6 +335,11 @@ TEST(MeasureTest, InterleavedConsoleSummarizesEachCombination) {
     const std::string every = console_of(true);
     EXPECT_NE(every.find("box/a/render/iterations:1/repeats:1"), std::string::npos) << every;
     EXPECT_EQ(every.find("box/a/render: median "), std::string::npos) << every;
+    // One repetition has no interval of its median (the row's *_ci_lo and *_ci_hi are empty).
+    const std::string one = console_of(false, 1);
+    EXPECT_NE(one.find("box/b/render: "), std::string::npos) << one;
+    EXPECT_NE(one.find(" ms, one repetition, interleaved"), std::string::npos) << one;
+    EXPECT_EQ(one.find("["), std::string::npos) << one;
 }
 
 TEST(MeasureTest, InterleavedTimeLimitCountsOnlyACombinationsOwnStages) {
