@@ -361,6 +361,64 @@ TEST(Wbvh, VectorRayConstantsEqualTheScalarOnes) {
         expect_vector_ray_matches<8>(rays[i], "ray " + std::to_string(i) + " width 8");
     }
 }
+
+// The packet test answers alike for both queries: the closest-hit form, which returns as
+// soon as every lane is outside its edges, and the any-hit form, which does not, give the
+// scalar test's lanes, distances and barycentrics bit for bit — on full and part-used
+// packets, and on rays through the grid's vertices and edges, whose lanes are on an edge
+// (edge function zero) and must still reach the double-precision end.
+TEST(Wbvh, PacketTestAnswersAlikeForClosestAndAnyHit) {
+    const Scene grid = closed_grid();
+    std::vector<WbvhTriPacket> packets;
+    for (uint32_t first = 0; first < grid.triangle_count(); first += 4) {
+        WbvhTriPacket p{};
+        for (uint32_t lane = 0; lane < 4 && first + lane < grid.triangle_count(); ++lane)
+            for (int i = 0; i < 3; ++i) {
+                const Vec3 v = grid.vertex(first + lane, i);
+                p.v[i][0][lane] = v.x;
+                p.v[i][1][lane] = v.y;
+                p.v[i][2][lane] = v.z;
+            }
+        packets.push_back(p);
+    }
+    std::vector<Ray> rays = probe_rays(grid, 300, 3);
+    for (int i = 0; i <= 40; i += 4) {
+        const Vec3 v = grid.vertices[size_t(i * 41 + i)];
+        rays.push_back({{v.x, v.y, 1}, 0, {0, 0, -1}, kInfinity});
+        rays.push_back({{v.x, 0.5f, v.z}, 0, {0, 1, 0}, kInfinity});
+    }
+    auto bits = [](float f) { return std::bit_cast<uint32_t>(f); };
+    size_t hits = 0, outside_only = 0;
+    for (size_t r = 0; r < rays.size(); ++r) {
+        const WbvhScalarRay scalar(rays[r]);
+        const WbvhVectorRay<8> vector(rays[r]);
+        if (!vector.valid) continue;
+        for (size_t k = 0; k < packets.size(); ++k)
+            for (int lanes : {4, 3, 1}) {
+                const float tmin = rays[r].tmin, tmax = rays[r].tmax;
+                const WbvhPacketHits want = wbvh_packet_test(packets[k], lanes, scalar, tmin, tmax);
+                const WbvhPacketHits closest = wbvh_packet_test<false>(packets[k], lanes, vector, tmin, tmax);
+                const WbvhPacketHits any = wbvh_packet_test<true>(packets[k], lanes, vector, tmin, tmax);
+                const std::string what =
+                    "ray " + std::to_string(r) + " packet " + std::to_string(k) + " lanes " + std::to_string(lanes);
+                ASSERT_EQ(closest.mask, want.mask) << what;
+                ASSERT_EQ(any.mask, want.mask) << what;
+                hits += want.mask != 0;
+                outside_only += want.mask == 0;
+                for (uint32_t m = want.mask; m; m &= m - 1) {
+                    const int lane = std::countr_zero(m);
+                    for (const WbvhPacketHits* got : {&closest, &any}) {
+                        EXPECT_EQ(bits(got->t[lane]), bits(want.t[lane])) << what;
+                        EXPECT_EQ(bits(got->u[lane]), bits(want.u[lane])) << what;
+                        EXPECT_EQ(bits(got->v[lane]), bits(want.v[lane])) << what;
+                    }
+                }
+            }
+    }
+    // Both paths ran: packets hit and packets missed on every lane.
+    EXPECT_GT(hits, 300u);
+    EXPECT_GT(outside_only, 10000u);
+}
 #endif
 
 // ---- the extreme-case catalogue ------------------------------------------------------------
