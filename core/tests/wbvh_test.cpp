@@ -6,15 +6,19 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <map>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "accelbench/accel/bvh/bvh.h"
+#include "accelbench/accel/bvh/bvh_packet_leaves.h"
 #include "accelbench/scene/procedural.h"
 #include "accelbench/verify/robustness_cases.h"
 #include "agreement.h"
@@ -369,18 +373,19 @@ TEST(Wbvh, VectorRayConstantsEqualTheScalarOnes) {
 // (edge function zero) and must still reach the double-precision end.
 TEST(Wbvh, PacketTestAnswersAlikeForClosestAndAnyHit) {
     const Scene grid = closed_grid();
+    // The grid's triangles in slot order of a binary tree that keeps them (scalar leaves),
+    // packed four by four as the structures pack their leaves.
+    Bvh::Config config;
+    config.leaf_test = Bvh::Config::LeafTest::scalar;
+    Bvh bvh(config);
+    bvh.build(grid);
+    std::vector<uint32_t> slots(bvh.tree().prim_ids.size());
+    for (uint32_t i = 0; i < slots.size(); ++i) slots[i] = i;
     std::vector<WbvhTriPacket> packets;
-    for (uint32_t first = 0; first < grid.triangle_count(); first += 4) {
-        WbvhTriPacket p{};
-        for (uint32_t lane = 0; lane < 4 && first + lane < grid.triangle_count(); ++lane)
-            for (int i = 0; i < 3; ++i) {
-                const Vec3 v = grid.vertex(first + lane, i);
-                p.v[i][0][lane] = v.x;
-                p.v[i][1][lane] = v.y;
-                p.v[i][2][lane] = v.z;
-            }
-        packets.push_back(p);
-    }
+    for (size_t first = 0; first < slots.size(); first += WbvhTriPacket::kLanes)
+        packets.push_back(pack_triangles(
+            bvh.tree(),
+            std::span(slots).subspan(first, std::min<size_t>(WbvhTriPacket::kLanes, slots.size() - first))));
     std::vector<Ray> rays = probe_rays(grid, 300, 3);
     for (int i = 0; i <= 40; i += 4) {
         const Vec3 v = grid.vertices[size_t(i * 41 + i)];
